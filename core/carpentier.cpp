@@ -1,0 +1,128 @@
+#include "core/carpentier.h"
+
+#include <cctype>
+#include <cmath>
+#include <limits>
+
+namespace chordfit {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+
+// Wraps an angle difference into (-pi, pi].
+double wrapPi(double angle) {
+  angle = std::fmod(angle + M_PI, kTwoPi);
+  if (angle <= 0.0) angle += kTwoPi;
+  return angle - M_PI;
+}
+
+double lateralCoordinate(const AnnulusFrame& frame, const Eigen::Vector3d& p) {
+  return frame.l.dot(p - frame.plane.centre);
+}
+
+// Position of p along an arc as a fraction of its sweep (0 at theta_start, 1 at the far end);
+// outside the arc the fraction is < 0 or > 1, measured toward the nearer end.
+double arcFraction(const LeafletArc& arc, double theta) {
+  const double direction = arc.sweep >= 0.0 ? 1.0 : -1.0;
+  double along = std::fmod(direction * (theta - arc.theta_start), kTwoPi);
+  if (along < 0.0) along += kTwoPi;
+  const double extent = std::abs(arc.sweep);
+  if (along <= extent) return along / extent;
+  const double past_end = along - extent;
+  const double before_start = kTwoPi - along;
+  return past_end < before_start ? 1.0 + past_end / extent : -before_start / extent;
+}
+
+}  // namespace
+
+double annulusAngle(const AnnulusFrame& frame, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - frame.plane.centre;
+  return std::atan2(frame.l.dot(d), frame.a.dot(d));
+}
+
+SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMesh& mesh,
+                           const AnnulusFrame& frame) {
+  SegmentMap map;
+  map.frame = frame;
+  map.leaflet_names = mesh.leaflet_names;
+  const int n = static_cast<int>(mesh.annulus.size());
+  if (n < 3) return map;
+  auto label = [&](int i) { return mesh.leaflet(mesh.annulus(((i % n) + n) % n)); };
+  auto point = [&](int i) -> Eigen::Vector3d {
+    return ring_positions.row(((i % n) + n) % n).transpose();
+  };
+
+  // Start the walk just after a label change so that every run is seen whole.
+  int first = -1;
+  for (int i = 0; i < n; ++i) {
+    if (label(i) != label(i - 1)) {
+      first = i;
+      break;
+    }
+  }
+  if (first < 0) {  // a single leaflet all round: one arc covering the full circle
+    map.arcs.push_back({label(0), annulusAngle(frame, point(0)), kTwoPi});
+    return map;
+  }
+
+  int i = first;
+  while (i < first + n) {
+    const int run_label = label(i);
+    int j = i;
+    while (j + 1 < first + n && label(j + 1) == run_label) ++j;
+    // Commissures: midpoints of the ring edges where the label changes.
+    const Eigen::Vector3d start = 0.5 * (point(i - 1) + point(i));
+    const Eigen::Vector3d end = 0.5 * (point(j) + point(j + 1));
+    double sweep = wrapPi(annulusAngle(frame, point(i)) - annulusAngle(frame, start));
+    for (int k = i; k < j; ++k) {
+      sweep += wrapPi(annulusAngle(frame, point(k + 1)) - annulusAngle(frame, point(k)));
+    }
+    sweep += wrapPi(annulusAngle(frame, end) - annulusAngle(frame, point(j)));
+    LeafletArc arc{run_label, annulusAngle(frame, start), sweep};
+    if (lateralCoordinate(frame, end) > lateralCoordinate(frame, start)) {
+      arc.theta_start = annulusAngle(frame, end);
+      arc.sweep = -sweep;
+    }
+    map.arcs.push_back(arc);
+    i = j + 1;
+  }
+  return map;
+}
+
+int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
+  const double theta = annulusAngle(map.frame, p);
+  const LeafletArc* best = nullptr;
+  double best_fraction = 0.0;
+  double best_outside = std::numeric_limits<double>::infinity();
+  for (const LeafletArc& arc : map.arcs) {
+    if (leaflet >= 0 && arc.leaflet != leaflet) continue;
+    const double fraction = arcFraction(arc, theta);
+    // How far outside [0, 1] (in radians), 0 when inside: picks the containing/nearest arc.
+    const double outside =
+        std::max({0.0, -fraction, fraction - 1.0}) * std::abs(arc.sweep);
+    if (outside < best_outside) {
+      best_outside = outside;
+      best = &arc;
+      best_fraction = fraction;
+    }
+  }
+  if (best == nullptr) return -1;
+  const double clamped = std::min(std::max(best_fraction, 0.0), 1.0);
+  const int index = std::min(2, static_cast<int>(clamped * 3.0));
+  return best->leaflet * 3 + index;
+}
+
+std::string segmentName(const SegmentMap& map, int segment_id) {
+  if (segment_id < 0) return "?";
+  const int leaflet = segment_id / 3;
+  std::string prefix = leaflet < static_cast<int>(map.leaflet_names.size()) &&
+                               !map.leaflet_names[leaflet].empty()
+                           ? std::string(1, static_cast<char>(std::toupper(
+                                                static_cast<unsigned char>(
+                                                    map.leaflet_names[leaflet][0]))))
+                           : "L" + std::to_string(leaflet);
+  return prefix + std::to_string(segment_id % 3 + 1);
+}
+
+}  // namespace chordfit

@@ -1,0 +1,48 @@
+// Carpentier segments (A1-A3, P1-P3): each leaflet's stretch of annulus between its two
+// commissures is split into three equal angular thirds, numbered from the anterolateral
+// commissure (segment 1) to the posteromedial one (segment 3) (Carpentier's nomenclature,
+// Carpentier A. "Cardiac valve surgery - the French correction", J Thorac Cardiovasc Surg
+// 1983;86:323). A point belongs to the segment of its leaflet whose angular range, seen
+// along the annulus-plane normal from the annulus centre, contains it.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/annulus_plane.h"
+#include "core/valve_mesh.h"
+
+namespace chordfit {
+
+struct LeafletArc {
+  int leaflet = 0;
+  double theta_start = 0.0;  // angle (rad) of the end nearer the anterolateral side
+  double sweep = 0.0;        // signed angular extent from theta_start to the other end
+};
+
+struct SegmentMap {
+  AnnulusFrame frame;
+  std::vector<LeafletArc> arcs;            // one per leaflet present on the ring
+  std::vector<std::string> leaflet_names;  // copied from the mesh
+};
+
+// Builds the map from the annulus ring at `ring_positions` (#ring by 3, ordered as
+// mesh.annulus; e.g. the closed annulus) with leaflet labels mesh.leaflet(mesh.annulus).
+// Commissures are where the ring's leaflet label changes.
+SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMesh& mesh,
+                           const AnnulusFrame& frame);
+
+// Angle of p around the annulus centre in the frame's plane: atan2(l.(p-c), a.(p-c)).
+double annulusAngle(const AnnulusFrame& frame, const Eigen::Vector3d& p);
+
+// Segment index 0..2 of point p on leaflet `leaflet` (clamped to the leaflet's ends).
+// If leaflet < 0 the leaflet whose arc contains the point's angle is used.
+// Returns a global segment id = leaflet * 3 + index, or -1 if the leaflet has no arc.
+int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet);
+
+// "A2", "P1", ...: first letter of the leaflet name, upper-cased, + (index + 1).
+std::string segmentName(const SegmentMap& map, int segment_id);
+
+}  // namespace chordfit

@@ -1,0 +1,373 @@
+#include "core/case_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/cordset_io.h"
+#include "core/curve_io.h"
+#include "core/json_fields.h"
+#include "core/mesh_checks.h"
+#include "core/mesh_io.h"
+
+namespace chordfit {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr const char* kCaseFile = "case.json";
+
+// A side file named by a string field of case.json; resolved relative to the case directory.
+struct SideFile {
+  fs::path path;
+  std::string name;  // as written in case.json, used in messages
+};
+
+std::optional<SideFile> sideFile(const json& object, const std::string& where,
+                                 const std::string& key, bool required, const fs::path& dir,
+                                 JsonFields& fields) {
+  const json* value = fields.member(object, where, key, required);
+  if (value == nullptr) return std::nullopt;
+  std::string name;
+  if (!fields.text(*value, fieldPath(where, key), name)) return std::nullopt;
+  return SideFile{dir / name, name};
+}
+
+// Files holding one array either bare or under `key`: [..] or {"key": [..]}.
+const json* arrayOf(const json& document, const std::string& key, JsonFields& fields) {
+  if (document.is_array()) return &document;
+  return fields.member(document, "", key, true);
+}
+
+bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+  const auto document = loadJsonFile(file.path, file.name, diagnostics);
+  if (!document) return false;
+  JsonFields fields(file.name, diagnostics);
+  const json* labels = arrayOf(*document, "labels", fields);
+  if (labels == nullptr || !fields.integers(*labels, "labels", c.mesh.leaflet)) return false;
+  if (c.mesh.leaflet.size() != c.mesh.V.rows()) {
+    fields.error("labels", std::to_string(c.mesh.leaflet.size()) +
+                               " leaflet labels for a mesh of " +
+                               std::to_string(c.mesh.V.rows()) + " vertices");
+    return false;
+  }
+  const int leaflet_count = static_cast<int>(c.mesh.leaflet_names.size());
+  for (Eigen::Index v = 0; v < c.mesh.leaflet.size(); ++v) {
+    if (c.mesh.leaflet(v) < 0 || c.mesh.leaflet(v) >= leaflet_count) {
+      fields.error(indexPath("labels", v), "label " + std::to_string(c.mesh.leaflet(v)) +
+                                               " is not a leaflet (case has " +
+                                               std::to_string(leaflet_count) + " leaflets)");
+      return false;
+    }
+  }
+  return true;
+}
+
+bool readRing(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+  const auto document = loadJsonFile(file.path, file.name, diagnostics);
+  if (!document) return false;
+  JsonFields fields(file.name, diagnostics);
+  const json* ring = arrayOf(*document, "vertices", fields);
+  return ring != nullptr && fields.integers(*ring, "vertices", c.mesh.annulus);
+}
+
+// Leaflet of a tracing: a leaflet name, a label number, or null / absent (unknown).
+bool readTracingLeaflet(const json& value, const std::string& where,
+                        const std::vector<std::string>& names, JsonFields& fields,
+                        int& leaflet) {
+  if (value.is_string()) {
+    const std::string name = value.get<std::string>();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      if (names[i] == name) {
+        leaflet = static_cast<int>(i);
+        return true;
+      }
+    }
+    fields.error(where, "\"" + name + "\" is not a leaflet name of this case");
+    return false;
+  }
+  if (!fields.integer(value, where, leaflet)) return false;
+  if (leaflet < 0 || leaflet >= static_cast<int>(names.size())) {
+    fields.error(where, "leaflet " + std::to_string(leaflet) + " does not exist");
+    return false;
+  }
+  return true;
+}
+
+bool readTracing(const json& entry, const std::string& where, const fs::path& dir,
+                 const std::vector<std::string>& leaflet_names, JsonFields& fields,
+                 Tracing& tracing) {
+  bool ok = true;
+  if (const json* plane = fields.member(entry, where, "plane", true)) {
+    const std::string at = fieldPath(where, "plane");
+    if (const json* origin = fields.member(*plane, at, "origin", true)) {
+      ok &= fields.vec3(*origin, fieldPath(at, "origin"), tracing.plane_origin);
+    } else {
+      ok = false;
+    }
+    if (const json* normal = fields.member(*plane, at, "normal", true)) {
+      if (fields.vec3(*normal, fieldPath(at, "normal"), tracing.plane_normal)) {
+        if (tracing.plane_normal.norm() < 1e-12) {
+          fields.error(fieldPath(at, "normal"), "plane normal has zero length");
+          ok = false;
+        } else {
+          tracing.plane_normal.normalize();
+        }
+      } else {
+        ok = false;
+      }
+    } else {
+      ok = false;
+    }
+  } else {
+    ok = false;
+  }
+  if (const json* leaflet = fields.member(entry, where, "leaflet", false)) {
+    ok &= readTracingLeaflet(*leaflet, fieldPath(where, "leaflet"), leaflet_names, fields,
+                             tracing.leaflet);
+  }
+  const json* points = fields.member(entry, where, "points", false);
+  const json* file = fields.member(entry, where, "file", false);
+  if (points != nullptr) {
+    ok &= fields.points(*points, fieldPath(where, "points"), tracing.points);
+  } else if (file != nullptr) {
+    std::string name;
+    Curve curve;
+    if (fields.text(*file, fieldPath(where, "file"), name) &&
+        readCurve(dir / name, curve, fields.diagnostics(), name)) {
+      tracing.points = curve.points;
+    } else {
+      ok = false;
+    }
+  } else {
+    fields.error(where, "a tracing needs \"points\" or \"file\"");
+    return false;
+  }
+  if (ok && tracing.points.rows() < 2) {
+    fields.error(fieldPath(where, points != nullptr ? "points" : "file"),
+                 "a tracing needs at least 2 points, got " +
+                     std::to_string(tracing.points.rows()));
+    ok = false;
+  }
+  return ok;
+}
+
+bool readTracings(const SideFile& file, const fs::path& dir, ValveCase& c,
+                  Diagnostics& diagnostics) {
+  const auto document = loadJsonFile(file.path, file.name, diagnostics);
+  if (!document) return false;
+  JsonFields fields(file.name, diagnostics);
+  const json* list = arrayOf(*document, "tracings", fields);
+  if (list == nullptr) return false;
+  if (!list->is_array()) {
+    fields.typeError("tracings", "an array of tracings", *list);
+    return false;
+  }
+  bool ok = true;
+  for (std::size_t i = 0; i < list->size(); ++i) {
+    Tracing tracing;
+    if (readTracing((*list)[i], indexPath("tracings", i), dir, c.mesh.leaflet_names, fields,
+                    tracing)) {
+      c.tracings.push_back(std::move(tracing));
+    } else {
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool readTipsFile(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+  const auto document = loadJsonFile(file.path, file.name, diagnostics);
+  if (!document) return false;
+  JsonFields fields(file.name, diagnostics);
+  const json* list = arrayOf(*document, "tips", fields);
+  std::vector<PmTip> tips;
+  if (list == nullptr || !readTips(*list, "tips", fields, tips)) return false;
+  c.tips = tips;
+  return true;
+}
+
+bool readVersion(const json& document, JsonFields& fields) {
+  if (const json* format = fields.member(document, "", "format", false)) {
+    std::string text;
+    if (!fields.text(*format, "format", text)) return false;
+    if (text != "chordfit-case") {
+      fields.error("format", "\"" + text + "\" is not a chordfit-case file");
+      return false;
+    }
+  }
+  const json* version = fields.member(document, "", "version", true);
+  int v = 0;
+  if (version == nullptr || !fields.integer(*version, "version", v)) return false;
+  if (v != kCaseFormatVersion) {
+    fields.error("version", "unsupported format version " + std::to_string(v) +
+                                " (this build reads version " +
+                                std::to_string(kCaseFormatVersion) + ")");
+    return false;
+  }
+  return true;
+}
+
+bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
+  const json* names = fields.member(leaflets, "leaflets", "names", false);
+  if (names == nullptr) return true;  // mitral default
+  if (!names->is_array() || names->empty()) {
+    fields.error("leaflets.names", "expected a non-empty array of leaflet names");
+    return false;
+  }
+  c.mesh.leaflet_names.clear();
+  for (std::size_t i = 0; i < names->size(); ++i) {
+    std::string name;
+    if (!fields.text((*names)[i], indexPath("leaflets.names", i), name)) return false;
+    c.mesh.leaflet_names.push_back(name);
+  }
+  return true;
+}
+
+// Mesh, labels and annulus: the parts every later check depends on.
+bool readValve(const json& document, const fs::path& dir, JsonFields& fields, ValveCase& c) {
+  Diagnostics& diagnostics = fields.diagnostics();
+  bool ok = true;
+  const auto mesh_file = sideFile(document, "", "mesh", true, dir, fields);
+  bool mesh_ok = mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics,
+                                       mesh_file->name);
+  mesh_ok = mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics);
+  ok &= mesh_ok;
+
+  const json* leaflets = fields.member(document, "", "leaflets", true);
+  if (leaflets != nullptr && readLeafletNames(*leaflets, fields, c)) {
+    const auto labels = sideFile(*leaflets, "leaflets", "labels", true, dir, fields);
+    ok &= labels && (!mesh_ok || readLabels(*labels, c, diagnostics));
+  } else {
+    ok = false;
+  }
+
+  const json* annulus = fields.member(document, "", "annulus", true);
+  if (annulus == nullptr) return false;
+  const auto ring = sideFile(*annulus, "annulus", "ring", true, dir, fields);
+  bool ring_ok = ring && readRing(*ring, c, diagnostics);
+  if (ring_ok && mesh_ok) {
+    ring_ok = checkAnnulusRing(c.mesh.F, static_cast<int>(c.mesh.V.rows()), c.mesh.annulus,
+                               ring->name, "vertices", diagnostics);
+  }
+  ok &= ring_ok;
+  const auto closed = sideFile(*annulus, "annulus", "closed", true, dir, fields);
+  Curve closed_curve;
+  if (closed && readCurve(closed->path, closed_curve, diagnostics, closed->name)) {
+    c.annulus_closed = closed_curve.points;
+    if (ring_ok && c.annulus_closed.rows() != c.mesh.annulus.size()) {
+      diagnostics.error(closed->name, "points",
+                        std::to_string(c.annulus_closed.rows()) +
+                            " closed-state annulus positions for an annulus ring of " +
+                            std::to_string(c.mesh.annulus.size()) + " vertices");
+      ok = false;
+    }
+  } else {
+    ok = false;
+  }
+  return ok;
+}
+
+bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fields,
+                       bool mesh_ok, ValveCase& c) {
+  Diagnostics& diagnostics = fields.diagnostics();
+  bool ok = true;
+  if (const auto tracings = sideFile(document, "", "tracings", false, dir, fields)) {
+    ok &= readTracings(*tracings, dir, c, diagnostics);
+  }
+  if (const auto tips = sideFile(document, "", "pm_tips", false, dir, fields)) {
+    ok &= readTipsFile(*tips, c, diagnostics);
+  }
+  if (const auto cords = sideFile(document, "", "cords", false, dir, fields)) {
+    CordSet set;
+    if (readCordSet(cords->path, cords->name, set, diagnostics)) {
+      if (mesh_ok) ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name,
+                                           diagnostics);
+      c.cords = set;
+    } else {
+      ok = false;
+    }
+  }
+  if (const json* simulation = fields.member(document, "", "simulation", false)) {
+    if (!simulation->is_object()) {
+      fields.typeError("simulation", "an object", *simulation);
+      ok = false;
+    } else {
+      c.simulation_json = simulation->dump();
+    }
+  }
+  return ok;
+}
+
+}  // namespace
+
+std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagnostics) {
+  const std::size_t problems_before = diagnostics.problems().size();
+  if (!fs::is_directory(directory)) {
+    diagnostics.error(directory.string(), "",
+                      fs::exists(directory) ? "not a directory" : "case directory not found");
+    return std::nullopt;
+  }
+  const auto document = loadJsonFile(directory / kCaseFile, kCaseFile, diagnostics);
+  if (!document) return std::nullopt;
+  JsonFields fields(kCaseFile, diagnostics);
+  if (!document->is_object()) {
+    fields.typeError("(top level)", "an object", *document);
+    return std::nullopt;
+  }
+  if (!readVersion(*document, fields)) return std::nullopt;
+
+  ValveCase c;
+  c.name = directory.filename().string();
+  if (const json* name = fields.member(*document, "", "name", false)) fields.text(*name, "name", c.name);
+  const bool valve_ok = readValve(*document, directory, fields, c);
+  readOptionalParts(*document, directory, fields, c.mesh.V.rows() > 0 && valve_ok, c);
+  if (diagnostics.problems().size() != problems_before) return std::nullopt;
+  return c;
+}
+
+void writeCase(const fs::path& directory, const ValveCase& c) {
+  writePly(directory / "open.ply", c.mesh.V, c.mesh.F);
+  std::vector<int> labels(c.mesh.leaflet.data(), c.mesh.leaflet.data() + c.mesh.leaflet.size());
+  writeFileAtomically(directory / "leaflets.json", json{{"labels", labels}}.dump() + "\n");
+  std::vector<int> ring(c.mesh.annulus.data(), c.mesh.annulus.data() + c.mesh.annulus.size());
+  writeFileAtomically(directory / "annulus_ring.json", json{{"vertices", ring}}.dump() + "\n");
+  writePointList(directory / "annulus_closed.json", c.annulus_closed, true);
+
+  json document = {{"format", "chordfit-case"},
+                   {"version", kCaseFormatVersion},
+                   {"name", c.name},
+                   {"mesh", "open.ply"},
+                   {"leaflets", {{"names", c.mesh.leaflet_names}, {"labels", "leaflets.json"}}},
+                   {"annulus", {{"ring", "annulus_ring.json"}, {"closed", "annulus_closed.json"}}}};
+  if (!c.tracings.empty()) {
+    json list = json::array();
+    for (const Tracing& t : c.tracings) {
+      json points = json::array();
+      for (Eigen::Index i = 0; i < t.points.rows(); ++i) {
+        points.push_back({t.points(i, 0), t.points(i, 1), t.points(i, 2)});
+      }
+      json entry = {{"plane",
+                     {{"origin", {t.plane_origin.x(), t.plane_origin.y(), t.plane_origin.z()}},
+                      {"normal", {t.plane_normal.x(), t.plane_normal.y(), t.plane_normal.z()}}}},
+                    {"points", points}};
+      if (t.leaflet >= 0) entry["leaflet"] = c.mesh.leaflet_names.at(t.leaflet);
+      list.push_back(entry);
+    }
+    writeFileAtomically(directory / "tracings.json", json{{"tracings", list}}.dump(1) + "\n");
+    document["tracings"] = "tracings.json";
+  }
+  if (c.tips) {
+    writeFileAtomically(directory / "pm_tips.json", json{{"tips", tipsJson(*c.tips)}}.dump(2) + "\n");
+    document["pm_tips"] = "pm_tips.json";
+  }
+  if (c.cords) {
+    writeCordSet(directory / "cords.json", *c.cords, &c.mesh);
+    document["cords"] = "cords.json";
+  }
+  if (c.simulation_json != "{}") document["simulation"] = json::parse(c.simulation_json);
+  writeFileAtomically(directory / kCaseFile, document.dump(2) + "\n");
+}
+
+}  // namespace chordfit

@@ -1,0 +1,666 @@
+// The only translation unit that includes CGAL (see cgal_backend.h for why).
+//
+// CGAL's polygon-soup readers trust their input more than a command-line tool can: a PLY
+// "property" line before any "element" line indexes an empty vector, a non-float "x"
+// property is dereferenced through a null pointer, and a corrupt list length or element
+// count is passed straight to std::vector::resize. The pre-checks below reject such files
+// with a located message before CGAL sees them.
+#include "core/cgal_backend.h"
+
+#include <algorithm>
+#include <array>
+#include <cctype>
+#include <cerrno>
+#include <climits>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <exception>
+#include <iterator>
+#include <limits>
+#include <set>
+#include <sstream>
+#include <utility>
+#include <vector>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/IO/OBJ.h>
+#include <CGAL/IO/OFF.h>
+#include <CGAL/IO/PLY.h>
+#include <CGAL/IO/STL.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/repair_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/self_intersections.h>
+#include <CGAL/Simple_cartesian.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/box_intersection_d.h>
+
+#include "core/atomic_file.h"
+
+namespace chordfit {
+namespace {
+
+namespace PMP = CGAL::Polygon_mesh_processing;
+
+using ReadKernel = CGAL::Simple_cartesian<double>;
+using ReadPoint = ReadKernel::Point_3;
+using Polygon = std::vector<std::size_t>;
+
+// ---------------------------------------------------------------------------------------
+// Small text helpers shared by the pre-checks.
+
+std::string lowercase(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool parseCount(const std::string& text, unsigned long long& value) {
+  if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) return false;
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtoull(text.c_str(), &end, 10);
+  return errno == 0 && end != nullptr && *end == '\0';
+}
+
+// ---------------------------------------------------------------------------------------
+// PLY pre-check: walks the header and the body without storing anything, so that every
+// count CGAL will trust has been checked against the bytes that are really there.
+
+struct PlyProperty {
+  std::string name;
+  bool is_list = false;
+  std::string type;       // scalar type, or the list's item type
+  std::string size_type;  // list only
+};
+
+struct PlyElement {
+  std::string name;
+  unsigned long long count = 0;
+  std::vector<PlyProperty> properties;
+};
+
+enum class PlyFormat { kAscii, kBinaryLittle, kBinaryBig };
+
+// Byte size of a PLY scalar type as CGAL understands it; 0 for an unknown type.
+int plyTypeSize(const std::string& type) {
+  if (type == "char" || type == "int8" || type == "uchar" || type == "uint8") return 1;
+  if (type == "short" || type == "int16" || type == "ushort" || type == "uint16") return 2;
+  if (type == "int" || type == "int32" || type == "uint" || type == "uint32") return 4;
+  if (type == "float" || type == "float32") return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+bool isPlyFloatType(const std::string& type) {
+  return type == "float" || type == "float32" || type == "double" || type == "float64";
+}
+
+bool isPlyIntegerType(const std::string& type) {
+  return plyTypeSize(type) > 0 && !isPlyFloatType(type);
+}
+
+bool isPlyIndexType(const std::string& type) {
+  return type == "int" || type == "int32" || type == "uint" || type == "uint32";
+}
+
+struct PlyHeader {
+  PlyFormat format = PlyFormat::kAscii;
+  std::vector<PlyElement> elements;
+  std::size_t body_offset = 0;
+};
+
+// Parses "property ..." of the current element; returns an error or "".
+std::string parsePlyProperty(std::istringstream& line, PlyElement& element) {
+  PlyProperty p;
+  std::string type;
+  if (!(line >> type)) return "incomplete property line";
+  if (type == "list") {
+    p.is_list = true;
+    if (!(line >> p.size_type >> p.type >> p.name)) return "incomplete list property line";
+    if (!isPlyIntegerType(p.size_type))
+      return "list length type '" + p.size_type + "' is not an integer type";
+    if (plyTypeSize(p.type) == 0) return "unknown list item type '" + p.type + "'";
+  } else {
+    p.type = type;
+    if (!(line >> p.name)) return "property without a name";
+    if (plyTypeSize(p.type) == 0) return "unknown property type '" + p.type + "'";
+  }
+  element.properties.push_back(p);
+  return "";
+}
+
+std::string parsePlyHeader(const std::string& bytes, PlyHeader& header) {
+  std::size_t pos = 0;
+  int line_number = 0;
+  while (pos < bytes.size()) {
+    std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    std::istringstream line(bytes.substr(pos, eol - pos));
+    pos = std::min(bytes.size(), eol + 1);
+    ++line_number;
+    const std::string where = "line " + std::to_string(line_number) + ": ";
+    std::string keyword;
+    line >> keyword;
+    if (line_number == 1) {
+      if (keyword != "ply") return where + "not a PLY file (first line is not 'ply')";
+      continue;
+    }
+    if (line_number == 2) {
+      std::string format;
+      line >> format;
+      if (keyword != "format") return where + "expected 'format ...'";
+      if (format == "ascii") {
+        header.format = PlyFormat::kAscii;
+      } else if (format == "binary_little_endian") {
+        header.format = PlyFormat::kBinaryLittle;
+      } else if (format == "binary_big_endian") {
+        header.format = PlyFormat::kBinaryBig;
+      } else {
+        return where + "unknown format '" + format + "'";
+      }
+      continue;
+    }
+    if (keyword == "end_header") {
+      header.body_offset = pos;
+      return "";
+    }
+    if (keyword == "element") {
+      PlyElement element;
+      std::string count;
+      if (!(line >> element.name >> count) || !parseCount(count, element.count))
+        return where + "expected 'element <name> <count>'";
+      header.elements.push_back(element);
+    } else if (keyword == "property") {
+      if (header.elements.empty()) return where + "property before any element";
+      const std::string error = parsePlyProperty(line, header.elements.back());
+      if (!error.empty()) return where + error;
+    }
+    // comment, obj_info and blank lines carry nothing we need.
+  }
+  return "header has no end_header line";
+}
+
+const PlyProperty* findPlyProperty(const PlyElement& element, const std::string& name) {
+  for (const PlyProperty& p : element.properties)
+    if (p.name == name) return &p;
+  return nullptr;
+}
+
+// CGAL reads x, y, z through a float-or-double cast it does not check, and face indices
+// only as 32-bit lists; anything else must be refused here.
+std::string checkPlySemantics(const PlyHeader& header) {
+  for (const PlyElement& e : header.elements) {
+    if (e.name == "vertex" || e.name == "vertices") {
+      for (const char* axis : {"x", "y", "z"}) {
+        const PlyProperty* p = findPlyProperty(e, axis);
+        if (p == nullptr) return std::string("element vertex: no '") + axis + "' property";
+        if (p->is_list || !isPlyFloatType(p->type))
+          return std::string("element vertex: property '") + axis + "' must be float or double";
+      }
+    } else if (e.name == "face" || e.name == "faces") {
+      const PlyProperty* p = findPlyProperty(e, "vertex_indices");
+      if (p == nullptr) p = findPlyProperty(e, "vertex_index");
+      if (p == nullptr) return "element face: no 'vertex_indices' property";
+      if (!p->is_list || !isPlyIndexType(p->type))
+        return "element face: 'vertex_indices' must be a list of int or uint";
+    }
+  }
+  return "";
+}
+
+std::uint64_t readUnsigned(const char* data, int size, bool big_endian) {
+  std::uint64_t value = 0;
+  for (int i = 0; i < size; ++i) {
+    const int k = big_endian ? i : size - 1 - i;
+    value = (value << 8) | static_cast<unsigned char>(data[k]);
+  }
+  return value;
+}
+
+// Reads a binary list length; negative signed lengths come back as "too large".
+std::uint64_t readBinaryListLength(const char* data, const std::string& type, bool big_endian) {
+  const int size = plyTypeSize(type);
+  const std::uint64_t raw = readUnsigned(data, size, big_endian);
+  const bool is_signed = type == "char" || type == "int8" || type == "short" ||
+                         type == "int16" || type == "int" || type == "int32";
+  if (is_signed && (raw >> (8 * size - 1)) != 0) return std::numeric_limits<std::uint64_t>::max();
+  return raw;
+}
+
+std::string plyItemWhere(const PlyElement& e, unsigned long long item) {
+  return "element " + e.name + " " + std::to_string(item) + ": ";
+}
+
+std::string walkPlyBinary(const std::string& bytes, const PlyHeader& header) {
+  const bool big_endian = header.format == PlyFormat::kBinaryBig;
+  std::size_t pos = header.body_offset;
+  for (const PlyElement& e : header.elements) {
+    for (unsigned long long item = 0; item < e.count; ++item) {
+      for (const PlyProperty& p : e.properties) {
+        const std::size_t remaining = bytes.size() - pos;
+        if (!p.is_list) {
+          const std::size_t size = static_cast<std::size_t>(plyTypeSize(p.type));
+          if (remaining < size) return plyItemWhere(e, item) + "file is truncated";
+          pos += size;
+          continue;
+        }
+        const std::size_t length_size = static_cast<std::size_t>(plyTypeSize(p.size_type));
+        if (remaining < length_size) return plyItemWhere(e, item) + "file is truncated";
+        const std::uint64_t length = readBinaryListLength(bytes.data() + pos, p.size_type,
+                                                          big_endian);
+        pos += length_size;
+        const std::size_t item_size = static_cast<std::size_t>(plyTypeSize(p.type));
+        if (length > (bytes.size() - pos) / item_size)
+          return plyItemWhere(e, item) + "list length " + std::to_string(length) +
+                 " runs past the end of the file";
+        pos += static_cast<std::size_t>(length) * item_size;
+      }
+    }
+  }
+  return "";
+}
+
+// Next whitespace-separated token of an ASCII body, or "" at the end.
+std::string nextToken(const std::string& bytes, std::size_t& pos) {
+  while (pos < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[pos]))) ++pos;
+  const std::size_t begin = pos;
+  while (pos < bytes.size() && !std::isspace(static_cast<unsigned char>(bytes[pos]))) ++pos;
+  return bytes.substr(begin, pos - begin);
+}
+
+std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header) {
+  std::size_t pos = header.body_offset;
+  for (const PlyElement& e : header.elements) {
+    for (unsigned long long item = 0; item < e.count; ++item) {
+      for (const PlyProperty& p : e.properties) {
+        const std::string token = nextToken(bytes, pos);
+        if (token.empty()) return plyItemWhere(e, item) + "file is truncated";
+        if (!p.is_list) continue;
+        unsigned long long length = 0;
+        if (!parseCount(token, length))
+          return plyItemWhere(e, item) + "list length '" + token + "' is not a count";
+        // Every list entry needs at least one character and one separator.
+        if (length > (bytes.size() - pos) / 2 + 1)
+          return plyItemWhere(e, item) + "list length " + token +
+                 " runs past the end of the file";
+        for (unsigned long long k = 0; k < length; ++k) {
+          if (nextToken(bytes, pos).empty()) return plyItemWhere(e, item) + "file is truncated";
+        }
+      }
+    }
+  }
+  return "";
+}
+
+std::string checkPly(const std::string& bytes) {
+  PlyHeader header;
+  std::string error = parsePlyHeader(bytes, header);
+  if (error.empty()) error = checkPlySemantics(header);
+  if (!error.empty()) return error;
+  return header.format == PlyFormat::kAscii ? walkPlyAscii(bytes, header)
+                                            : walkPlyBinary(bytes, header);
+}
+
+// ---------------------------------------------------------------------------------------
+// STL pre-check.
+
+float readFloatLittleEndian(const char* data) {
+  const std::uint32_t bits = static_cast<std::uint32_t>(readUnsigned(data, 4, false));
+  float value;
+  std::memcpy(&value, &bits, sizeof value);
+  return value;
+}
+
+// A binary STL is recognised by its size (84 + 50 bytes per facet), because many binary
+// files start their 80-byte header with "solid" and CGAL would first try them as ASCII.
+// Binary coordinates must be finite: CGAL welds points in a std::map, and a NaN makes its
+// ordering inconsistent, so a NaN vertex would silently be merged into an unrelated one.
+std::string prepareStl(std::string& bytes) {
+  if (bytes.size() < 84) return "";
+  const std::uint64_t facets = readUnsigned(bytes.data() + 80, 4, false);
+  if (bytes.size() != 84 + 50 * facets) return "";  // ASCII (or a corrupt binary file)
+  for (std::uint64_t f = 0; f < facets; ++f) {
+    const char* vertices = bytes.data() + 84 + 50 * f + 12;  // skip the facet normal
+    for (int k = 0; k < 9; ++k) {
+      if (!std::isfinite(readFloatLittleEndian(vertices + 4 * k)))
+        return "facet " + std::to_string(f) + ": non-finite vertex coordinate";
+    }
+  }
+  if (bytes.compare(0, 5, "solid") == 0) std::fill(bytes.begin(), bytes.begin() + 80, 'x');
+  return "";
+}
+
+// ---------------------------------------------------------------------------------------
+// OFF pre-check: CGAL resizes its point and polygon vectors to the header counts.
+
+std::string checkOff(const std::string& bytes) {
+  std::size_t pos = 0;
+  std::string keyword = nextToken(bytes, pos);
+  if (keyword.find("OFF") == std::string::npos) return "not an OFF file (no OFF keyword)";
+  std::vector<unsigned long long> counts;
+  while (counts.size() < 2) {
+    const std::string token = nextToken(bytes, pos);
+    if (token.empty()) return "header is truncated";
+    if (token == "BINARY") return "";  // counts are binary; CGAL reads them incrementally
+    if (token[0] == '#') {
+      pos = bytes.find('\n', pos);
+      if (pos == std::string::npos) return "header is truncated";
+      continue;
+    }
+    unsigned long long value = 0;
+    if (!parseCount(token, value)) return "header: '" + token + "' is not a count";
+    counts.push_back(value);
+  }
+  if (counts[0] > bytes.size() / 2 || counts[1] > bytes.size() / 2)
+    return "header: vertex or face count is larger than the file";
+  return "";
+}
+
+// ---------------------------------------------------------------------------------------
+// OBJ: CGAL rejects any statement it does not know, including "l" (polyline), which
+// readMesh documents as ignored. Such lines are dropped before CGAL sees the text.
+void dropObjLines(std::string& bytes) {
+  std::string kept;
+  kept.reserve(bytes.size());
+  std::size_t pos = 0;
+  while (pos < bytes.size()) {
+    std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    std::istringstream line(bytes.substr(pos, eol - pos));
+    std::string keyword;
+    line >> keyword;
+    // Keep the newline so that the line count stays right.
+    if (keyword != "l") kept.append(bytes, pos, eol - pos);
+    if (eol < bytes.size()) kept += '\n';
+    pos = eol + 1;
+  }
+  bytes.swap(kept);
+}
+
+// True when some whitespace-separated word reads as a non-finite number ("nan", "-inf").
+bool containsNonFiniteWord(const std::string& bytes) {
+  std::size_t pos = 0;
+  for (std::string word = nextToken(bytes, pos); !word.empty(); word = nextToken(bytes, pos)) {
+    word = lowercase(word);
+    if (word[0] == '-' || word[0] == '+') word.erase(0, 1);
+    if (word.rfind("nan", 0) == 0 || word.rfind("inf", 0) == 0) return true;
+  }
+  return false;
+}
+
+// ---------------------------------------------------------------------------------------
+// Soup to Eigen.
+
+// Maps a CGAL index back to an int without turning an out-of-range index into a valid one:
+// CGAL stores negative file indices as huge size_t values, which come back negative here.
+int toIndex(std::size_t index) {
+  if (index <= static_cast<std::size_t>(INT_MAX)) return static_cast<int>(index);
+  const auto as_signed = static_cast<long long>(index);
+  if (as_signed < 0 && as_signed >= INT_MIN) return static_cast<int>(as_signed);
+  return -1;
+}
+
+// Fan-triangulates; polygons with fewer than 3 corners (points, lines) are dropped.
+// Indices are copied unchecked: the mesh validator reports out-of-range ones by face.
+void soupToEigen(const std::vector<ReadPoint>& points, const std::vector<Polygon>& polygons,
+                 Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
+  V.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const auto row = static_cast<Eigen::Index>(i);
+    V(row, 0) = points[i].x();
+    V(row, 1) = points[i].y();
+    V(row, 2) = points[i].z();
+  }
+  Eigen::Index triangles = 0;
+  for (const Polygon& p : polygons)
+    if (p.size() >= 3) triangles += static_cast<Eigen::Index>(p.size() - 2);
+  F.resize(triangles, 3);
+  Eigen::Index row = 0;
+  for (const Polygon& p : polygons) {
+    for (std::size_t k = 1; k + 1 < p.size(); ++k) {
+      F(row, 0) = toIndex(p[0]);
+      F(row, 1) = toIndex(p[k]);
+      F(row, 2) = toIndex(p[k + 1]);
+      ++row;
+    }
+  }
+}
+
+bool allIndicesBelow(const std::vector<Polygon>& polygons, std::size_t n) {
+  for (const Polygon& p : polygons)
+    for (std::size_t i : p)
+      if (i >= n) return false;
+  return true;
+}
+
+// Runs the CGAL reader for `extension` on the (pre-checked) bytes.
+bool readSoup(const std::string& extension, const std::string& bytes,
+              std::vector<ReadPoint>& points, std::vector<Polygon>& polygons) {
+  std::istringstream in(bytes, std::ios::in | std::ios::binary);
+  const auto quiet = CGAL::parameters::verbose(false);
+  if (extension == ".ply") {
+    CGAL::IO::set_mode(in, CGAL::IO::BINARY);
+    return CGAL::IO::read_PLY(in, points, polygons, quiet);
+  }
+  if (extension == ".obj") return CGAL::IO::read_OBJ(in, points, polygons, quiet);
+  if (extension == ".off") return CGAL::IO::read_OFF(in, points, polygons, quiet);
+  if (extension == ".stl") {
+    CGAL::IO::set_mode(in, CGAL::IO::BINARY);
+    if (!CGAL::IO::read_STL(in, points, polygons, quiet)) return false;
+    // The STL reader already merges identical points; the explicit weld keeps that
+    // guarantee independent of the reader version.
+    if (allIndicesBelow(polygons, points.size()))
+      PMP::merge_duplicate_points_in_polygon_soup(points, polygons);
+    return true;
+  }
+  return false;
+}
+
+bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
+                          Eigen::MatrixXi& F, std::string& error) {
+  const std::string extension = lowercase(path.extension().string());
+  if (extension != ".ply" && extension != ".obj" && extension != ".off" &&
+      extension != ".stl") {
+    error = "unsupported extension '" + path.extension().string() + "'";
+    return false;
+  }
+  std::string bytes;
+  if (!readWholeFile(path, bytes)) {
+    error = "cannot open file";
+    return false;
+  }
+  if (extension == ".ply") error = checkPly(bytes);
+  if (extension == ".off") error = checkOff(bytes);
+  if (extension == ".stl") error = prepareStl(bytes);
+  if (extension == ".obj") dropObjLines(bytes);
+  if (!error.empty()) return false;
+
+  std::vector<ReadPoint> points;
+  std::vector<Polygon> polygons;
+  if (!readSoup(extension, bytes, points, polygons)) {
+    const bool text = extension != ".ply" || bytes.find("format ascii") != std::string::npos;
+    error = "CGAL could not parse the file";
+    // CGAL's ASCII number parser accepts only digits, signs, '.' and exponents.
+    if (text && containsNonFiniteWord(bytes))
+      error += " (non-finite values such as 'nan' or 'inf' are not readable in this format)";
+    return false;
+  }
+  soupToEigen(points, polygons, V, F);
+  if (F.rows() == 0) {
+    error = "no polygons with 3 or more corners";
+    return false;
+  }
+  return true;
+}
+
+// ---------------------------------------------------------------------------------------
+// Self-intersections.
+
+using ExactKernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using ExactPoint = ExactKernel::Point_3;
+
+bool isDegenerate(const std::array<ExactPoint, 3>& t) {
+  return CGAL::collinear(t[0], t[1], t[2]);
+}
+
+// Same rules as CGAL's do_faces_intersect, but adjacency comes from shared vertex indices
+// instead of mesh connectivity, so it works on non-manifold soups.
+bool soupFacesIntersect(const std::vector<ExactPoint>& points, const Eigen::MatrixXi& F, int a,
+                        int b) {
+  std::array<int, 3> ia{F(a, 0), F(a, 1), F(a, 2)};
+  std::array<int, 3> ib{F(b, 0), F(b, 1), F(b, 2)};
+  std::vector<std::pair<int, int>> shared;  // (corner in a, corner in b)
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j)
+      if (ia[i] == ib[j]) shared.emplace_back(i, j);
+  const auto P = [&](int index) { return points[static_cast<std::size_t>(index)]; };
+  const ExactKernel::Triangle_3 ta(P(ia[0]), P(ia[1]), P(ia[2]));
+  const ExactKernel::Triangle_3 tb(P(ib[0]), P(ib[1]), P(ib[2]));
+  if (shared.size() >= 3) return true;  // the same triangle twice
+  if (shared.size() == 2) {
+    // Across a shared edge only a coplanar fold-over counts.
+    const int oa = 3 - shared[0].first - shared[1].first;
+    const int ob = 3 - shared[0].second - shared[1].second;
+    const ExactPoint& p = P(ia[shared[0].first]);
+    const ExactPoint& q = P(ia[shared[1].first]);
+    return CGAL::coplanar(p, q, P(ia[oa]), P(ib[ob])) &&
+           CGAL::coplanar_orientation(p, q, P(ia[oa]), P(ib[ob])) == CGAL::POSITIVE;
+  }
+  if (shared.size() == 1) {
+    const int i = shared[0].first;
+    const int j = shared[0].second;
+    const ExactKernel::Segment_3 sa(P(ia[(i + 1) % 3]), P(ia[(i + 2) % 3]));
+    const ExactKernel::Segment_3 sb(P(ib[(j + 1) % 3]), P(ib[(j + 2) % 3]));
+    return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
+  }
+  return CGAL::do_intersect(ta, tb);
+}
+
+int countSoupSelfIntersections(const std::vector<ExactPoint>& points, const Eigen::MatrixXi& F) {
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int,
+                                                         CGAL::Box_intersection_d::ID_EXPLICIT>;
+  std::vector<Box> boxes;
+  for (int f = 0; f < F.rows(); ++f) {
+    const std::array<ExactPoint, 3> t{points[static_cast<std::size_t>(F(f, 0))],
+                                      points[static_cast<std::size_t>(F(f, 1))],
+                                      points[static_cast<std::size_t>(F(f, 2))]};
+    if (isDegenerate(t)) continue;  // as in CGAL: a degenerate face has no box
+    boxes.emplace_back(t[0].bbox() + t[1].bbox() + t[2].bbox(), f);
+  }
+  std::vector<const Box*> pointers;
+  for (const Box& b : boxes) pointers.push_back(&b);
+  std::set<std::pair<int, int>> pairs;
+  CGAL::box_self_intersection_d(pointers.begin(), pointers.end(),
+                                [&](const Box* x, const Box* y) {
+                                  const int a = std::min(x->info(), y->info());
+                                  const int b = std::max(x->info(), y->info());
+                                  if (soupFacesIntersect(points, F, a, b)) pairs.emplace(a, b);
+                                });
+  return static_cast<int>(pairs.size());
+}
+
+int countMeshSelfIntersections(const std::vector<ExactPoint>& points,
+                               const std::vector<std::array<std::size_t, 3>>& faces) {
+  using Mesh = CGAL::Surface_mesh<ExactPoint>;
+  using Face = boost::graph_traits<Mesh>::face_descriptor;
+  Mesh mesh;
+  PMP::polygon_soup_to_polygon_mesh(points, faces, mesh);
+  std::vector<std::pair<Face, Face>> pairs;
+  PMP::self_intersections(mesh, std::back_inserter(pairs));
+  // CGAL reports a degenerate face as the pair (f, f); that is not a pair of triangles
+  // (the mesh checks report degenerate faces on their own).
+  return static_cast<int>(std::count_if(pairs.begin(), pairs.end(),
+                                        [](const auto& p) { return p.first != p.second; }));
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+
+bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V,
+                          Eigen::MatrixXi& F, std::string& error) {
+  error.clear();
+  try {
+    return readTriangleSoupImpl(path, V, F, error);
+  } catch (const std::exception& e) {
+    error = std::string("reader failed: ") + e.what();
+  } catch (...) {
+    error = "reader failed with an unknown exception";
+  }
+  return false;
+}
+
+struct SurfaceDistance::Impl {
+  using Triangle = ReadKernel::Triangle_3;
+  using Iterator = std::vector<Triangle>::const_iterator;
+  using Primitive = CGAL::AABB_triangle_primitive<ReadKernel, Iterator>;
+  using Traits = CGAL::AABB_traits<ReadKernel, Primitive>;
+  using Tree = CGAL::AABB_tree<Traits>;
+
+  std::vector<Triangle> triangles;  // must outlive and never move under `tree`
+  Tree tree;
+};
+
+// Triangles with an out-of-range index are skipped like degenerate ones: the distance is
+// a measurement, and the mesh checks are where bad indices get reported.
+SurfaceDistance::SurfaceDistance(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F)
+    : impl_(std::make_unique<Impl>()) {
+  const auto point = [&](int i) { return ReadPoint(V(i, 0), V(i, 1), V(i, 2)); };
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    bool valid = true;
+    for (int k = 0; k < 3; ++k) valid = valid && F(f, k) >= 0 && F(f, k) < V.rows();
+    if (!valid) continue;
+    Impl::Triangle t(point(F(f, 0)), point(F(f, 1)), point(F(f, 2)));
+    if (!t.is_degenerate()) impl_->triangles.push_back(t);
+  }
+  if (impl_->triangles.empty()) return;
+  impl_->tree.insert(impl_->triangles.begin(), impl_->triangles.end());
+  // Both structures are otherwise built lazily by the first query, which would race when
+  // several threads query at once.
+  impl_->tree.build();
+  impl_->tree.accelerate_distance_queries();
+}
+
+SurfaceDistance::~SurfaceDistance() = default;
+
+// An empty surface (no valid triangle) is infinitely far away; `closest` becomes NaN.
+double SurfaceDistance::distance(const Eigen::Vector3d& p, Eigen::Vector3d* closest) const {
+  if (impl_->triangles.empty()) {
+    if (closest != nullptr) closest->setConstant(std::numeric_limits<double>::quiet_NaN());
+    return std::numeric_limits<double>::infinity();
+  }
+  const ReadPoint query(p.x(), p.y(), p.z());
+  const ReadPoint c = impl_->tree.closest_point(query);
+  if (closest != nullptr) *closest = Eigen::Vector3d(c.x(), c.y(), c.z());
+  return std::sqrt(CGAL::squared_distance(query, c));
+}
+
+// Returns -1 when the count cannot be computed: an index out of range, a non-finite
+// coordinate, or a CGAL failure. Degenerate triangles are not counted (see above).
+// CGAL 5.5 has no triangle_soup_self_intersections, so a soup that is not a valid polygon
+// mesh (non-manifold edges or vertices, repeated corners) goes through the soup version
+// above, which applies CGAL's own adjacency rules to shared vertex indices.
+int countSelfIntersections(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  try {
+    if (V.cols() != 3 || F.cols() != 3 || !V.allFinite()) return -1;
+    if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows())) return -1;
+    std::vector<ExactPoint> points;
+    points.reserve(static_cast<std::size_t>(V.rows()));
+    for (Eigen::Index i = 0; i < V.rows(); ++i) points.emplace_back(V(i, 0), V(i, 1), V(i, 2));
+    std::vector<std::array<std::size_t, 3>> faces;
+    for (Eigen::Index f = 0; f < F.rows(); ++f)
+      faces.push_back({static_cast<std::size_t>(F(f, 0)), static_cast<std::size_t>(F(f, 1)),
+                       static_cast<std::size_t>(F(f, 2))});
+    if (PMP::is_polygon_soup_a_polygon_mesh(faces)) return countMeshSelfIntersections(points, faces);
+    return countSoupSelfIntersections(points, F);
+  } catch (...) {
+    return -1;
+  }
+}
+
+}  // namespace chordfit

@@ -1,0 +1,66 @@
+// Vertex-triangle proximity contact with thickness, for leaflet coaptation and self-contact.
+//
+// Once per time step the detector finds every (vertex p, triangle T) pair with
+// dist(p, T) < thickness + margin at the predicted positions and linearises it into a
+// ContactConstraint C = n . (x_p - q) - thickness >= 0 (xpbd_constraints.h):
+//   - q = closest point of T to p (barycentrics frozen, Ericson 2005),
+//   - n = T's unit normal, signed to the side where p was at the START of the step, when the
+//     closest point is interior to T. The start-of-step state is non-penetrating, so a
+//     vertex that crossed T during the prediction is pushed back to its own side;
+//   - n = (p - q) / |p - q| when q lies on an edge or a vertex of T (no side to lose there;
+//     this makes the direction continuous across the region boundary).
+// Pairs that are close in the rest state are excluded: T containing p, and T with a vertex
+// within `exclusion_radius` of p in the rest (open) state, so that bending of the sheet itself
+// does not register as contact.
+//
+// Broad phase: a uniform grid hashed into a table of 2 #V buckets (Teschner et al. 2003,
+// "Optimized spatial hashing for collision detection of deformable objects"; Mueller's Ten
+// Minute Physics "self-collision" lesson): vertices are counting-sorted into buckets, every
+// triangle visits the cells overlapped by its (start u predicted) bounding box inflated by
+// thickness + margin. Hash collisions are filtered by comparing the integer cell coordinates.
+// The output order is by triangle, then by bucket order: deterministic.
+#pragma once
+
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/xpbd_constraints.h"
+
+namespace chordfit {
+
+struct ContactOptions {
+  double thickness_mm = 1.0;         // target separation of a vertex from a triangle
+  double margin_mm = 0.5;            // pairs within thickness + margin become constraints
+  double exclusion_radius_mm = 2.0;  // rest-state neighbourhood ignored (see above)
+};
+
+class ContactDetector {
+ public:
+  // V_rest  #V by 3 rest (open) state, used for the exclusion test and the cell size
+  // F       #F by 3 triangles (winding defines the normal's sign, not the contact side)
+  ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::MatrixXi& F,
+                  const ContactOptions& options);
+
+  // x_start, x_pred  flat positions (3 #V) at the start of the step and predicted
+  // w                inverse masses; pairs whose vertices all have w = 0 are skipped
+  // out              replaced with the step's contact constraints
+  void detect(const double* x_start, const double* x_pred, const double* w,
+              std::vector<ContactConstraint>& out);
+
+  const ContactOptions& options() const { return options_; }
+
+ private:
+  bool excluded(int p, int a, int b, int c) const;
+
+  ContactOptions options_;
+  Eigen::MatrixXi F_;
+  std::vector<double> rest_;  // 3 #V rest positions
+  double cell_size_ = 1.0;
+  // Spatial hash of the vertices (rebuilt every detect): bucket_start_ (#buckets + 1) and
+  // bucket_entries_ (#V) as a counting sort; cell_ holds each vertex's integer cell.
+  std::vector<int> bucket_start_, bucket_entries_;
+  std::vector<int> cell_;  // 3 #V
+};
+
+}  // namespace chordfit

@@ -1,0 +1,78 @@
+#include "core/cordset.h"
+
+namespace chordfit {
+
+const char* toString(CordKind kind) {
+  return kind == CordKind::kPrimary ? "primary" : "secondary";
+}
+
+const char* toString(Provenance provenance) {
+  switch (provenance) {
+    case Provenance::kHeuristic: return "heuristic";
+    case Provenance::kManual: return "manual";
+    case Provenance::kFitted: return "fitted";
+  }
+  return "heuristic";
+}
+
+std::optional<CordKind> parseCordKind(const std::string& text) {
+  if (text == "primary") return CordKind::kPrimary;
+  if (text == "secondary") return CordKind::kSecondary;
+  return std::nullopt;
+}
+
+std::optional<Provenance> parseProvenance(const std::string& text) {
+  if (text == "heuristic") return Provenance::kHeuristic;
+  if (text == "manual") return Provenance::kManual;
+  if (text == "fitted") return Provenance::kFitted;
+  return std::nullopt;
+}
+
+std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
+                      const std::vector<std::string>& leaflet_names,
+                      const std::vector<PmTip>& tips) {
+  std::string leaflet = "?";
+  if (cord.vertex >= 0 && cord.vertex < leaflet_labels.size()) {
+    const int label = leaflet_labels(cord.vertex);
+    leaflet = (label >= 0 && label < static_cast<int>(leaflet_names.size()))
+                  ? leaflet_names[label]
+                  : std::to_string(label);
+  }
+  std::string tip = (cord.tip >= 0 && cord.tip < static_cast<int>(tips.size()))
+                        ? tips[cord.tip].name
+                        : std::to_string(cord.tip);
+  return leaflet + "/" + tip;
+}
+
+namespace {
+bool applyScale(Cord& cord, double scale) {
+  if (cord.locked) return false;
+  cord.rest_length = cord.seed_rest_length * scale;
+  cord.provenance = Provenance::kManual;
+  return true;
+}
+}  // namespace
+
+int scaleCord(CordSet& set, int cord_index, double scale) {
+  if (cord_index < 0 || cord_index >= static_cast<int>(set.cords.size())) return 0;
+  return applyScale(set.cords[cord_index], scale) ? 1 : 0;
+}
+
+int scaleGroup(CordSet& set, const Eigen::VectorXi& leaflet_labels, int leaflet, int tip,
+               double scale) {
+  int changed = 0;
+  for (Cord& cord : set.cords) {
+    if (cord.tip != tip || cord.vertex < 0 || cord.vertex >= leaflet_labels.size()) continue;
+    if (leaflet_labels(cord.vertex) != leaflet) continue;
+    changed += applyScale(cord, scale) ? 1 : 0;
+  }
+  return changed;
+}
+
+int scaleAllCords(CordSet& set, double scale) {
+  int changed = 0;
+  for (Cord& cord : set.cords) changed += applyScale(cord, scale) ? 1 : 0;
+  return changed;
+}
+
+}  // namespace chordfit

@@ -1,0 +1,64 @@
+// Chordae model: papillary-muscle (PM) tips and the cords tying them to leaflet vertices.
+// A CordSet is its own JSON file (cordset_io.h) so that heuristic, manual and fitted cord
+// sets of one case can be kept side by side and compared.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace chordfit {
+
+enum class CordKind { kPrimary, kSecondary };  // primary: near the free edge; secondary: belly
+enum class Provenance { kHeuristic, kManual, kFitted };
+
+struct PmTip {
+  std::string name;  // mitral default: "anterolateral", "posteromedial"
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // open state, mm
+  // Closed-state position; when present the simulator interpolates open -> closed,
+  // otherwise the tip is static (paper: heuristic tips are static).
+  std::optional<Eigen::Vector3d> closed_position;
+};
+
+struct Cord {
+  int tip = 0;     // index into CordSet::tips
+  int vertex = 0;  // leaflet vertex index into ValveMesh::V
+  CordKind kind = CordKind::kPrimary;
+  // Rest length l0 (mm) = seed_rest_length * scale. The seed is what the heuristic (or the
+  // user's first definition) gave; a scale multiplies it (paper: "scale cord lengths").
+  double seed_rest_length = 0.0;
+  double rest_length = 0.0;
+  double compliance = 0.0;  // XPBD compliance, mm/N; 0 = inextensible (paper eq. 1, alpha^CT = 0)
+  Provenance provenance = Provenance::kHeuristic;
+  bool locked = false;  // a manual override the fitter must not change
+
+  double scale() const { return seed_rest_length > 0.0 ? rest_length / seed_rest_length : 1.0; }
+};
+
+struct CordSet {
+  std::vector<PmTip> tips;
+  std::vector<Cord> cords;
+};
+
+const char* toString(CordKind kind);
+const char* toString(Provenance provenance);
+std::optional<CordKind> parseCordKind(const std::string& text);
+std::optional<Provenance> parseProvenance(const std::string& text);
+
+// Group of a cord = (leaflet of its vertex, tip); the paper's four groups are
+// anterior/posterior x anterolateral/posteromedial. Returns "<leaflet>/<tip>".
+std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
+                      const std::vector<std::string>& leaflet_names,
+                      const std::vector<PmTip>& tips);
+
+// Editing, as in the paper's editor: a scale multiplies the seed rest length. Edited cords
+// become provenance kManual. Locked cords are left alone and counted in the return value.
+// Returns the number of cords changed.
+int scaleCord(CordSet& set, int cord_index, double scale);
+int scaleGroup(CordSet& set, const Eigen::VectorXi& leaflet_labels, int leaflet, int tip,
+               double scale);
+int scaleAllCords(CordSet& set, double scale);
+
+}  // namespace chordfit

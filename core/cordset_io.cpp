@@ -1,0 +1,222 @@
+#include "core/cordset_io.h"
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/json_fields.h"
+
+namespace chordfit {
+
+namespace {
+
+using nlohmann::json;
+
+json vec3Json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
+
+bool readCord(const json& value, const std::string& where, int tip_count, JsonFields& fields,
+              Cord& cord) {
+  bool ok = true;
+  if (const json* tip = fields.member(value, where, "tip", true)) {
+    ok &= fields.integer(*tip, fieldPath(where, "tip"), cord.tip);
+    if (ok && (cord.tip < 0 || cord.tip >= tip_count)) {
+      fields.error(fieldPath(where, "tip"), "tip " + std::to_string(cord.tip) +
+                                                " does not exist (the file has " +
+                                                std::to_string(tip_count) + " tips)");
+      ok = false;
+    }
+  } else {
+    ok = false;
+  }
+  if (const json* vertex = fields.member(value, where, "vertex", true)) {
+    ok &= fields.integer(*vertex, fieldPath(where, "vertex"), cord.vertex);
+  } else {
+    ok = false;
+  }
+  if (const json* kind = fields.member(value, where, "kind", false)) {
+    std::string text;
+    if (fields.text(*kind, fieldPath(where, "kind"), text)) {
+      if (auto parsed = parseCordKind(text)) {
+        cord.kind = *parsed;
+      } else {
+        fields.error(fieldPath(where, "kind"), "\"" + text + "\" is not primary or secondary");
+        ok = false;
+      }
+    } else {
+      ok = false;
+    }
+  }
+  if (const json* rest = fields.member(value, where, "rest_length_mm", true)) {
+    ok &= fields.number(*rest, fieldPath(where, "rest_length_mm"), cord.rest_length);
+    if (ok && cord.rest_length <= 0.0) {
+      fields.error(fieldPath(where, "rest_length_mm"), "rest length must be positive");
+      ok = false;
+    }
+  } else {
+    ok = false;
+  }
+  cord.seed_rest_length = cord.rest_length;
+  if (const json* seed = fields.member(value, where, "seed_rest_length_mm", false)) {
+    ok &= fields.number(*seed, fieldPath(where, "seed_rest_length_mm"), cord.seed_rest_length);
+    if (ok && cord.seed_rest_length <= 0.0) {
+      fields.error(fieldPath(where, "seed_rest_length_mm"), "seed rest length must be positive");
+      ok = false;
+    }
+  }
+  if (const json* compliance = fields.member(value, where, "compliance_mm_per_N", false)) {
+    ok &= fields.number(*compliance, fieldPath(where, "compliance_mm_per_N"), cord.compliance);
+    if (ok && cord.compliance < 0.0) {
+      fields.error(fieldPath(where, "compliance_mm_per_N"), "compliance must be >= 0");
+      ok = false;
+    }
+  }
+  // A hand-written cord set without provenance is the user's: manual.
+  cord.provenance = Provenance::kManual;
+  if (const json* provenance = fields.member(value, where, "provenance", false)) {
+    std::string text;
+    if (fields.text(*provenance, fieldPath(where, "provenance"), text)) {
+      if (auto parsed = parseProvenance(text)) {
+        cord.provenance = *parsed;
+      } else {
+        fields.error(fieldPath(where, "provenance"),
+                     "\"" + text + "\" is not heuristic, manual or fitted");
+        ok = false;
+      }
+    } else {
+      ok = false;
+    }
+  }
+  if (const json* locked = fields.member(value, where, "locked", false)) {
+    ok &= fields.boolean(*locked, fieldPath(where, "locked"), cord.locked);
+  }
+  return ok;
+}
+
+}  // namespace
+
+bool readTips(const json& array, const std::string& where, JsonFields& fields,
+              std::vector<PmTip>& tips) {
+  if (!array.is_array()) {
+    fields.typeError(where, "an array of tips", array);
+    return false;
+  }
+  bool ok = true;
+  tips.clear();
+  for (std::size_t i = 0; i < array.size(); ++i) {
+    const std::string at = indexPath(where, i);
+    PmTip tip;
+    tip.name = "tip" + std::to_string(i);
+    if (const json* name = fields.member(array[i], at, "name", false)) {
+      ok &= fields.text(*name, fieldPath(at, "name"), tip.name);
+    }
+    if (const json* position = fields.member(array[i], at, "position", true)) {
+      ok &= fields.vec3(*position, fieldPath(at, "position"), tip.position);
+    } else {
+      ok = false;
+    }
+    if (const json* closed = fields.member(array[i], at, "closed_position", false)) {
+      Eigen::Vector3d p;
+      if (fields.vec3(*closed, fieldPath(at, "closed_position"), p)) {
+        tip.closed_position = p;
+      } else {
+        ok = false;
+      }
+    }
+    tips.push_back(tip);
+  }
+  return ok;
+}
+
+bool readCordSet(const std::filesystem::path& path, const std::string& file, CordSet& set,
+                 Diagnostics& diagnostics) {
+  const std::optional<json> document = loadJsonFile(path, file, diagnostics);
+  if (!document) return false;
+  JsonFields fields(file, diagnostics);
+  bool ok = true;
+  if (const json* format = fields.member(*document, "", "format", false)) {
+    std::string text;
+    if (fields.text(*format, "format", text) && text != "chordfit-cordset") {
+      fields.error("format", "\"" + text + "\" is not a chordfit-cordset file");
+      ok = false;
+    }
+  }
+  if (const json* version = fields.member(*document, "", "version", true)) {
+    int v = 0;
+    if (fields.integer(*version, "version", v) && v != kCordSetFormatVersion) {
+      fields.error("version", "unsupported format version " + std::to_string(v) +
+                                  " (this build reads version " +
+                                  std::to_string(kCordSetFormatVersion) + ")");
+      return false;
+    }
+  } else {
+    return false;
+  }
+  set = CordSet{};
+  if (const json* tips = fields.member(*document, "", "tips", true)) {
+    ok &= readTips(*tips, "tips", fields, set.tips);
+  } else {
+    ok = false;
+  }
+  const json* cords = fields.member(*document, "", "cords", true);
+  if (cords == nullptr) return false;
+  if (!cords->is_array()) {
+    fields.typeError("cords", "an array of cords", *cords);
+    return false;
+  }
+  for (std::size_t i = 0; i < cords->size(); ++i) {
+    Cord cord;
+    if (readCord((*cords)[i], indexPath("cords", i), static_cast<int>(set.tips.size()), fields,
+                 cord)) {
+      set.cords.push_back(cord);
+    } else {
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& file,
+                       Diagnostics& diagnostics) {
+  bool ok = true;
+  for (std::size_t i = 0; i < set.cords.size(); ++i) {
+    const int v = set.cords[i].vertex;
+    if (v < 0 || v >= vertex_count) {
+      diagnostics.error(file, indexPath("cords", i) + ".vertex",
+                        "vertex " + std::to_string(v) + " does not exist (mesh has " +
+                            std::to_string(vertex_count) + " vertices)");
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+json tipsJson(const std::vector<PmTip>& tips) {
+  json list = json::array();
+  for (const PmTip& tip : tips) {
+    json t = {{"name", tip.name}, {"position", vec3Json(tip.position)}};
+    if (tip.closed_position) t["closed_position"] = vec3Json(*tip.closed_position);
+    list.push_back(t);
+  }
+  return list;
+}
+
+void writeCordSet(const std::filesystem::path& path, const CordSet& set, const ValveMesh* mesh) {
+  json cords = json::array();
+  for (const Cord& cord : set.cords) {
+    json c = {{"tip", cord.tip}, {"vertex", cord.vertex}, {"kind", toString(cord.kind)}};
+    if (mesh != nullptr) c["group"] = groupName(cord, mesh->leaflet, mesh->leaflet_names, set.tips);
+    c["seed_rest_length_mm"] = cord.seed_rest_length;
+    c["rest_length_mm"] = cord.rest_length;
+    c["scale"] = cord.scale();
+    c["compliance_mm_per_N"] = cord.compliance;
+    c["provenance"] = toString(cord.provenance);
+    c["locked"] = cord.locked;
+    cords.push_back(c);
+  }
+  const json document = {{"format", "chordfit-cordset"},
+                         {"version", kCordSetFormatVersion},
+                         {"tips", tipsJson(set.tips)},
+                         {"cords", cords}};
+  writeFileAtomically(path, document.dump(2) + "\n");
+}
+
+}  // namespace chordfit

@@ -1,0 +1,192 @@
+#include "core/curve_io.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/json_fields.h"
+
+namespace chordfit {
+namespace {
+
+using json = nlohmann::json;
+
+// Slicer's own reader (vtkMRMLMarkupsJsonStorageNode) assumes LPS when the field is absent.
+constexpr const char* kDefaultCoordinateSystem = "LPS";
+
+// Reads "coordinateSystem" of `object` and converts `points` from it to LPS in place.
+bool toLps(const json& object, const std::string& where, JsonFields& fields,
+           Eigen::MatrixXd& points) {
+  std::string system = kDefaultCoordinateSystem;
+  if (const json* value = fields.member(object, where, "coordinateSystem", false)) {
+    if (!fields.text(*value, fieldPath(where, "coordinateSystem"), system)) return false;
+  }
+  if (system == "RAS") {
+    points.col(0) *= -1.0;  // R -> L
+    points.col(1) *= -1.0;  // A -> P
+  } else if (system != "LPS") {
+    fields.error(fieldPath(where, "coordinateSystem"),
+                 "expected \"LPS\" or \"RAS\", got \"" + system + "\"");
+    return false;
+  }
+  return true;
+}
+
+// Positions are millimetres everywhere in chordfit; other units would be silently wrong.
+bool checkUnits(const json& markup, const std::string& where, JsonFields& fields) {
+  const json* value = fields.member(markup, where, "coordinateUnits", false);
+  if (value == nullptr || !value->is_string()) return true;  // Slicer also writes a code object
+  const std::string units = value->get<std::string>();
+  if (units == "mm") return true;
+  fields.error(fieldPath(where, "coordinateUnits"), "expected \"mm\", got \"" + units + "\"");
+  return false;
+}
+
+// Slicer keeps placeholder control points that were never placed; their positions are
+// meaningless, so they are skipped.
+bool isPlaced(const json& point) {
+  const auto status = point.find("positionStatus");
+  return status == point.end() || !status->is_string() || *status != "undefined";
+}
+
+bool readControlPoints(const json& markup, const std::string& where, JsonFields& fields,
+                       Eigen::MatrixXd& points) {
+  const std::string list_where = fieldPath(where, "controlPoints");
+  const json* list = fields.member(markup, where, "controlPoints", true);
+  if (list == nullptr) return false;
+  if (!list->is_array()) {
+    fields.typeError(list_where, "an array of control points", *list);
+    return false;
+  }
+  points.resize(static_cast<Eigen::Index>(list->size()), 3);
+  Eigen::Index placed = 0;
+  bool ok = true;
+  for (std::size_t i = 0; i < list->size(); ++i) {
+    const json& point = (*list)[i];
+    const std::string point_where = indexPath(list_where, i);
+    if (!point.is_object()) {
+      fields.typeError(point_where, "a control point object", point);
+      ok = false;
+      continue;
+    }
+    if (!isPlaced(point)) continue;
+    const json* position = fields.member(point, point_where, "position", true);
+    Eigen::Vector3d p;
+    if (position == nullptr || !fields.vec3(*position, fieldPath(point_where, "position"), p)) {
+      ok = false;
+      continue;
+    }
+    points.row(placed++) = p.transpose();
+  }
+  points.conservativeResize(placed, 3);
+  return ok;
+}
+
+bool readMarkups(const json& document, JsonFields& fields, int markup_index, Curve& curve) {
+  const json& markups = document["markups"];
+  if (!markups.is_array()) {
+    fields.typeError("markups", "an array", markups);
+    return false;
+  }
+  if (markup_index < 0 || static_cast<std::size_t>(markup_index) >= markups.size()) {
+    fields.error("markups", "markup " + std::to_string(markup_index) + " requested, but the file has " +
+                                std::to_string(markups.size()));
+    return false;
+  }
+  const std::string where = indexPath("markups", static_cast<std::size_t>(markup_index));
+  const json& markup = markups[static_cast<std::size_t>(markup_index)];
+  const json* type_value = fields.member(markup, where, "type", true);
+  std::string type;
+  if (type_value == nullptr || !fields.text(*type_value, fieldPath(where, "type"), type))
+    return false;
+  if (type != "Curve" && type != "ClosedCurve" && type != "Fiducial") {
+    fields.error(fieldPath(where, "type"),
+                 "expected \"Curve\", \"ClosedCurve\" or \"Fiducial\", got \"" + type + "\"");
+    return false;
+  }
+  curve.closed = type == "ClosedCurve";
+  bool ok = checkUnits(markup, where, fields);
+  ok = readControlPoints(markup, where, fields, curve.points) && ok;
+  ok = ok && toLps(markup, where, fields, curve.points);
+  if (ok && curve.points.rows() == 0) {
+    fields.error(fieldPath(where, "controlPoints"), "no placed control points");
+    return false;
+  }
+  return ok;
+}
+
+// {"points": [[x, y, z], ...], "closed": bool, "coordinateSystem": "LPS"|"RAS"} (the last
+// two optional) or a bare [[x, y, z], ...].
+bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
+  if (document.is_array()) {
+    curve.closed = false;
+    if (!fields.points(document, "", curve.points)) return false;
+    if (curve.points.rows() == 0) {
+      fields.error("(top level)", "no points");
+      return false;
+    }
+    return true;
+  }
+  const json* points = fields.member(document, "", "points", true);
+  if (points == nullptr || !fields.points(*points, "points", curve.points)) return false;
+  curve.closed = false;
+  if (const json* closed = fields.member(document, "", "closed", false)) {
+    if (!fields.boolean(*closed, "closed", curve.closed)) return false;
+  }
+  if (!toLps(document, "", fields, curve.points)) return false;
+  if (curve.points.rows() == 0) {
+    fields.error("points", "no points");
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& diagnostics,
+               const std::string& display_name, int markup_index) {
+  const std::string file = display_name.empty() ? path.string() : display_name;
+  try {
+    const auto document = loadJsonFile(path, file, diagnostics);
+    if (!document) return false;
+    JsonFields fields(file, diagnostics);
+    Curve result;
+    const bool ok = document->is_object() && document->contains("markups")
+                        ? readMarkups(*document, fields, markup_index, result)
+                        : readPointList(*document, fields, result);
+    if (ok) curve = std::move(result);
+    return ok;
+  } catch (const std::exception& e) {  // e.g. std::bad_alloc; the contract is "never throws"
+    diagnostics.error(file, "", std::string("cannot be read: ") + e.what());
+  }
+  return false;
+}
+
+// Throws std::invalid_argument for a matrix that is not #P by 3 or holds a non-finite
+// value (JSON has no NaN), std::runtime_error on I/O failure.
+void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points,
+                    bool closed) {
+  if (points.cols() != 3 && points.rows() != 0)
+    throw std::invalid_argument(path.string() + ": points must have 3 columns");
+  if (!points.allFinite())
+    throw std::invalid_argument(path.string() + ": points must be finite");
+  // One point per line keeps the files readable and diffable; nlohmann prints the
+  // shortest text that reads back to the same double.
+  std::string out = "{\n  \"closed\": " + std::string(closed ? "true" : "false") +
+                    ",\n  \"points\": [";
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    out += i == 0 ? "\n    [" : ",\n    [";
+    for (int k = 0; k < 3; ++k) {
+      if (k > 0) out += ", ";
+      out += json(points(i, k)).dump();
+    }
+    out += "]";
+  }
+  out += points.rows() > 0 ? "\n  ]\n}\n" : "]\n}\n";
+  writeFileAtomically(path, out);
+}
+
+}  // namespace chordfit

@@ -1,0 +1,30 @@
+// Curve readers: 3D Slicer markups JSON (*.mrk.json: Curve / ClosedCurve / Fiducial lists,
+// coordinateSystem LPS or RAS) and plain JSON point lists ({"points": [[x,y,z], ...]} or a
+// bare [[x,y,z], ...] array). All points are returned in the case coordinate system, LPS
+// (3D Slicer's file convention): RAS input is converted by negating x and y.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/diagnostics.h"
+
+namespace chordfit {
+
+struct Curve {
+  Eigen::MatrixXd points;  // #P by 3, mm, LPS
+  bool closed = false;     // Slicer ClosedCurve (plain lists: "closed": true)
+};
+
+// Reads one curve. For a markups file with several markups, `markup_index` picks one.
+// Never throws on bad content; returns false with problems added to `diagnostics`.
+bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& diagnostics,
+               const std::string& display_name = "", int markup_index = 0);
+
+// Writes a plain JSON point list atomically.
+void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points,
+                    bool closed = false);
+
+}  // namespace chordfit

@@ -1,0 +1,37 @@
+// Collects input problems so that one run reports all of them, each as
+//   error: <file>: <field or line>: <problem>
+// Readers add to a Diagnostics instead of throwing, so bad input never aborts.
+#pragma once
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace chordfit {
+
+struct Problem {
+  std::string file;   // path as given by the user (or a file name inside a case)
+  std::string where;  // field ("mesh", "tracings[2].points") or location ("line 7", "face 12")
+  std::string what;   // the problem, in words
+};
+
+class Diagnostics {
+ public:
+  void error(std::string file, std::string where, std::string what);
+  bool ok() const { return problems_.empty(); }
+  const std::vector<Problem>& problems() const { return problems_; }
+  // Appends another collector's problems (used when a sub-reader worked on its own).
+  void merge(const Diagnostics& other);
+  // Prints one "error: file: where: what" line per problem.
+  void print(std::ostream& out) const;
+
+ private:
+  std::vector<Problem> problems_;
+};
+
+// Thrown by the command-line layer for a fatal input problem already described in words.
+struct InputError {
+  Diagnostics diagnostics;
+};
+
+}  // namespace chordfit

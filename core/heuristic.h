@@ -1,0 +1,60 @@
+// The paper's heuristic chordae model (Walczak et al., "Modeling of tendinous cords"), plus the
+// automatic placement of cord leaflet vertices that the paper leaves as future work.
+//   - annulus plane (AP) by PCA, n_AP toward the atrium (annulus_plane.h);
+//   - cord vertices: given, or primary cords on the free edge at a regular spacing and
+//     secondary cords on the belly;
+//   - subsets per PM tip: side of the plane through the annulus centre spanned by n_AP and
+//     the anteroposterior axis (anterolateral +l, posteromedial -l);
+//   - tip_i = c_i - d_i n_AP, c_i the centroid of subset i, d_i = dist(c_i, AP);
+//   - rest length l0 = dist(V_j, AP) + |V_j - tip_i|, in the open state.
+#pragma once
+
+#include <vector>
+
+#include "core/annulus_plane.h"
+#include "core/case_data.h"
+#include "core/cordset.h"
+
+namespace chordfit {
+
+struct HeuristicOptions {
+  double primary_spacing_mm = 4.0;    // arc length between primary cords along the free edge
+  double secondary_spacing_mm = 6.0;  // spacing of secondary cords along the belly
+  double secondary_depth_mm = 7.0;    // secondary cords this far (edge path) from the free edge
+  // No cord where the leaflet is shorter than this from annulus to the vertex (commissures).
+  double min_annulus_distance_mm = 4.0;
+};
+
+struct CordAttachment {
+  int vertex = 0;
+  CordKind kind = CordKind::kPrimary;
+};
+
+// Free-edge loops: boundary loops of the mesh other than the annulus ring.
+std::vector<std::vector<int>> freeEdgeLoops(const ValveMesh& mesh);
+
+// Automatic placement of cord leaflet vertices (primaries first, then secondaries), in a
+// deterministic order.
+std::vector<CordAttachment> placeCordAttachments(const ValveMesh& mesh,
+                                                 const HeuristicOptions& options);
+
+// Tip subset of each vertex: 0 (anterolateral, l.(p - c) >= 0) or 1 (posteromedial).
+std::vector<int> splitBySide(const ValveMesh& mesh, const AnnulusFrame& frame,
+                             const std::vector<int>& vertices);
+
+// Paper's tip: c - d n_AP for the centroid c of `vertices` (d = |dist(c, AP)|).
+Eigen::Vector3d heuristicTipPosition(const ValveMesh& mesh, const Plane& annulus_plane,
+                                     const std::vector<int>& vertices);
+
+// Paper's rest length: dist(p, AP) + |p - tip|.
+double heuristicRestLength(const Eigen::Vector3d& p, const Plane& annulus_plane,
+                           const Eigen::Vector3d& tip);
+
+// The heuristic cord set of a case. Cord vertices, kinds and tip subsets come from the
+// case's cords when it has them (the user's choice), else from automatic placement and
+// the side split; tip positions come from the case's pm_tips when given, else from the
+// paper's formula. Rest lengths always from the paper's formula; every cord has
+// provenance heuristic, scale 1 and the case cord's compliance (0 otherwise).
+CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& options = {});
+
+}  // namespace chordfit

@@ -1,0 +1,193 @@
+#include "core/json_fields.h"
+
+#include <cmath>
+#include <limits>
+
+#include "core/atomic_file.h"
+
+namespace chordfit {
+
+namespace {
+
+// nlohmann reports a byte offset; people look for line and column.
+std::string lineColumn(const std::string& text, std::size_t byte) {
+  std::size_t line = 1;
+  std::size_t column = 1;
+  for (std::size_t i = 0; i < text.size() && i + 1 < byte; ++i) {
+    if (text[i] == '\n') {
+      ++line;
+      column = 1;
+    } else {
+      ++column;
+    }
+  }
+  return "line " + std::to_string(line) + ", column " + std::to_string(column);
+}
+
+// nlohmann's message starts with "[json.exception.parse_error.101] parse error at line ..";
+// keep only the reason after the last ": ".
+std::string parseReason(const std::string& message) {
+  const std::size_t colon = message.rfind(": ");
+  return colon == std::string::npos ? message : message.substr(colon + 2);
+}
+
+}  // namespace
+
+std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
+                                        Diagnostics& diagnostics) {
+  try {
+    return nlohmann::json::parse(text);
+  } catch (const nlohmann::json::parse_error& e) {
+    diagnostics.error(file, lineColumn(text, e.byte), "malformed JSON: " + parseReason(e.what()));
+  }
+  return std::nullopt;
+}
+
+std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
+                                           const std::string& file, Diagnostics& diagnostics) {
+  std::string text;
+  if (!readWholeFile(path, text)) {
+    diagnostics.error(file, "", std::filesystem::exists(path) ? "cannot be read" : "file not found");
+    return std::nullopt;
+  }
+  return parseJson(text, file, diagnostics);
+}
+
+std::string jsonTypeName(const nlohmann::json& value) {
+  if (value.is_object()) return "object";
+  if (value.is_array()) return "array";
+  if (value.is_string()) return "string";
+  if (value.is_boolean()) return "boolean";
+  if (value.is_number()) return "number";
+  return "null";
+}
+
+std::string fieldPath(const std::string& parent, const std::string& key) {
+  return parent.empty() ? key : parent + "." + key;
+}
+
+std::string indexPath(const std::string& parent, std::size_t index) {
+  return parent + "[" + std::to_string(index) + "]";
+}
+
+void JsonFields::error(const std::string& where, const std::string& what) {
+  diagnostics_.error(file_, where, what);
+}
+
+void JsonFields::typeError(const std::string& where, const std::string& expected,
+                           const nlohmann::json& got) {
+  error(where, "expected " + expected + ", got " + jsonTypeName(got));
+}
+
+const nlohmann::json* JsonFields::member(const nlohmann::json& object, const std::string& where,
+                                         const std::string& key, bool required) {
+  if (!object.is_object()) {
+    typeError(where.empty() ? "(top level)" : where, "an object", object);
+    return nullptr;
+  }
+  const auto it = object.find(key);
+  if (it == object.end() || it->is_null()) {
+    if (required) error(fieldPath(where, key), "required field is missing");
+    return nullptr;
+  }
+  return &*it;
+}
+
+bool JsonFields::number(const nlohmann::json& value, const std::string& where, double& out) {
+  if (!value.is_number()) {
+    typeError(where, "a number", value);
+    return false;
+  }
+  out = value.get<double>();
+  if (!std::isfinite(out)) {
+    error(where, "number is not finite");
+    return false;
+  }
+  return true;
+}
+
+bool JsonFields::integer(const nlohmann::json& value, const std::string& where, int& out) {
+  if (!value.is_number_integer()) {
+    typeError(where, "an integer", value);
+    return false;
+  }
+  const auto wide = value.get<long long>();
+  if (wide < std::numeric_limits<int>::min() || wide > std::numeric_limits<int>::max()) {
+    error(where, "integer out of range");
+    return false;
+  }
+  out = static_cast<int>(wide);
+  return true;
+}
+
+bool JsonFields::text(const nlohmann::json& value, const std::string& where, std::string& out) {
+  if (!value.is_string()) {
+    typeError(where, "a string", value);
+    return false;
+  }
+  out = value.get<std::string>();
+  return true;
+}
+
+bool JsonFields::boolean(const nlohmann::json& value, const std::string& where, bool& out) {
+  if (!value.is_boolean()) {
+    typeError(where, "true or false", value);
+    return false;
+  }
+  out = value.get<bool>();
+  return true;
+}
+
+bool JsonFields::vec3(const nlohmann::json& value, const std::string& where,
+                      Eigen::Vector3d& out) {
+  if (!value.is_array() || value.size() != 3) {
+    error(where, "expected an array of 3 numbers, got " +
+                     (value.is_array() ? "an array of " + std::to_string(value.size())
+                                       : jsonTypeName(value)));
+    return false;
+  }
+  for (int k = 0; k < 3; ++k) {
+    if (!number(value[k], indexPath(where, k), out(k))) return false;
+  }
+  return true;
+}
+
+bool JsonFields::points(const nlohmann::json& value, const std::string& where,
+                        Eigen::MatrixXd& out) {
+  if (!value.is_array()) {
+    typeError(where, "an array of [x, y, z] points", value);
+    return false;
+  }
+  out.resize(static_cast<Eigen::Index>(value.size()), 3);
+  bool ok = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    Eigen::Vector3d p;
+    if (vec3(value[i], indexPath(where, i), p)) {
+      out.row(static_cast<Eigen::Index>(i)) = p.transpose();
+    } else {
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+bool JsonFields::integers(const nlohmann::json& value, const std::string& where,
+                          Eigen::VectorXi& out) {
+  if (!value.is_array()) {
+    typeError(where, "an array of integers", value);
+    return false;
+  }
+  out.resize(static_cast<Eigen::Index>(value.size()));
+  bool ok = true;
+  for (std::size_t i = 0; i < value.size(); ++i) {
+    int v = 0;
+    if (integer(value[i], indexPath(where, i), v)) {
+      out(static_cast<Eigen::Index>(i)) = v;
+    } else {
+      ok = false;
+    }
+  }
+  return ok;
+}
+
+}  // namespace chordfit

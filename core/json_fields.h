@@ -1,0 +1,66 @@
+// Typed access to JSON input with precise messages: every reader of the project's JSON
+// formats (case.json, cord sets, point lists, tracings) reports problems as
+//   <file>: <field path>: expected <type>, got <type>
+// through one of these, so the wording is the same everywhere.
+#pragma once
+
+#include <filesystem>
+#include <optional>
+#include <string>
+
+#include <Eigen/Core>
+#include <nlohmann/json.hpp>
+
+#include "core/diagnostics.h"
+
+namespace chordfit {
+
+// Parses JSON text; on a syntax error adds "line L, column C: <reason>" and returns nullopt.
+std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
+                                        Diagnostics& diagnostics);
+
+// Reads and parses a file; a missing file is reported as "file not found".
+std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
+                                           const std::string& file, Diagnostics& diagnostics);
+
+// "object", "array", "string", "number", "boolean", "null".
+std::string jsonTypeName(const nlohmann::json& value);
+
+class JsonFields {
+ public:
+  JsonFields(std::string file, Diagnostics& diagnostics)
+      : file_(std::move(file)), diagnostics_(diagnostics) {}
+
+  const std::string& file() const { return file_; }
+  Diagnostics& diagnostics() { return diagnostics_; }
+
+  // Member `key` of `object` (whose own path is `where`). Reports a missing required member
+  // and a non-object parent. Returns nullptr when absent or on error.
+  const nlohmann::json* member(const nlohmann::json& object, const std::string& where,
+                               const std::string& key, bool required);
+
+  bool number(const nlohmann::json& value, const std::string& where, double& out);
+  bool integer(const nlohmann::json& value, const std::string& where, int& out);
+  bool text(const nlohmann::json& value, const std::string& where, std::string& out);
+  bool boolean(const nlohmann::json& value, const std::string& where, bool& out);
+  // [x, y, z] of finite numbers.
+  bool vec3(const nlohmann::json& value, const std::string& where, Eigen::Vector3d& out);
+  // [[x, y, z], ...] of finite numbers -> #P by 3.
+  bool points(const nlohmann::json& value, const std::string& where, Eigen::MatrixXd& out);
+  // [i, j, ...] of integers.
+  bool integers(const nlohmann::json& value, const std::string& where, Eigen::VectorXi& out);
+
+  void error(const std::string& where, const std::string& what);
+  void typeError(const std::string& where, const std::string& expected,
+                 const nlohmann::json& got);
+
+ private:
+  std::string file_;
+  Diagnostics& diagnostics_;
+};
+
+// Path helpers for messages: field("a", "b") == "a.b", index("a", 2) == "a[2]".
+std::string fieldPath(const std::string& parent, const std::string& key);
+std::string indexPath(const std::string& parent, std::size_t index);
+
+}  // namespace chordfit

@@ -1,0 +1,222 @@
+#include "core/metrics.h"
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <map>
+#include <set>
+
+#include "core/cgal_backend.h"
+
+namespace chordfit {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kTwoPi = 6.283185307179586;
+}  // namespace
+
+Eigen::VectorXd pointToSurfaceDistances(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                        const Eigen::MatrixXd& points) {
+  Eigen::VectorXd d(points.rows());
+  if (points.rows() == 0) return d;
+  const SurfaceDistance surface(V, F);
+  for (Eigen::Index i = 0; i < points.rows(); ++i) d(i) = surface.distance(points.row(i));
+  return d;
+}
+
+DeviationStats summarizeDeviation(const Eigen::VectorXd& distances) {
+  DeviationStats s;
+  s.count = static_cast<int>(distances.size());
+  if (s.count == 0) {
+    s.min = s.median = s.max = s.mean = s.sd = kNaN;
+    return s;
+  }
+  std::vector<double> sorted(distances.data(), distances.data() + distances.size());
+  std::sort(sorted.begin(), sorted.end());
+  s.min = sorted.front();
+  s.max = sorted.back();
+  const std::size_t mid = sorted.size() / 2;
+  s.median = sorted.size() % 2 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
+  s.mean = distances.mean();
+  s.sd = s.count > 1
+             ? std::sqrt((distances.array() - s.mean).square().sum() / (s.count - 1))
+             : 0.0;
+  return s;
+}
+
+double surfaceArea(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
+  double twice = 0.0;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    const Eigen::Vector3d a = V.row(F(f, 0)), b = V.row(F(f, 1)), c = V.row(F(f, 2));
+    twice += (b - a).cross(c - a).norm();
+  }
+  return 0.5 * twice;
+}
+
+Eigen::MatrixXd stackTracingPoints(const std::vector<Tracing>& tracings,
+                                   Eigen::VectorXi* leaflets) {
+  Eigen::Index total = 0;
+  for (const Tracing& t : tracings) total += t.points.rows();
+  Eigen::MatrixXd points(total, 3);
+  if (leaflets) leaflets->resize(total);
+  Eigen::Index row = 0;
+  for (const Tracing& t : tracings) {
+    points.middleRows(row, t.points.rows()) = t.points;
+    if (leaflets) leaflets->segment(row, t.points.rows()).setConstant(t.leaflet);
+    row += t.points.rows();
+  }
+  return points;
+}
+
+namespace {
+
+struct RingPoint {
+  double theta;   // angle around the centre in the frame
+  double radius;  // in-plane distance from the centre
+  double height;  // signed distance to the plane
+};
+
+std::vector<RingPoint> ringPolar(const AnnulusFrame& frame, const Eigen::MatrixXd& ring) {
+  std::vector<RingPoint> polar;
+  for (Eigen::Index i = 0; i < ring.rows(); ++i) {
+    const Eigen::Vector3d q = ring.row(i).transpose() - frame.plane.centre;
+    const double u = frame.a.dot(q), v = frame.l.dot(q);
+    polar.push_back({std::atan2(v, u), std::hypot(u, v), frame.plane.normal.dot(q)});
+  }
+  return polar;
+}
+
+// The annulus (radius, height) where the half-plane at angle theta cuts the ring: linear
+// interpolation on the ring edge whose angular span contains theta.
+std::pair<double, double> ringAt(const std::vector<RingPoint>& polar, double theta) {
+  const std::size_t n = polar.size();
+  double best_gap = std::numeric_limits<double>::infinity();
+  std::pair<double, double> nearest{polar[0].radius, polar[0].height};
+  for (std::size_t i = 0; i < n; ++i) {
+    const RingPoint& p = polar[i];
+    const RingPoint& q = polar[(i + 1) % n];
+    const double span = std::remainder(q.theta - p.theta, kTwoPi);
+    const double along = std::remainder(theta - p.theta, kTwoPi);
+    if (span != 0.0 && along / span >= 0.0 && along / span <= 1.0) {
+      const double t = along / span;
+      return {p.radius + t * (q.radius - p.radius), p.height + t * (q.height - p.height)};
+    }
+    const double gap = std::abs(along);
+    if (gap < best_gap) {
+      best_gap = gap;
+      nearest = {p.radius, p.height};
+    }
+  }
+  return nearest;
+}
+
+}  // namespace
+
+Eigen::VectorXd heightAboveAnnulus(const AnnulusFrame& frame, const Eigen::MatrixXd& ring,
+                                   const Eigen::MatrixXd& points) {
+  const std::vector<RingPoint> polar = ringPolar(frame, ring);
+  Eigen::VectorXd heights(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const Eigen::Vector3d q = points.row(i).transpose() - frame.plane.centre;
+    const double u = frame.a.dot(q), v = frame.l.dot(q);
+    const double r = std::hypot(u, v);
+    const double theta = std::atan2(v, u);
+    const auto [rho_near, z_near] = ringAt(polar, theta);
+    const auto [rho_far, z_far] = ringAt(polar, theta + M_PI);
+    // Hinge line from (-rho_far, z_far) to (rho_near, z_near) in the long-axis plane.
+    const double t = std::clamp((r + rho_far) / (rho_near + rho_far), 0.0, 1.0);
+    heights(i) = frame.plane.normal.dot(q) - (z_far + t * (z_near - z_far));
+  }
+  return heights;
+}
+
+ClosedAnnulus closedAnnulus(const ValveCase& valve_case) {
+  ClosedAnnulus closed;
+  closed.ring = valve_case.annulus_closed;
+  closed.frame = annulusFrameFromRing(closed.ring, valve_case.mesh,
+                                      openAnnulusFrame(valve_case.mesh));
+  closed.segments = buildSegmentMap(closed.ring, valve_case.mesh, closed.frame);
+  return closed;
+}
+
+ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
+                                const Eigen::VectorXi& leaflets, const ProlapseOptions& options) {
+  ProlapseResult result;
+  result.heights = heightAboveAnnulus(annulus.frame, annulus.ring, points);
+  result.max_height_mm = points.rows() > 0 ? result.heights.maxCoeff() : kNaN;
+  std::map<int, int> above;  // segment id -> points above threshold
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    if (result.heights(i) <= options.threshold_mm) continue;
+    ++above[segmentOf(annulus.segments, points.row(i).transpose(), leaflets(i))];
+  }
+  std::set<std::string> names;
+  for (const auto& [segment, count] : above) {
+    if (segment >= 0 && count >= options.min_points) {
+      names.insert(segmentName(annulus.segments, segment));
+    }
+  }
+  result.segments.assign(names.begin(), names.end());
+  return result;
+}
+
+ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                              const ProlapseOptions& options) {
+  const ValveMesh& mesh = valve_case.mesh;
+  std::vector<bool> on_ring(mesh.V.rows(), false);
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) on_ring[mesh.annulus(i)] = true;
+  std::vector<int> rows;
+  for (Eigen::Index v = 0; v < closed_V.rows(); ++v) {
+    if (!on_ring[v]) rows.push_back(static_cast<int>(v));
+  }
+  Eigen::MatrixXd points(rows.size(), 3);
+  Eigen::VectorXi leaflets(rows.size());
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    points.row(i) = closed_V.row(rows[i]);
+    leaflets(i) = mesh.leaflet(rows[i]);
+  }
+  return prolapseOfPoints(closedAnnulus(valve_case), points, leaflets, options);
+}
+
+ProlapseResult prolapseOfTracings(const ValveCase& valve_case, const ProlapseOptions& options) {
+  Eigen::VectorXi leaflets;
+  const Eigen::MatrixXd points = stackTracingPoints(valve_case.tracings, &leaflets);
+  return prolapseOfPoints(closedAnnulus(valve_case), points, leaflets, options);
+}
+
+ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V) {
+  ValveMetrics m;
+  const Eigen::MatrixXd points = stackTracingPoints(valve_case.tracings);
+  m.has_tracings = points.rows() > 0;
+  m.tracing_distances = pointToSurfaceDistances(closed_V, valve_case.mesh.F, points);
+  m.deviation = summarizeDeviation(m.tracing_distances);
+  m.area_mm2 = surfaceArea(closed_V, valve_case.mesh.F);
+  m.mesh_prolapse = prolapseOfMesh(valve_case, closed_V);
+  if (m.has_tracings) {
+    m.tracing_prolapse = prolapseOfTracings(valve_case);
+    m.prolapse_reconstructed = m.mesh_prolapse.segments == m.tracing_prolapse.segments;
+  }
+  return m;
+}
+
+std::string table1Header() {
+  return "| Case | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | Prolapse "
+         "Recon. |\n|---|---:|---:|---:|---:|---:|---|\n";
+}
+
+std::string table1Row(const std::string& label, const ValveMetrics& m) {
+  char buffer[256];
+  if (m.has_tracings) {
+    std::snprintf(buffer, sizeof buffer, "| %s | %.0f | %.2f | %.2f | %.2f | %.2f ± %.2f | %s |\n",
+                  label.c_str(), m.area_mm2, m.deviation.min, m.deviation.median,
+                  m.deviation.max, m.deviation.mean, m.deviation.sd,
+                  m.prolapse_reconstructed ? "Yes" : "No");
+  } else {
+    std::snprintf(buffer, sizeof buffer, "| %s | %.0f | – | – | – | – | – (no tracings) |\n",
+                  label.c_str(), m.area_mm2);
+  }
+  return buffer;
+}
+
+}  // namespace chordfit

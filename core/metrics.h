@@ -1,0 +1,94 @@
+// Metrics of a closed valve (DESIGN §6, the paper's Table 1):
+//   deviation  distance from every tracing point to the closed mesh surface (exact
+//              point-to-triangle, CGAL AABB tree): min, median, max, mean, SD in mm;
+//   area       valve surface area, mm^2;
+//   prolapse   leaflet points more than 2 mm above the closed annulus toward the atrium,
+//              localised to Carpentier segments; computed for the mesh and, independently,
+//              for the tracings. "Prolapse reconstructed" = same segment set (none <=> none).
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/annulus_plane.h"
+#include "core/case_data.h"
+#include "core/carpentier.h"
+
+namespace chordfit {
+
+struct DeviationStats {
+  int count = 0;  // number of tracing points; the statistics are NaN when 0
+  double min = 0, median = 0, max = 0, mean = 0, sd = 0;  // mm; sd uses n - 1
+};
+
+// Distances from each row of `points` to the triangle mesh (V, F). #points values, mm.
+Eigen::VectorXd pointToSurfaceDistances(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                        const Eigen::MatrixXd& points);
+DeviationStats summarizeDeviation(const Eigen::VectorXd& distances);
+
+// Sum of triangle areas, mm^2.
+double surfaceArea(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
+
+// All tracing points stacked (#P by 3) and each point's leaflet (-1 when unlabelled).
+Eigen::MatrixXd stackTracingPoints(const std::vector<Tracing>& tracings,
+                                   Eigen::VectorXi* leaflets = nullptr);
+
+// Height (mm) of each point above the closed annulus toward the atrium. The reference is the
+// clinical echo one (Levine et al., Circulation 1989;80:589): in the long-axis plane through
+// the annulus centre, n_AP and the point, the straight line joining the two annular hinge
+// points; a plain least-squares plane would call every saddle horn a prolapse.
+// `frame` is the closed annulus frame, `ring` the closed ring positions (#ring by 3).
+Eigen::VectorXd heightAboveAnnulus(const AnnulusFrame& frame, const Eigen::MatrixXd& ring,
+                                   const Eigen::MatrixXd& points);
+
+struct ProlapseOptions {
+  double threshold_mm = 2.0;  // clinical criterion: > 2 mm above the annulus
+  int min_points = 1;         // points above threshold a segment needs to count
+};
+
+struct ProlapseResult {
+  std::vector<std::string> segments;  // sorted segment names, e.g. {"P2"}; empty when none
+  double max_height_mm = 0.0;         // highest point above the annulus (may be negative)
+  Eigen::VectorXd heights;            // per input point
+};
+
+// Closed-state geometry shared by the prolapse computations.
+struct ClosedAnnulus {
+  AnnulusFrame frame;
+  Eigen::MatrixXd ring;  // closed ring positions
+  SegmentMap segments;
+};
+ClosedAnnulus closedAnnulus(const ValveCase& valve_case);
+
+// Prolapse of `points` with leaflet labels (-1 = decide by angle).
+ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
+                                const Eigen::VectorXi& leaflets, const ProlapseOptions& options);
+
+// Mesh: every non-annulus vertex of the closed mesh (same topology as the case mesh).
+ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                              const ProlapseOptions& options = {});
+// Tracings: every tracing point; two points above threshold per segment so that a lone noisy
+// point does not make a prolapse.
+ProlapseResult prolapseOfTracings(const ValveCase& valve_case,
+                                  const ProlapseOptions& options = {2.0, 2});
+
+struct ValveMetrics {
+  DeviationStats deviation;
+  double area_mm2 = 0.0;
+  ProlapseResult mesh_prolapse;
+  ProlapseResult tracing_prolapse;
+  bool has_tracings = false;
+  bool prolapse_reconstructed = false;  // meaningful only with tracings
+  Eigen::VectorXd tracing_distances;    // per stacked tracing point
+};
+
+// All metrics of a closed mesh `closed_V` (topology = valve_case.mesh.F).
+ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V);
+
+// The paper's Table 1 as Markdown: header, separator, and one row per labelled result.
+std::string table1Header();
+std::string table1Row(const std::string& label, const ValveMetrics& metrics);
+
+}  // namespace chordfit

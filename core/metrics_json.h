@@ -1,0 +1,15 @@
+// JSON form of ValveMetrics (the keys documented in docs/case-format.md, "metrics.json").
+#pragma once
+
+#include <nlohmann/json.hpp>
+
+#include "core/metrics.h"
+
+namespace chordfit {
+
+// Keys: min_mm, median_mm, max_mm, mean_mm, sd_mm, tracing_points (deviation; null without
+// tracings), area_mm2, prolapse_segments, prolapse_max_height_mm (simulated mesh),
+// tracing_prolapse_segments, prolapse_reconstructed (null without tracings).
+nlohmann::json metricsJson(const ValveMetrics& metrics);
+
+}  // namespace chordfit

@@ -1,0 +1,506 @@
+#include "core/simulator.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <memory>
+
+#include <nlohmann/json.hpp>
+
+#include "core/annulus_plane.h"
+#include "core/contact.h"
+#include "core/json_fields.h"
+#include "core/mesh_topology.h"
+#include "core/xpbd_constraints.h"
+
+namespace chordfit {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Map3 = Eigen::Map<Eigen::Vector3d>;
+using CMap3 = Eigen::Map<const Eigen::Vector3d>;
+
+// Smooth ramp 0 -> 1 (smoothstep), so boundary velocities start and end at zero.
+double ramp(double t, double duration) {
+  if (duration <= 0.0) return 1.0;
+  const double s = std::clamp(t / duration, 0.0, 1.0);
+  return s * s * (3.0 - 2.0 * s);
+}
+
+bool finite(const SimulationSettings& s) {
+  for (double v : {s.pressure_mmhg, s.flow_speed_mm_per_ms, s.drag_time_ms, s.ramp_ms, s.dt_ms,
+                   s.stiffness_ratio, s.max_step_mm, s.tolerance_mm, s.contact_thickness_mm,
+                   s.contact_margin_mm, s.contact_exclusion_mm, s.material.youngs_modulus_mpa,
+                   s.material.thickness_mm, s.material.poisson_ratio,
+                   s.material.density_g_per_cm3, s.material.area_bulk_fraction})
+    if (!std::isfinite(v)) return false;
+  return true;
+}
+
+std::string validate(const SimulationModel& m, const SimulationSettings& s) {
+  const int n = static_cast<int>(m.V_rest.rows());
+  if (n == 0 || m.V_rest.cols() != 3) return "model: V_rest must be #V by 3 and non-empty";
+  if (m.F.cols() != 3 || m.F.rows() == 0) return "model: F must be #F by 3 and non-empty";
+  if (m.F.minCoeff() < 0 || m.F.maxCoeff() >= n) return "model: face index out of range";
+  if (!m.V_rest.allFinite()) return "model: non-finite rest position";
+  if (m.fixed.size() > 0 && (m.fixed.minCoeff() < 0 || m.fixed.maxCoeff() >= n))
+    return "model: fixed vertex index out of range";
+  if (m.fixed_start.rows() != m.fixed.size() || m.fixed_end.rows() != m.fixed.size())
+    return "model: fixed_start / fixed_end must have one row per fixed vertex";
+  if (m.tip_start.rows() != m.tip_end.rows()) return "model: tip_start / tip_end sizes differ";
+  for (const auto& c : m.cords) {
+    if (c.tip < 0 || c.tip >= m.tip_start.rows()) return "model: cord tip index out of range";
+    if (c.vertex < 0 || c.vertex >= n) return "model: cord vertex index out of range";
+    if (!(c.rest_length > 0.0) || !std::isfinite(c.rest_length))
+      return "model: cord rest length must be positive";
+    if (!(c.compliance >= 0.0)) return "model: cord compliance must be >= 0";
+  }
+  if (!finite(s)) return "settings: non-finite value";
+  if (s.dt_ms < 0.0) return "settings: dt_ms must be >= 0 (0 = automatic)";
+  if (!(s.stiffness_ratio > 0.0)) return "settings: stiffness_ratio must be > 0";
+  if (s.iterations < 1) return "settings: iterations must be >= 1";
+  if (s.max_steps < 1 || s.window < 1) return "settings: max_steps and window must be >= 1";
+  if (!(s.material.youngs_modulus_mpa > 0.0) || !(s.material.thickness_mm > 0.0) ||
+      !(s.material.density_g_per_cm3 > 0.0))
+    return "settings: Young's modulus, thickness and density must be > 0";
+  if (!(s.material.poisson_ratio > -1.0 && s.material.poisson_ratio < 0.5))
+    return "settings: poisson_ratio must be in (-1, 0.5)";
+  if (s.material.area_bulk_fraction < 0.0) return "settings: area_bulk_fraction must be >= 0";
+  if (!(s.drag_time_ms > 0.0)) return "settings: drag_time_ms must be > 0";
+  return "";
+}
+
+// Constraint arrays and per-vertex data, precomputed from the rest state.
+struct System {
+  int n = 0;
+  std::vector<double> w;  // inverse masses, 0 for Dirichlet vertices
+  std::vector<DistanceConstraint> edges;
+  std::vector<AreaConstraint> areas;
+  std::vector<BendingConstraint> bends;
+  std::vector<CordConstraint> cords;
+  double typical_stiffness_over_mass = 0.0;  // median over free vertices of sum_e k_e / m_i
+};
+
+System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
+  System sys;
+  const int n = sys.n = static_cast<int>(m.V_rest.rows());
+  const LeafletMaterial& mat = s.material;
+  auto pos = [&](int i) { return Vec3(m.V_rest.row(i).transpose()); };
+
+  Eigen::VectorXd face_area(m.F.rows());
+  std::vector<double> vertex_area(n, 0.0);
+  for (int f = 0; f < m.F.rows(); ++f) {
+    face_area(f) = triangleArea(pos(m.F(f, 0)), pos(m.F(f, 1)), pos(m.F(f, 2)));
+    for (int c = 0; c < 3; ++c) vertex_area[m.F(f, c)] += face_area(f) / 3.0;
+  }
+  std::vector<double> mass(n);
+  sys.w.assign(n, 0.0);
+  for (int i = 0; i < n; ++i) {
+    mass[i] = lumpedMass(mat, vertex_area[i]);
+    sys.w[i] = mass[i] > 0.0 ? 1.0 / mass[i] : 0.0;  // isolated vertices do not move
+  }
+  for (int k = 0; k < m.fixed.size(); ++k) sys.w[m.fixed(k)] = 0.0;
+
+  Eigen::MatrixXi E, EF, EI;
+  edgeFlaps(m.F, E, EF, EI);
+  std::vector<double> vertex_stiffness(n, 0.0);
+  sys.edges.reserve(E.rows());
+  for (int e = 0; e < E.rows(); ++e) {
+    DistanceConstraint c;
+    c.i = E(e, 0), c.j = E(e, 1);
+    c.rest = (pos(c.i) - pos(c.j)).norm();
+    double adjacent = face_area(EF(e, 0));
+    if (EF(e, 1) >= 0) adjacent += face_area(EF(e, 1));
+    if (c.rest <= 0.0 || adjacent <= 0.0) continue;  // degenerate: no stiffness to give
+    c.compliance = edgeCompliance(mat, adjacent, c.rest);
+    vertex_stiffness[c.i] += 1.0 / c.compliance;
+    vertex_stiffness[c.j] += 1.0 / c.compliance;
+    sys.edges.push_back(c);
+  }
+  if (mat.area_bulk_fraction > 0.0) {
+    for (int f = 0; f < m.F.rows(); ++f) {
+      if (face_area(f) <= 0.0) continue;
+      AreaConstraint c;
+      c.a = m.F(f, 0), c.b = m.F(f, 1), c.c = m.F(f, 2);
+      c.rest_area = face_area(f);
+      c.compliance = areaCompliance(mat, face_area(f));
+      sys.areas.push_back(c);
+    }
+  }
+  const Eigen::MatrixXi Q = bendingQuads(m.F);
+  for (int b = 0; b < Q.rows(); ++b) {
+    BendingConstraint c;
+    c.i = Q(b, 0), c.j = Q(b, 1), c.k = Q(b, 2), c.l = Q(b, 3);
+    const double len = (pos(c.i) - pos(c.j)).norm();
+    const double a1 = triangleArea(pos(c.i), pos(c.j), pos(c.k));
+    const double a2 = triangleArea(pos(c.j), pos(c.i), pos(c.l));
+    if (len <= 0.0 || a1 <= 0.0 || a2 <= 0.0) continue;
+    c.rest_angle = dihedralAngle(pos(c.i), pos(c.j), pos(c.k), pos(c.l));
+    c.compliance = bendingCompliance(mat, a1 + a2, len);
+    sys.bends.push_back(c);
+  }
+  for (const auto& cord : m.cords) {
+    CordConstraint c;
+    c.tip = cord.tip, c.vertex = cord.vertex, c.rest = cord.rest_length;
+    c.compliance = cord.compliance;
+    sys.cords.push_back(c);
+  }
+  std::vector<double> ratio;
+  for (int i = 0; i < n; ++i)
+    if (sys.w[i] > 0.0 && vertex_stiffness[i] > 0.0) ratio.push_back(vertex_stiffness[i] * sys.w[i]);
+  if (!ratio.empty()) {
+    std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
+    sys.typical_stiffness_over_mass = ratio[ratio.size() / 2];
+  }
+  return sys;
+}
+
+// Accumulates the pressure force f_i = p sum_{T containing i} N_T / 6 (N_T = winding normal
+// scaled by 2 A_T, so N_T / 6 = A_T n_T / 3: the area-weighted vertex normal).
+void pressureForces(const Eigen::MatrixXi& F, const double* x, double p, double* f, int n) {
+  std::fill(f, f + 3 * static_cast<long>(n), 0.0);
+  const double scale = p / 6.0;
+  for (int t = 0; t < F.rows(); ++t) {
+    const int a = F(t, 0), b = F(t, 1), c = F(t, 2);
+    const CMap3 xa(x + 3 * a), xb(x + 3 * b), xc(x + 3 * c);
+    const Vec3 N = scale * (xb - xa).cross(xc - xa);
+    Map3(f + 3 * a) += N;
+    Map3(f + 3 * b) += N;
+    Map3(f + 3 * c) += N;
+  }
+}
+
+}  // namespace
+
+SimulationResult simulate(const SimulationModel& model, const SimulationSettings& settings,
+                          const Eigen::MatrixXd* start) {
+  SimulationResult result;
+  result.error = validate(model, settings);
+  if (result.error.empty() && start &&
+      (start->rows() != model.V_rest.rows() || start->cols() != 3 || !start->allFinite()))
+    result.error = "start: must be #V by 3 with finite positions";
+  if (!result.error.empty()) return result;
+
+  const auto clock_start = std::chrono::steady_clock::now();
+  const System sys = buildSystem(model, settings);
+  const int n = sys.n;
+  const double thickness = settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
+                                                               : settings.material.thickness_mm;
+  double dt = settings.dt_ms;
+  if (dt == 0.0) {
+    dt = sys.typical_stiffness_over_mass > 0.0
+             ? std::sqrt(settings.stiffness_ratio / sys.typical_stiffness_over_mass)
+             : 1e-2;
+  }
+  result.dt_ms = dt;
+  const double inv_dt2 = 1.0 / (dt * dt);
+  const double max_step = settings.max_step_mm > 0.0 ? settings.max_step_mm : 0.25 * thickness;
+  const double sign = settings.phase == ClosurePhase::kClose ? 1.0 : -1.0;
+  const double pressure = sign * mmHgToMpa(settings.pressure_mmhg);
+  const Vec3 flow_dir = sign * model.flow_direction.normalized();
+  const double drag_decay = std::exp(-dt / settings.drag_time_ms);
+
+  std::unique_ptr<ContactDetector> detector;
+  if (settings.contact) {
+    ContactOptions options;
+    options.thickness_mm = thickness;
+    options.margin_mm = settings.contact_margin_mm > 0.0 ? settings.contact_margin_mm : 0.5 * thickness;
+    options.exclusion_radius_mm =
+        settings.contact_exclusion_mm > 0.0 ? settings.contact_exclusion_mm : 2.0 * thickness;
+    detector = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
+  }
+
+  // State: flat arrays x, x_prev, v (3n), tips (3 #tips).
+  std::vector<double> x(3 * n), x_prev(3 * n), v(3 * n, 0.0), force(3 * n);
+  const Eigen::MatrixXd& x0 = start ? *start : model.V_rest;
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) x[3 * i + d] = x0(i, d);
+  const int num_tips = static_cast<int>(model.tip_start.rows());
+  std::vector<double> tips(3 * num_tips);
+  std::vector<double> lambda_edges(sys.edges.size()), lambda_areas(sys.areas.size()),
+      lambda_bends(sys.bends.size()), lambda_cords(sys.cords.size()), lambda_contacts;
+  std::vector<ContactConstraint> contacts;
+
+  // Reference scale for explosion detection.
+  const Vec3 centre = model.V_rest.colwise().mean().transpose();
+  const double radius = (model.V_rest.rowwise() - centre.transpose()).rowwise().norm().maxCoeff();
+  const double explode2 = std::pow(50.0 * radius + 100.0, 2);
+
+  const double ramp_ms = start ? 0.0 : settings.ramp_ms;
+  int quiet_steps = 0;
+  long long projections = 0;
+  SimulationProgress progress;
+  for (int step = 1; step <= settings.max_steps; ++step) {
+    const double t = step * dt;
+    const double s = ramp(t, ramp_ms);
+    // Dirichlet boundary: annulus ring and PM tips, start -> end.
+    for (int k = 0; k < model.fixed.size(); ++k) {
+      const int i = model.fixed(k);
+      for (int d = 0; d < 3; ++d)
+        x[3 * i + d] = (1.0 - s) * model.fixed_start(k, d) + s * model.fixed_end(k, d);
+    }
+    for (int k = 0; k < num_tips; ++k)
+      for (int d = 0; d < 3; ++d)
+        tips[3 * k + d] = (1.0 - s) * model.tip_start(k, d) + s * model.tip_end(k, d);
+
+    // Predict: v += dt w f; drag toward the flow field u; clamp; x* = x + dt v.
+    pressureForces(model.F, x.data(), pressure * s, force.data(), n);
+    const Vec3 u = (t < ramp_ms ? settings.flow_speed_mm_per_ms : 0.0) * flow_dir;
+    const double vmax = max_step / dt;
+    x_prev = x;
+    for (int i = 0; i < n; ++i) {
+      if (sys.w[i] == 0.0) continue;
+      Map3 vi(&v[3 * i]);
+      vi += (dt * sys.w[i]) * CMap3(&force[3 * i]);
+      vi = u + drag_decay * (vi - u);
+      const double speed = vi.norm();
+      if (speed > vmax) vi *= vmax / speed;
+      Map3(&x[3 * i]) += dt * vi;
+    }
+
+    // Solve: Gauss-Seidel sweeps in a fixed order; hard constraints (cords, contacts) last.
+    if (detector) detector->detect(x_prev.data(), x.data(), sys.w.data(), contacts);
+    std::fill(lambda_edges.begin(), lambda_edges.end(), 0.0);
+    std::fill(lambda_areas.begin(), lambda_areas.end(), 0.0);
+    std::fill(lambda_bends.begin(), lambda_bends.end(), 0.0);
+    std::fill(lambda_cords.begin(), lambda_cords.end(), 0.0);
+    lambda_contacts.assign(contacts.size(), 0.0);
+    for (int it = 0; it < settings.iterations; ++it) {
+      projectDistances(sys.edges, inv_dt2, x.data(), sys.w.data(), lambda_edges.data());
+      projectAreas(sys.areas, inv_dt2, x.data(), sys.w.data(), lambda_areas.data());
+      projectBending(sys.bends, inv_dt2, x.data(), sys.w.data(), lambda_bends.data());
+      projectCords(sys.cords, inv_dt2, tips.data(), x.data(), sys.w.data(), lambda_cords.data());
+      projectContacts(contacts, x.data(), sys.w.data(), lambda_contacts.data());
+    }
+    projections += static_cast<long long>(settings.iterations) *
+                   (sys.edges.size() + sys.areas.size() + sys.bends.size() + sys.cords.size() +
+                    contacts.size());
+
+    // Update velocities; watch for divergence and for equilibrium.
+    double max_disp2 = 0.0;
+    bool diverged = false;
+    for (int i = 0; i < n; ++i) {
+      if (sys.w[i] == 0.0) continue;
+      const Vec3 dx = CMap3(&x[3 * i]) - CMap3(&x_prev[3 * i]);
+      Map3 vi(&v[3 * i]);
+      vi = dx / dt;
+      max_disp2 = std::max(max_disp2, dx.squaredNorm());
+      const double r2 = (CMap3(&x[3 * i]) - centre).squaredNorm();
+      if (!std::isfinite(r2) || r2 > explode2) diverged = true;
+    }
+    result.steps = step;
+    result.max_displacement_mm = std::sqrt(max_disp2);
+    if (diverged || !std::isfinite(max_disp2)) {
+      result.error = "simulation diverged (non-finite or exploding positions) at step " +
+                     std::to_string(step) + "; reduce dt_ms or check the input";
+      break;
+    }
+    const bool ramp_done = t >= ramp_ms;
+    quiet_steps = (ramp_done && result.max_displacement_mm < settings.tolerance_mm) ? quiet_steps + 1 : 0;
+    if (settings.progress && settings.progress_every > 0 && step % settings.progress_every == 0) {
+      progress = {step, t, result.max_displacement_mm, static_cast<int>(contacts.size())};
+      settings.progress(progress);
+    }
+    if (quiet_steps >= settings.window) {
+      result.converged = true;
+      break;
+    }
+  }
+  result.projections = projections;
+  result.seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
+  if (settings.progress) {
+    progress = {result.steps, result.steps * dt, result.max_displacement_mm,
+                static_cast<int>(contacts.size())};
+    settings.progress(progress);
+  }
+  if (!result.error.empty()) return result;
+
+  result.V.resize(n, 3);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) result.V(i, d) = x[3 * i + d];
+  result.tips.resize(num_tips, 3);
+  for (int k = 0; k < num_tips; ++k)
+    for (int d = 0; d < 3; ++d) result.tips(k, d) = tips[3 * k + d];
+  result.cord_force.resize(sys.cords.size());
+  for (size_t c = 0; c < sys.cords.size(); ++c)
+    result.cord_force(c) = -lambda_cords[c] * inv_dt2;  // lambda / dt^2 is the force (N)
+  for (double l : lambda_contacts) result.contacts += l > 0.0 ? 1 : 0;
+  return result;
+}
+
+bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhase phase,
+                  SimulationModel& model, std::string& error) {
+  const ValveMesh& mesh = valve_case.mesh;
+  const int n = static_cast<int>(mesh.V.rows());
+  error.clear();
+  if (n == 0 || mesh.F.rows() == 0) {
+    error = "mesh: empty";
+    return false;
+  }
+  if (mesh.F.minCoeff() < 0 || mesh.F.maxCoeff() >= n) {
+    error = "mesh: face index out of range";
+    return false;
+  }
+  if (mesh.annulus.size() < 3 || mesh.annulus.minCoeff() < 0 || mesh.annulus.maxCoeff() >= n) {
+    error = "mesh: annulus ring needs >= 3 vertex indices in range";
+    return false;
+  }
+  const Eigen::Index ring = mesh.annulus.size();
+  if (valve_case.annulus_closed.rows() != 0 &&
+      (valve_case.annulus_closed.rows() != ring || valve_case.annulus_closed.cols() != 3)) {
+    error = "annulus_closed: expected one closed position per annulus vertex (" +
+            std::to_string(ring) + " by 3)";
+    return false;
+  }
+  for (size_t c = 0; c < cords.cords.size(); ++c) {
+    const Cord& cord = cords.cords[c];
+    if (cord.tip < 0 || cord.tip >= static_cast<int>(cords.tips.size()) || cord.vertex < 0 ||
+        cord.vertex >= n) {
+      error = "cords[" + std::to_string(c) + "]: tip or vertex index out of range";
+      return false;
+    }
+    if (!(cord.rest_length > 0.0)) {
+      error = "cords[" + std::to_string(c) + "]: rest length must be > 0";
+      return false;
+    }
+  }
+
+  const AnnulusFrame frame = openAnnulusFrame(mesh);
+  const Vec3 n_ap = frame.plane.normal;
+
+  // Consistent winding, then per component make the winding normal point to the atrial side:
+  // toward n_AP and toward the valve axis (the line through the annulus centre along n_AP).
+  // Both hold for the atrial face of a leaflet hanging from the annulus like a funnel; the
+  // axis term decides for near-vertical leaflets, the n_AP term for flat ones.
+  Eigen::MatrixXi F;
+  orientFacesConsistently(mesh.F, F);
+  const Eigen::VectorXi component = faceComponents(F);
+  const int num_components = component.size() ? component.maxCoeff() + 1 : 0;
+  std::vector<double> score(num_components, 0.0);
+  for (int f = 0; f < F.rows(); ++f) {
+    const Vec3 a = mesh.V.row(F(f, 0)).transpose(), b = mesh.V.row(F(f, 1)).transpose(),
+               c = mesh.V.row(F(f, 2)).transpose();
+    const Vec3 N = (b - a).cross(c - a);  // 2 A n
+    const Vec3 centroid = (a + b + c) / 3.0;
+    Vec3 inward = frame.plane.centre - centroid;
+    inward -= inward.dot(n_ap) * n_ap;
+    const double len = inward.norm();
+    if (len > 1e-12) inward /= len;
+    score[component(f)] += N.dot(n_ap + inward);
+  }
+  for (int f = 0; f < F.rows(); ++f)
+    if (score[component(f)] < 0.0) std::swap(F(f, 1), F(f, 2));
+
+  model = SimulationModel();
+  model.V_rest = mesh.V;
+  model.F = F;
+  model.fixed = mesh.annulus;
+  Eigen::MatrixXd open_ring(ring, 3);
+  for (Eigen::Index k = 0; k < ring; ++k) open_ring.row(k) = mesh.V.row(mesh.annulus(k));
+  const Eigen::MatrixXd closed_ring =
+      valve_case.annulus_closed.rows() == ring ? valve_case.annulus_closed : open_ring;
+  const int num_tips = static_cast<int>(cords.tips.size());
+  Eigen::MatrixXd tips_open(num_tips, 3), tips_closed(num_tips, 3);
+  for (int k = 0; k < num_tips; ++k) {
+    tips_open.row(k) = cords.tips[k].position.transpose();
+    tips_closed.row(k) = cords.tips[k].closed_position.value_or(cords.tips[k].position).transpose();
+  }
+  const bool closing = phase == ClosurePhase::kClose;
+  model.fixed_start = closing ? open_ring : closed_ring;
+  model.fixed_end = closing ? closed_ring : open_ring;
+  model.tip_start = closing ? tips_open : tips_closed;
+  model.tip_end = closing ? tips_closed : tips_open;
+  for (const Cord& cord : cords.cords)
+    model.cords.push_back({cord.tip, cord.vertex, cord.rest_length, cord.compliance});
+  model.flow_direction = n_ap;  // simulate() reverses it (and the pressure) for kOpen
+  return true;
+}
+
+SimulationResult simulateClosure(const ValveCase& valve_case, const CordSet& cords,
+                                 const SimulationSettings& settings,
+                                 const Eigen::MatrixXd* warm_start) {
+  SimulationResult result;
+  SimulationModel model;
+  if (!closureModel(valve_case, cords, settings.phase, model, result.error)) return result;
+  if (settings.phase == ClosurePhase::kOpen && !warm_start) {
+    result.error = "opening needs a start state (the closed valve)";
+    return result;
+  }
+  return simulate(model, settings, warm_start);
+}
+
+SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,
+                                    const SimulationSettings& defaults) {
+  SimulationSettings s = defaults;
+  const std::string file = "case.json";
+  const auto parsed = parseJson(json, file, diagnostics);
+  if (!parsed) return s;
+  JsonFields fields(file, diagnostics);
+  if (!parsed->is_object()) {
+    fields.typeError("simulation", "object", *parsed);
+    return s;
+  }
+  struct NumberKey {
+    const char* key;
+    double* target;
+  };
+  const NumberKey numbers[] = {
+      {"pressure_mmhg", &s.pressure_mmhg},
+      {"youngs_modulus_mpa", &s.material.youngs_modulus_mpa},
+      {"thickness_mm", &s.material.thickness_mm},
+      {"poisson_ratio", &s.material.poisson_ratio},
+      {"density_g_per_cm3", &s.material.density_g_per_cm3},
+      {"area_bulk_fraction", &s.material.area_bulk_fraction},
+      {"flow_speed_mm_per_ms", &s.flow_speed_mm_per_ms},
+      {"drag_time_ms", &s.drag_time_ms},
+      {"ramp_ms", &s.ramp_ms},
+      {"dt_ms", &s.dt_ms},
+      {"stiffness_ratio", &s.stiffness_ratio},
+      {"max_step_mm", &s.max_step_mm},
+      {"tolerance_mm", &s.tolerance_mm},
+      {"contact_thickness_mm", &s.contact_thickness_mm},
+  };
+  struct IntKey {
+    const char* key;
+    int* target;
+  };
+  const IntKey integers[] = {
+      {"iterations", &s.iterations}, {"window", &s.window}, {"max_steps", &s.max_steps}};
+  for (const auto& [key, value] : parsed->items()) {
+    const std::string where = "simulation." + key;
+    bool known = false;
+    for (const auto& nk : numbers)
+      if (key == nk.key) {
+        known = true;
+        double out;
+        if (fields.number(value, where, out)) *nk.target = out;
+      }
+    for (const auto& ik : integers)
+      if (key == ik.key) {
+        known = true;
+        int out;
+        if (fields.integer(value, where, out)) *ik.target = out;
+      }
+    if (key == "contact") {
+      known = true;
+      bool out;
+      if (fields.boolean(value, where, out)) s.contact = out;
+    } else if (key == "phase") {
+      known = true;
+      std::string out;
+      if (fields.text(value, where, out)) {
+        if (out == "close")
+          s.phase = ClosurePhase::kClose;
+        else if (out == "open")
+          s.phase = ClosurePhase::kOpen;
+        else
+          fields.error(where, "expected \"close\" or \"open\", got \"" + out + "\"");
+      }
+    }
+    if (!known) fields.error(where, "unknown simulation setting");
+  }
+  return s;
+}
+
+}  // namespace chordfit

@@ -1,0 +1,151 @@
+// XPBD closure simulator (DESIGN §4; paper "Mitral valve model and simulation" and
+// "Modeling of tendinous cords"; Macklin et al. 2016 for XPBD).
+//
+// Model: leaflet membrane (edge distance, dihedral bending and triangle area constraints with
+// compliances from material.h), cords (paper eq. 1: a distance constraint PM tip -> leaflet
+// vertex, active only when stretched), Dirichlet annulus ring and PM tips (interpolated from
+// their start to their end positions during the ramp), systolic pressure along the area-
+// weighted vertex normals (ventricle -> atrium), a velocity field along the annulus-plane
+// normal n_AP with viscous drag toward it, and vertex-triangle contact (contact.h).
+// Units: mm, g, ms, N, MPa (material.h).
+//
+// Equilibrium criterion (quasi-static): after the ramp, the largest displacement of any
+// vertex within one time step stays below `tolerance_mm` for `window` consecutive steps.
+// With the default dt this is a velocity bound of tolerance_mm / dt.
+//
+// Determinism: single-threaded Gauss-Seidel over constraint arrays in a fixed order; contact
+// detection is order-deterministic. Same input => bit-identical output, independent of the
+// number of threads of the caller (the inverse layer parallelises over forward runs instead).
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "core/case_data.h"
+#include "core/cordset.h"
+#include "core/diagnostics.h"
+#include "core/material.h"
+
+namespace chordfit {
+
+// Closing: pressure and flow push the leaflets toward the atrium while the annulus moves
+// open -> closed. Opening: signs reversed, annulus closed -> open (the paper: "closed and
+// opened by changing the signs of the fields").
+enum class ClosurePhase { kClose, kOpen };
+
+struct SimulationProgress {
+  int step = 0;
+  double time_ms = 0.0;
+  double max_displacement_mm = 0.0;  // largest vertex displacement in the last step
+  int contacts = 0;                  // contact constraints of the last step
+};
+
+struct SimulationSettings {
+  LeafletMaterial material;
+  // Transvalvular pressure (LV - LA) in systole; peak LV systolic pressure is ~120 mmHg
+  // with LA pressure ~10 mmHg.
+  double pressure_mmhg = 100.0;
+  // Velocity field along n_AP during the ramp (the paper's "main flow direction"); the
+  // leaflet velocity relaxes toward it with time constant drag_time_ms. After the ramp the
+  // field is zero, so the drag only damps and the equilibrium does not depend on it.
+  double flow_speed_mm_per_ms = 0.0;
+  double drag_time_ms = 0.1;
+  // Duration of the boundary interpolation (annulus, PM tips) and of the pressure ramp
+  // (smoothstep 0 -> 1).
+  double ramp_ms = 1.0;
+  // Time step; 0 selects dt from the mesh so that a typical vertex's stretching stiffness
+  // ratio k dt^2 / m equals `stiffness_ratio` (XPBD converges in few iterations for ratios
+  // of order 1).
+  double dt_ms = 0.0;
+  double stiffness_ratio = 1.0;
+  int iterations = 2;  // Gauss-Seidel sweeps per time step
+  // Largest allowed vertex displacement per step before the constraints (velocity clamp);
+  // keeps contact detection from missing a crossing. <= 0: 0.25 * contact thickness.
+  double max_step_mm = 0.0;
+  double tolerance_mm = 1e-4;
+  int window = 10;
+  int max_steps = 20000;
+  bool contact = true;
+  double contact_thickness_mm = 0.0;  // <= 0: material thickness
+  double contact_margin_mm = 0.0;     // <= 0: 0.5 * contact thickness
+  double contact_exclusion_mm = 0.0;  // <= 0: 2 * contact thickness
+  ClosurePhase phase = ClosurePhase::kClose;
+  // Called every `progress_every` steps (0: never) and once at the end.
+  int progress_every = 0;
+  std::function<void(const SimulationProgress&)> progress;
+};
+
+// Overrides from a JSON object (a case's "simulation" block). Known keys, all optional:
+//   pressure_mmhg, youngs_modulus_mpa, thickness_mm, poisson_ratio, density_g_per_cm3,
+//   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, dt_ms,
+//   stiffness_ratio, iterations, max_step_mm, tolerance_mm, window, max_steps, contact,
+//   contact_thickness_mm, phase ("close" | "open").
+// Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
+// "simulation.<key>"); the remaining keys still apply.
+SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,
+                                    const SimulationSettings& defaults = {});
+
+// A simulation problem in plain arrays. simulateClosure builds one from a case; tests and
+// benchmarks may build their own (e.g. a clamped disc).
+struct SimulationModel {
+  Eigen::MatrixXd V_rest;  // #V by 3 rest state (open): rest lengths, angles, areas, masses
+  // #F by 3, consistently wound; the pressure force acts along the winding normal
+  // (right-hand rule), i.e. the winding normal points to the side the pressure pushes to.
+  Eigen::MatrixXi F;
+  Eigen::VectorXi fixed;          // Dirichlet vertex indices
+  Eigen::MatrixXd fixed_start;    // #fixed by 3 positions at t = 0
+  Eigen::MatrixXd fixed_end;      // #fixed by 3 positions from the end of the ramp on
+  Eigen::MatrixXd tip_start;      // #tips by 3 PM tip positions at t = 0
+  Eigen::MatrixXd tip_end;        // #tips by 3 PM tip positions from the end of the ramp on
+  struct Cord {
+    int tip = 0, vertex = 0;
+    double rest_length = 0.0;  // mm
+    double compliance = 0.0;   // mm/N
+  };
+  std::vector<Cord> cords;
+  Eigen::Vector3d flow_direction = Eigen::Vector3d::UnitZ();  // unit; velocity field direction
+};
+
+struct SimulationResult {
+  Eigen::MatrixXd V;           // #V by 3 final positions (empty when error is set)
+  Eigen::MatrixXd tips;        // #tips by 3 final PM tip positions
+  Eigen::VectorXd cord_force;  // #cords cord tension at the end, N (0 when slack)
+  bool converged = false;      // equilibrium criterion met before max_steps
+  int steps = 0;
+  double seconds = 0.0;              // wall time of the time loop
+  double dt_ms = 0.0;                // time step used
+  double max_displacement_mm = 0.0;  // of the last step
+  int contacts = 0;                  // active contact constraints (lambda > 0) at the end
+  long long projections = 0;         // constraint projections performed (for ns/projection)
+  std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
+  bool ok() const { return error.empty(); }
+};
+
+// The model of a case's closure (phase kClose) or opening (kOpen):
+//   - F consistently oriented; per connected component the winding normal is chosen to point
+//     to the atrial side (toward n_AP and toward the valve axis; DESIGN §4);
+//   - fixed = mesh.annulus, open positions mesh.V, closed positions case.annulus_closed
+//     (static at the open positions if annulus_closed is empty);
+//   - tips from `cords.tips` (closed_position when given, else static);
+//   - flow_direction = n_AP of openAnnulusFrame (toward the atrium); reversed for kOpen.
+// Returns false and sets `error` on inconsistent input (indices out of range, sizes).
+bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhase phase,
+                  SimulationModel& model, std::string& error);
+
+// Runs the model to quasi-static equilibrium.
+// start  optional #V by 3 start positions (warm start, e.g. a previous closed state). With a
+//        start, the Dirichlet vertices and tips are placed at their end positions and there
+//        is no ramp (the flow field is off); without one the run starts from V_rest with the
+//        boundary at its start positions.
+SimulationResult simulate(const SimulationModel& model, const SimulationSettings& settings,
+                          const Eigen::MatrixXd* start = nullptr);
+
+// closureModel + simulate. For phase kOpen a warm start (the closed state) is required.
+SimulationResult simulateClosure(const ValveCase& valve_case, const CordSet& cords,
+                                 const SimulationSettings& settings,
+                                 const Eigen::MatrixXd* warm_start = nullptr);
+
+}  // namespace chordfit

@@ -1,0 +1,225 @@
+#include "core/xpbd_constraints.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace chordfit {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+using Map3 = Eigen::Map<Eigen::Vector3d>;
+using CMap3 = Eigen::Map<const Eigen::Vector3d>;
+
+inline Map3 at(double* x, int i) { return Map3(x + 3 * static_cast<long>(i)); }
+
+}  // namespace
+
+void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2,
+                      double* x, const double* w, double* lambda) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const DistanceConstraint& k = constraints[c];
+    const double wsum = w[k.i] + w[k.j];
+    if (wsum == 0.0) continue;
+    Map3 xi = at(x, k.i), xj = at(x, k.j);
+    const Vec3 d = xi - xj;
+    const double len = d.norm();
+    if (len < 1e-12) continue;
+    const double alpha = k.compliance * inv_dt2;
+    // grad_i C = d/|d|, grad_j C = -d/|d|, |grad|^2 = 1.
+    const double dl = (-(len - k.rest) - alpha * lambda[c]) / (wsum + alpha);
+    lambda[c] += dl;
+    const Vec3 step = (dl / len) * d;
+    xi += w[k.i] * step;
+    xj -= w[k.j] * step;
+  }
+}
+
+double dihedralAngle(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
+                     const Eigen::Vector3d& xk, const Eigen::Vector3d& xl, Eigen::Vector3d* grad) {
+  // Bridson et al. 2003 with x3 = xi, x4 = xj (hinge E = x4 - x3), x1 = xk, x2 = xl:
+  // N1 = (x1 - x3) x (x1 - x4), N2 = (x2 - x4) x (x2 - x3) (= the faces' winding normals).
+  const Vec3 e = xj - xi;
+  const Vec3 n1 = (xk - xi).cross(xk - xj);
+  const Vec3 n2 = (xl - xj).cross(xl - xi);
+  const double n1sq = n1.squaredNorm(), n2sq = n2.squaredNorm(), elen = e.norm();
+  if (n1sq < 1e-24 || n2sq < 1e-24 || elen < 1e-12) {
+    if (grad)
+      for (int m = 0; m < 4; ++m) grad[m].setZero();
+    return 0.0;
+  }
+  // sin theta ~ (n2 x n1) . e / |e|, cos theta ~ n1 . n2 (common positive factor cancels).
+  const double theta = std::atan2(n2.cross(n1).dot(e) / elen, n1.dot(n2));
+  if (grad) {
+    const Vec3 a1 = n1 / n1sq, a2 = n2 / n2sq;
+    grad[2] = elen * a1;
+    grad[3] = elen * a2;
+    grad[0] = ((xk - xj).dot(e) / elen) * a1 + ((xl - xj).dot(e) / elen) * a2;
+    grad[1] = -((xk - xi).dot(e) / elen) * a1 - ((xl - xi).dot(e) / elen) * a2;
+  }
+  return theta;
+}
+
+void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+                    const double* w, double* lambda) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const BendingConstraint& k = constraints[c];
+    const double wi = w[k.i], wj = w[k.j], wk = w[k.k], wl = w[k.l];
+    if (wi + wj + wk + wl == 0.0) continue;
+    Map3 xi = at(x, k.i), xj = at(x, k.j), xk = at(x, k.k), xl = at(x, k.l);
+    Vec3 g[4];
+    const double theta = dihedralAngle(xi, xj, xk, xl, g);
+    const double denom_w = wi * g[0].squaredNorm() + wj * g[1].squaredNorm() +
+                           wk * g[2].squaredNorm() + wl * g[3].squaredNorm();
+    if (denom_w < 1e-24) continue;
+    const double alpha = k.compliance * inv_dt2;
+    double C = theta - k.rest_angle;
+    // Keep C in (-pi, pi] so a fold through +-pi does not flip the restoring direction.
+    if (C > M_PI) C -= 2.0 * M_PI;
+    if (C < -M_PI) C += 2.0 * M_PI;
+    const double dl = (-C - alpha * lambda[c]) / (denom_w + alpha);
+    lambda[c] += dl;
+    xi += (wi * dl) * g[0];
+    xj += (wj * dl) * g[1];
+    xk += (wk * dl) * g[2];
+    xl += (wl * dl) * g[3];
+  }
+}
+
+double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
+                    const Eigen::Vector3d& xc, Eigen::Vector3d* grad) {
+  const Vec3 N = (xb - xa).cross(xc - xa);
+  const double len = N.norm();
+  if (grad) {
+    if (len < 1e-24) {
+      for (int m = 0; m < 3; ++m) grad[m].setZero();
+    } else {
+      // dA/dx_a = n x (x_c - x_b) / 2 and cyclic (n = N/|N|).
+      const Vec3 nh = N / len;
+      grad[0] = 0.5 * nh.cross(xc - xb);
+      grad[1] = 0.5 * nh.cross(xa - xc);
+      grad[2] = 0.5 * nh.cross(xb - xa);
+    }
+  }
+  return 0.5 * len;
+}
+
+void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+                  const double* w, double* lambda) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const AreaConstraint& k = constraints[c];
+    const double wa = w[k.a], wb = w[k.b], wc = w[k.c];
+    if (wa + wb + wc == 0.0) continue;
+    Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
+    Vec3 g[3];
+    const double area = triangleArea(xa, xb, xc, g);
+    const double denom_w = wa * g[0].squaredNorm() + wb * g[1].squaredNorm() + wc * g[2].squaredNorm();
+    if (denom_w < 1e-24) continue;
+    const double alpha = k.compliance * inv_dt2;
+    const double dl = (-(area - k.rest_area) - alpha * lambda[c]) / (denom_w + alpha);
+    lambda[c] += dl;
+    xa += (wa * dl) * g[0];
+    xb += (wb * dl) * g[1];
+    xc += (wc * dl) * g[2];
+  }
+}
+
+void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
+                  const double* tips, double* x, const double* w, double* lambda) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const CordConstraint& k = constraints[c];
+    const double wv = w[k.vertex];
+    if (wv == 0.0) continue;
+    Map3 xv = at(x, k.vertex);
+    const CMap3 tip(tips + 3 * static_cast<long>(k.tip));
+    const Vec3 d = xv - tip;
+    const double len = d.norm();
+    if (len < 1e-12) continue;
+    const double C = len - k.rest;
+    if (C < 0.0 && lambda[c] == 0.0) continue;  // slack: k^CT = 0 (paper eq. 1)
+    const double alpha = k.compliance * inv_dt2;
+    double dl = (-C - alpha * lambda[c]) / (wv + alpha);
+    // A cord only pulls: accumulated lambda stays <= 0.
+    const double total = std::min(lambda[c] + dl, 0.0);
+    dl = total - lambda[c];
+    lambda[c] = total;
+    xv += (wv * dl / len) * d;
+  }
+}
+
+void projectContacts(const std::vector<ContactConstraint>& constraints, double* x,
+                     const double* w, double* lambda) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const ContactConstraint& k = constraints[c];
+    const double wp = w[k.p], wa = w[k.a] * k.ba * k.ba, wb = w[k.b] * k.bb * k.bb,
+                 wc = w[k.c] * k.bc * k.bc;
+    const double denom = wp + wa + wb + wc;
+    if (denom == 0.0) continue;
+    Map3 xp = at(x, k.p), xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
+    const CMap3 nrm(k.n);
+    const double C = nrm.dot(xp - k.ba * xa - k.bb * xb - k.bc * xc) - k.thickness;
+    if (C > 0.0 && lambda[c] == 0.0) continue;
+    double dl = -C / denom;
+    // A contact only pushes: accumulated lambda stays >= 0.
+    const double total = std::max(lambda[c] + dl, 0.0);
+    dl = total - lambda[c];
+    lambda[c] = total;
+    // grad_p C = n, grad_a C = -ba n, ...
+    xp += (w[k.p] * dl) * nrm;
+    xa -= (w[k.a] * k.ba * dl) * nrm;
+    xb -= (w[k.b] * k.bb * dl) * nrm;
+    xc -= (w[k.c] * k.bc * dl) * nrm;
+  }
+}
+
+int closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
+                           const Eigen::Vector3d& b, const Eigen::Vector3d& c, double& ba,
+                           double& bb, double& bc) {
+  // Ericson 2005, "Real-Time Collision Detection", ClosestPtPointTriangle (Voronoi regions).
+  const Vec3 ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    ba = 1.0, bb = 0.0, bc = 0.0;
+    return 2;
+  }
+  const Vec3 bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0.0 && d4 <= d3) {
+    ba = 0.0, bb = 1.0, bc = 0.0;
+    return 2;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double v = d1 / (d1 - d3);
+    ba = 1.0 - v, bb = v, bc = 0.0;
+    return 1;
+  }
+  const Vec3 cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0.0 && d5 <= d6) {
+    ba = 0.0, bb = 0.0, bc = 1.0;
+    return 2;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double w = d2 / (d2 - d6);
+    ba = 1.0 - w, bb = 0.0, bc = w;
+    return 1;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    ba = 0.0, bb = 1.0 - w, bc = w;
+    return 1;
+  }
+  const double denom = 1.0 / (va + vb + vc);
+  const double v = vb * denom, w = vc * denom;
+  ba = 1.0 - v - w, bb = v, bc = w;
+  return 0;
+}
+
+}  // namespace chordfit

@@ -1,0 +1,212 @@
+// `chordfit validate` end to end: a good case passes with a summary; every kind of bad input
+// named by the foundation issue gives "error: <file>: <where>: <problem>" and exit code 2.
+#include <cmath>
+#include <functional>
+#include <regex>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/mesh_io.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+using testing::runChordfit;
+using testing::TempDir;
+using testing::tinyConeCase;
+using testing::writeText;
+
+class ValidateCommand : public ::testing::Test {
+ protected:
+  void SetUp() override { writeCase(dir_.path(), valve_); }
+
+  testing::CommandResult validate() { return runChordfit("validate '" + dir_.path().string() + "'"); }
+
+  // Asserts exit code 2, no crash, and an error line for `file` whose text matches `pattern`.
+  void expectError(const std::string& file, const std::string& pattern) {
+    const testing::CommandResult r = validate();
+    EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+    const std::regex line("(^|\n)error: " + file + ": [^\n]*" + pattern);
+    EXPECT_TRUE(std::regex_search(r.err, line)) << "stderr was:\n" << r.err;
+    EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
+  }
+
+  void editCaseJson(const std::function<void(nlohmann::json&)>& edit) {
+    nlohmann::json j = nlohmann::json::parse(testing::readText(dir_ / "case.json"));
+    edit(j);
+    writeText(dir_ / "case.json", j.dump(2));
+  }
+
+  TempDir dir_;
+  ValveCase valve_ = tinyConeCase();
+};
+
+TEST_F(ValidateCommand, AcceptsAGoodCaseAndPrintsItsSummary) {
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("16 vertices, 16 triangles"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("anterior 6"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("posterior 10"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ring of 8 vertices"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("valid"), std::string::npos) << r.out;
+}
+
+TEST_F(ValidateCommand, ReportsAMissingFile) {
+  std::filesystem::remove(dir_ / "leaflets.json");
+  expectError("leaflets\\.json", "file not found");
+}
+
+TEST_F(ValidateCommand, ReportsAMissingCaseDirectory) {
+  const testing::CommandResult r = runChordfit("validate '" + (dir_ / "nowhere").string() + "'");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("case directory not found"), std::string::npos) << r.err;
+}
+
+TEST_F(ValidateCommand, ReportsMalformedJsonWithLineAndColumn) {
+  writeText(dir_ / "case.json", "{\n  \"version\": 1,\n  \"mesh\": \"open.ply\",,\n}");
+  expectError("case\\.json", "line 3, column [0-9]+: malformed JSON");
+}
+
+TEST_F(ValidateCommand, ReportsAWrongJsonType) {
+  editCaseJson([](nlohmann::json& j) { j["mesh"] = 5; });
+  expectError("case\\.json", "mesh: expected a string, got number");
+}
+
+TEST_F(ValidateCommand, ReportsAnUnknownFormatVersion) {
+  editCaseJson([](nlohmann::json& j) { j["version"] = 7; });
+  expectError("case\\.json", "version: unsupported format version 7");
+}
+
+TEST_F(ValidateCommand, ReportsAFaceIndexOutOfRange) {
+  // Legacy VTK, parsed by our own reader, which leaves index checks to the validator.
+  writeText(dir_ / "open.vtk",
+            "# vtk DataFile Version 3.0\nbad\nASCII\nDATASET POLYDATA\nPOINTS 3 double\n"
+            "0 0 0\n1 0 0\n0 1 0\nPOLYGONS 1 4\n3 0 1 99\n");
+  editCaseJson([](nlohmann::json& j) { j["mesh"] = "open.vtk"; });
+  expectError("open\\.vtk", "face 0: vertex index 99 out of range");
+}
+
+TEST_F(ValidateCommand, ReportsADegenerateTriangle) {
+  valve_.mesh.V.row(8) = valve_.mesh.V.row(0);  // face 0 = (0, 1, 8) collapses
+  writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);
+  expectError("open\\.ply", "face 0: degenerate triangle");
+}
+
+TEST_F(ValidateCommand, ReportsANonManifoldEdge) {
+  Eigen::MatrixXd V(valve_.mesh.V.rows() + 1, 3);
+  V << valve_.mesh.V, 20.0, 20.0, 5.0;
+  Eigen::MatrixXi F(valve_.mesh.F.rows() + 1, 3);
+  F << valve_.mesh.F, 1, 8, 16;  // edge (1, 8) now has three triangles
+  writePly(dir_ / "open.ply", V, F);
+  expectError("open\\.ply", "edge \\(1, 8\\): non-manifold edge shared by 3 triangles");
+}
+
+TEST_F(ValidateCommand, ReportsANaNCoordinate) {
+  valve_.mesh.V(3, 1) = std::nan("");
+  writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);
+  expectError("open\\.ply", "vertex 3: coordinate y is NaN");
+}
+
+TEST_F(ValidateCommand, ReportsAnInfiniteCoordinate) {
+  valve_.mesh.V(5, 2) = INFINITY;
+  writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);
+  expectError("open\\.ply", "vertex 5: coordinate z is infinite");
+}
+
+TEST_F(ValidateCommand, ReportsAnAnnulusRingThatIsNotAClosedBoundaryLoop) {
+  // Skipping vertex 4 leaves a step 3 -> 5 that is no mesh edge.
+  writeText(dir_ / "annulus_ring.json", R"({"vertices": [0, 1, 2, 3, 5, 6, 7]})");
+  writeText(dir_ / "annulus_closed.json",
+            nlohmann::json{{"points", nlohmann::json::array({{10, 0, 0}, {7, 7, 0}, {0, 10, 0},
+                                                             {-7, 7, 0}, {-7, -7, 0}, {0, -10, 0},
+                                                             {7, -7, 0}})}}
+                .dump());
+  expectError("annulus_ring\\.json", "vertices\\[3\\]->\\[4\\]: .*not a closed loop");
+}
+
+TEST_F(ValidateCommand, ReportsAnAnnulusRingOffTheBoundary) {
+  // Every step is a mesh edge, but (1, 9) is a diagonal shared by two triangles.
+  writeText(dir_ / "annulus_ring.json", R"({"vertices": [1, 9, 8, 0]})");
+  writeText(dir_ / "annulus_closed.json", R"({"points": [[1,0,0],[0,1,0],[0,0,1],[1,1,1]]})");
+  expectError("annulus_ring\\.json", "is not on the mesh boundary");
+}
+
+TEST_F(ValidateCommand, ReportsAClosedAnnulusCountThatDoesNotMatchTheRing) {
+  writeText(dir_ / "annulus_closed.json", R"({"points": [[1,0,0],[0,1,0],[0,0,1]]})");
+  expectError("annulus_closed\\.json", "3 closed-state annulus positions for an annulus ring of 8");
+}
+
+TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": "posterior", "points": [[1, 0, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json", "tracings\\[0\\]\\.points: a tracing needs at least 2 points");
+}
+
+TEST_F(ValidateCommand, ReportsACordOnAMissingVertex) {
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9999;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords.push_back(cord);
+  writeCordSet(dir_ / "cords.json", set);
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json", "cords\\[0\\]\\.vertex: vertex 9999 does not exist");
+}
+
+TEST_F(ValidateCommand, ReportsACordOnAMissingTip) {
+  writeText(dir_ / "cords.json", R"({"format": "chordfit-cordset", "version": 1,
+      "tips": [{"name": "anterolateral", "position": [0, 5, -20]}],
+      "cords": [{"tip": 3, "vertex": 9, "kind": "primary", "rest_length_mm": 18.0}]})");
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json", "cords\\[0\\]\\.tip: tip 3 does not exist");
+}
+
+TEST_F(ValidateCommand, ReportsALeafletLabelCountThatDoesNotMatchTheVertexCount) {
+  writeText(dir_ / "leaflets.json", R"({"labels": [0, 0, 1]})");
+  expectError("leaflets\\.json", "labels: 3 leaflet labels for a mesh of 16 vertices");
+}
+
+TEST_F(ValidateCommand, ReportsSeveralProblemsInOneRun) {
+  writeText(dir_ / "leaflets.json", R"({"labels": [0, 0, 1]})");
+  writeText(dir_ / "annulus_closed.json", R"({"points": [[1,0,0],[0,1,0],[0,0,1]]})");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: leaflets.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: annulus_closed.json"), std::string::npos) << r.err;
+}
+
+TEST(CaseRoundTrip, WriteThenLoadGivesTheSameCase) {
+  TempDir dir;
+  ValveCase original = tinyConeCase();
+  Tracing t;
+  t.points = Eigen::MatrixXd::Random(5, 3);
+  t.plane_origin = Eigen::Vector3d(0, 0, 0);
+  t.plane_normal = Eigen::Vector3d(0, 1, 0);
+  t.leaflet = 1;
+  original.tracings.push_back(t);
+  original.tips = std::vector<PmTip>{{"anterolateral", Eigen::Vector3d(1, 2, -20), std::nullopt}};
+  writeCase(dir.path(), original);
+  Diagnostics diagnostics;
+  const auto loaded = loadCase(dir.path(), diagnostics);
+  ASSERT_TRUE(loaded.has_value()) << diagnostics.problems().front().what;
+  EXPECT_EQ(loaded->mesh.V, original.mesh.V);
+  EXPECT_EQ(loaded->mesh.F, original.mesh.F);
+  EXPECT_EQ(loaded->mesh.leaflet, original.mesh.leaflet);
+  EXPECT_EQ(loaded->mesh.annulus, original.mesh.annulus);
+  EXPECT_EQ(loaded->annulus_closed, original.annulus_closed);
+  ASSERT_EQ(loaded->tracings.size(), 1u);
+  EXPECT_EQ(loaded->tracings[0].points, t.points);
+  EXPECT_EQ(loaded->tracings[0].leaflet, 1);
+  ASSERT_TRUE(loaded->tips.has_value());
+  EXPECT_EQ((*loaded->tips)[0].position, Eigen::Vector3d(1, 2, -20));
+}
+
+}  // namespace
+}  // namespace chordfit

@@ -1,0 +1,114 @@
+// The chordfit program end to end: the foundation pipeline (make-valve -> validate ->
+// heuristic -> metrics), the documented example case, and usage errors.
+#include <cmath>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/curve_io.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+using testing::runChordfit;
+using testing::TempDir;
+
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  auto r = runChordfit("make-valve --out " + quoted(case_dir) + " --edge 2.0");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runChordfit("validate " + quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("leaflets:  2 (anterior"), std::string::npos) << r.out;
+
+  r = runChordfit("heuristic " + quoted(case_dir) + " --out " + quoted(dir / "cords.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("anterior/anterolateral"), std::string::npos) << r.out;
+  Diagnostics diagnostics;
+  CordSet cords;
+  ASSERT_TRUE(readCordSet(dir / "cords.json", "cords.json", cords, diagnostics));
+  EXPECT_EQ(cords.tips.size(), 2u);
+  EXPECT_GT(cords.cords.size(), 10u);
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left a temp file";
+  }
+
+  r = runChordfit("metrics " + quoted(case_dir) + " --mesh " + quoted(case_dir / "open.ply") +
+                  " --out " + quoted(dir / "metrics.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| Case | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm)"),
+            std::string::npos)
+      << r.out;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "metrics.json"));
+  for (const char* key : {"min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm", "area_mm2",
+                          "prolapse_segments", "prolapse_max_height_mm"}) {
+    EXPECT_TRUE(metrics.contains(key)) << key;
+  }
+  EXPECT_TRUE(metrics["prolapse_segments"].is_array());
+  EXPECT_GT(metrics["area_mm2"].get<double>(), 500.0);
+}
+
+TEST(ChordfitCli, ValidatesTheDocumentedExampleCase) {
+  const auto r = runChordfit(std::string("validate '") + CHORDFIT_SOURCE_DIR + "/docs/example-case'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tracings:  3 polylines, 10 points"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("4 cords on 2 tips"), std::string::npos) << r.out;
+}
+
+TEST(ChordfitCli, MetricsOfTheExampleCaseMatchItsTracings) {
+  const std::string example = std::string(CHORDFIT_SOURCE_DIR) + "/docs/example-case";
+  const auto r = runChordfit("metrics '" + example + "' --mesh '" + example + "/open.obj'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // 10 tracing points; the row has numbers, and no prolapse on either side -> reconstructed.
+  EXPECT_NE(r.out.find("| example-cone | 432 |"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| Yes |"), std::string::npos) << r.out;
+}
+
+TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
+  TempDir dir;
+  Eigen::MatrixXd ring(48, 3);
+  for (int i = 0; i < 48; ++i) {
+    const double phi = 2.0 * M_PI * i / 48;
+    ring.row(i) << 13.0 * std::cos(phi), 16.0 * std::sin(phi), 2.0 * std::cos(2 * phi);
+  }
+  writePointList(dir / "annulus.json", ring, true);
+  auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --annulus " +
+                       quoted(dir / "annulus.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(runChordfit("validate " + quoted(dir / "case")).exit_code, 0);
+}
+
+TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
+  TempDir dir;
+  const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --edge -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: "), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "case" / "case.json"));
+}
+
+TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
+  TempDir dir;
+  writeCase(dir / "case", testing::tinyConeCase());
+  runChordfit("make-valve --out " + quoted(dir / "other") + " --edge 3.0");
+  const auto r = runChordfit("metrics " + quoted(dir / "case") + " --mesh " +
+                             quoted(dir / "other" / "open.ply"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("does not have the case mesh's topology"), std::string::npos) << r.err;
+}
+
+TEST(ChordfitCli, UnknownCommandsAndMissingArgumentsAreUsageErrors) {
+  EXPECT_EQ(runChordfit("frobnicate").exit_code, 2);
+  EXPECT_EQ(runChordfit("heuristic").exit_code, 2);
+  const auto r = runChordfit("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("validate"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace chordfit

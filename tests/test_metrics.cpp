@@ -1,0 +1,135 @@
+#include <Eigen/Geometry>
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "core/metrics.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kTolerance = 1e-9;
+
+// Unit square in z = 0 as two triangles.
+void unitSquare(Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
+  V.resize(4, 3);
+  V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0;
+  F.resize(2, 3);
+  F << 0, 1, 2, 0, 2, 3;
+}
+
+TEST(SurfaceArea, OfAUnitSquareIsOne) {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  unitSquare(V, F);
+  EXPECT_NEAR(surfaceArea(V, F), 1.0, kTolerance);
+}
+
+TEST(SurfaceArea, OfTheConeFrustumMatchesTheTrapezoidFormula) {
+  // Each of the 8 sides is two triangles; sum = exact polyhedral area, computed by hand as
+  // sum over quads of the two triangles' areas.
+  const ValveCase c = testing::tinyConeCase();
+  double expected = 0.0;
+  for (Eigen::Index f = 0; f < c.mesh.F.rows(); ++f) {
+    const Eigen::Vector3d a = c.mesh.V.row(c.mesh.F(f, 0)), b = c.mesh.V.row(c.mesh.F(f, 1)),
+                          d = c.mesh.V.row(c.mesh.F(f, 2));
+    expected += 0.5 * (b - a).cross(d - a).norm();
+  }
+  EXPECT_NEAR(surfaceArea(c.mesh.V, c.mesh.F), expected, kTolerance);
+  // Sanity: between the lateral areas of the inscribed and circumscribed frusta.
+  const double slant = std::sqrt(8.0 * 8.0 + 4.0 * 4.0);
+  EXPECT_LT(surfaceArea(c.mesh.V, c.mesh.F), M_PI * (10.0 + 6.0) * slant);
+}
+
+TEST(Deviation, StatisticsOfPointsAboveASquareAreTheirHeights) {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  unitSquare(V, F);
+  Eigen::MatrixXd points(4, 3);
+  points << 0.5, 0.5, 0.1, 0.2, 0.7, -0.4, 0.9, 0.1, 0.3, 0.5, 0.5, 1.0;
+  const DeviationStats s = summarizeDeviation(pointToSurfaceDistances(V, F, points));
+  EXPECT_EQ(s.count, 4);
+  EXPECT_NEAR(s.min, 0.1, kTolerance);
+  EXPECT_NEAR(s.max, 1.0, kTolerance);
+  EXPECT_NEAR(s.median, 0.35, kTolerance);  // mean of 0.3 and 0.4
+  EXPECT_NEAR(s.mean, 0.45, kTolerance);
+  // Sample SD of {0.1, 0.4, 0.3, 1.0}: sqrt(((0.35)^2 + 0.05^2 + 0.15^2 + 0.55^2) / 3).
+  EXPECT_NEAR(s.sd, std::sqrt((0.1225 + 0.0025 + 0.0225 + 0.3025) / 3.0), kTolerance);
+}
+
+TEST(Deviation, IsNaNWithoutPoints) {
+  const DeviationStats s = summarizeDeviation(Eigen::VectorXd());
+  EXPECT_EQ(s.count, 0);
+  EXPECT_TRUE(std::isnan(s.mean));
+}
+
+// Saddle ring z = h cos(2 phi), r = 15, frame n = +z, a = +x.
+struct SaddleCase {
+  ValveCase c;
+  double h = 3.0;
+};
+
+SaddleCase saddle() {
+  SaddleCase s;
+  const int n = 96;  // a multiple of 4: horns and troughs fall on ring vertices
+  ValveMesh& mesh = s.c.mesh;
+  mesh.V.resize(n + 1, 3);
+  mesh.leaflet.resize(n + 1);
+  mesh.annulus.resize(n);
+  for (int i = 0; i < n; ++i) {
+    const double phi = 2.0 * M_PI * i / n;
+    mesh.V.row(i) << 15 * std::cos(phi), 15 * std::sin(phi), s.h * std::cos(2 * phi);
+    mesh.leaflet(i) = (phi < M_PI / 3 || phi > 5 * M_PI / 3) ? 0 : 1;
+    mesh.annulus(i) = i;
+  }
+  mesh.V.row(n) << 0, 0, -15;
+  mesh.leaflet(n) = 1;
+  s.c.annulus_closed = mesh.V.topRows(n);
+  return s;
+}
+
+TEST(HeightAboveAnnulus, IsMeasuredFromTheHingeLineOfEachLongAxisPlane) {
+  const SaddleCase s = saddle();
+  const ClosedAnnulus annulus = closedAnnulus(s.c);
+  Eigen::MatrixXd points(3, 3);
+  // In the anteroposterior plane both hinges are horns at +h: reference +h everywhere.
+  points.row(0) << 5.0, 0.0, s.h + 1.0;
+  // In the commissural plane both hinges are troughs at -h.
+  points.row(1) << 0.0, -7.0, -s.h + 0.5;
+  // At a horn itself the height is zero.
+  points.row(2) << 15.0, 0.0, s.h;
+  const Eigen::VectorXd heights = heightAboveAnnulus(annulus.frame, annulus.ring, points);
+  EXPECT_NEAR(heights(0), 1.0, 1e-6);
+  EXPECT_NEAR(heights(1), 0.5, 1e-6);
+  EXPECT_NEAR(heights(2), 0.0, 1e-6);
+}
+
+TEST(Prolapse, FindsTheSegmentOfPointsMoreThanTwoMillimetresAboveTheAnnulus) {
+  const SaddleCase s = saddle();
+  const ClosedAnnulus annulus = closedAnnulus(s.c);
+  Eigen::MatrixXd points(4, 3);
+  points.row(0) << -8.0, 0.0, s.h + 3.0;   // posterior, centre of P2, 3 mm up: prolapse
+  points.row(1) << -8.0, 0.5, s.h + 2.5;   // P2 again
+  points.row(2) << 8.0, 0.0, s.h + 1.5;    // anterior, 1.5 mm: not prolapse
+  points.row(3) << 0.0, 8.0, -s.h + 1.0;   // commissural zone, below threshold
+  Eigen::VectorXi leaflets(4);
+  leaflets << 1, 1, 0, -1;
+  const ProlapseResult result = prolapseOfPoints(annulus, points, leaflets, ProlapseOptions{});
+  EXPECT_EQ(result.segments, std::vector<std::string>{"P2"});
+  EXPECT_NEAR(result.max_height_mm, 3.0, 1e-6);
+  // Requiring three points per segment removes it.
+  EXPECT_TRUE(prolapseOfPoints(annulus, points, leaflets, {2.0, 3}).segments.empty());
+}
+
+TEST(ComputeMetrics, ReportsNoTracingsHonestly) {
+  const ValveCase c = testing::tinyConeCase();
+  const ValveMetrics m = computeMetrics(c, c.mesh.V);
+  EXPECT_FALSE(m.has_tracings);
+  EXPECT_EQ(m.deviation.count, 0);
+  EXPECT_GT(m.area_mm2, 0.0);
+  EXPECT_TRUE(m.mesh_prolapse.segments.empty());  // the open cone hangs below the annulus
+}
+
+}  // namespace
+}  // namespace chordfit

@@ -1,0 +1,83 @@
+#include "tests/test_support.h"
+
+#include <atomic>
+#include <cmath>
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace chordfit::testing {
+
+namespace fs = std::filesystem;
+
+TempDir::TempDir() {
+  static std::atomic<int> counter{0};
+  path_ = fs::temp_directory_path() /
+          ("chordfit-test-" + std::to_string(::getpid()) + "-" + std::to_string(counter++));
+  fs::remove_all(path_);
+  fs::create_directories(path_);
+}
+
+TempDir::~TempDir() {
+  std::error_code ec;
+  fs::remove_all(path_, ec);
+}
+
+ValveCase tinyConeCase() {
+  ValveCase c;
+  c.name = "tiny-cone";
+  constexpr int kColumns = 8;
+  c.mesh.V.resize(2 * kColumns, 3);
+  for (int k = 0; k < kColumns; ++k) {
+    const double phi = k * M_PI / 4.0;
+    c.mesh.V.row(k) << 10.0 * std::cos(phi), 10.0 * std::sin(phi), 0.0;
+    c.mesh.V.row(kColumns + k) << 6.0 * std::cos(phi), 6.0 * std::sin(phi), -8.0;
+  }
+  c.mesh.F.resize(2 * kColumns, 3);
+  for (int k = 0; k < kColumns; ++k) {
+    const int next = (k + 1) % kColumns;
+    c.mesh.F.row(2 * k) << k, next, kColumns + k;
+    c.mesh.F.row(2 * k + 1) << next, kColumns + next, kColumns + k;
+  }
+  c.mesh.leaflet.resize(2 * kColumns);
+  for (int k = 0; k < kColumns; ++k) {
+    const int label = (k == 7 || k == 0 || k == 1) ? 0 : 1;
+    c.mesh.leaflet(k) = label;
+    c.mesh.leaflet(kColumns + k) = label;
+  }
+  c.mesh.annulus.resize(kColumns);
+  for (int k = 0; k < kColumns; ++k) c.mesh.annulus(k) = k;
+  c.annulus_closed = c.mesh.V.topRows(kColumns);
+  return c;
+}
+
+void writeText(const fs::path& path, const std::string& text) {
+  if (path.has_parent_path()) fs::create_directories(path.parent_path());
+  std::ofstream(path, std::ios::binary) << text;
+}
+
+std::string readText(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CommandResult runChordfit(const std::string& arguments) {
+  TempDir capture;
+  const fs::path out = capture / "stdout.txt";
+  const fs::path err = capture / "stderr.txt";
+  const std::string command = std::string("'") + CHORDFIT_EXE + "' " + arguments + " >'" +
+                              out.string() + "' 2>'" + err.string() + "' </dev/null";
+  const int status = std::system(command.c_str());
+  CommandResult result;
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  result.out = readText(out);
+  result.err = readText(err);
+  return result;
+}
+
+}  // namespace chordfit::testing

@@ -1,0 +1,47 @@
+// Helpers shared by the tests: temporary directories, a tiny hand-built valve case, and
+// running the chordfit executable with its output captured.
+#pragma once
+
+#include <filesystem>
+#include <string>
+
+#include "core/case_data.h"
+
+namespace chordfit::testing {
+
+// A fresh directory under the system temp dir, removed on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::filesystem::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A truncated-cone "valve" small enough to check by hand:
+//   annulus ring: 8 vertices on the circle r = 10 in z = 0 at angles k * 45 deg (k = 0..7);
+//   free edge:    8 vertices on r = 6 at z = -8, same angles (indices 8..15);
+//   anterior leaflet (label 0) = columns k = 7, 0, 1 (the +x side), posterior the rest.
+// The annulus plane is z = 0 with n_AP = +z (leaflets hang below), a = +x, l = +y.
+// Closed annulus = the open ring; no tracings, tips or cords.
+ValveCase tinyConeCase();
+
+// Writes `text` to `path` (creating directories).
+void writeText(const std::filesystem::path& path, const std::string& text);
+std::string readText(const std::filesystem::path& path);
+
+struct CommandResult {
+  int exit_code = -1;
+  std::string out;
+  std::string err;
+};
+
+// Runs build/tools/chordfit with `arguments` (already shell-quoted where needed).
+CommandResult runChordfit(const std::string& arguments);
+
+}  // namespace chordfit::testing

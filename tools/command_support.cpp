@@ -1,0 +1,62 @@
+#include "tools/command_support.h"
+
+#include <iostream>
+#include <sstream>
+
+#include "core/case_io.h"
+#include "core/metrics.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
+  Diagnostics diagnostics;
+  std::optional<ValveCase> loaded = loadCase(case_dir, diagnostics);
+  if (!loaded) {
+    // Problems inside the case name files relative to it; say which case they belong to.
+    std::cerr << "case " << case_dir << ": " << diagnostics.problems().size()
+              << " problem(s)\n";
+    diagnostics.print(std::cerr);
+  }
+  return loaded;
+}
+
+int reportProblems(const Diagnostics& diagnostics) {
+  diagnostics.print(std::cerr);
+  return kExitBadInput;
+}
+
+std::string joinSegments(const std::vector<std::string>& segments) {
+  if (segments.empty()) return "none";
+  std::string joined;
+  for (const std::string& name : segments) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+std::string caseSummary(const ValveCase& c) {
+  std::ostringstream out;
+  const ValveMesh& mesh = c.mesh;
+  out << "case " << c.name << "\n";
+  out << "  mesh:      " << mesh.V.rows() << " vertices, " << mesh.F.rows() << " triangles, area "
+      << static_cast<long>(surfaceArea(mesh.V, mesh.F) + 0.5) << " mm²\n";
+  out << "  leaflets:  " << mesh.leaflet_names.size();
+  for (std::size_t l = 0; l < mesh.leaflet_names.size(); ++l) {
+    out << (l == 0 ? " (" : ", ") << mesh.leaflet_names[l] << " "
+        << (mesh.leaflet.array() == static_cast<int>(l)).count();
+  }
+  out << " vertices)\n";
+  out << "  annulus:   ring of " << mesh.annulus.size() << " vertices, "
+      << c.annulus_closed.rows() << " closed-state positions\n";
+  Eigen::Index points = 0;
+  for (const Tracing& t : c.tracings) points += t.points.rows();
+  out << "  tracings:  " << c.tracings.size() << " polylines, " << points << " points\n";
+  out << "  PM tips:   " << (c.tips ? std::to_string(c.tips->size()) : "none (heuristic)") << "\n";
+  out << "  cords:     "
+      << (c.cords ? std::to_string(c.cords->cords.size()) + " cords on " +
+                        std::to_string(c.cords->tips.size()) + " tips"
+                  : "none (automatic placement + heuristic)")
+      << "\n";
+  return out.str();
+}
+
+}  // namespace chordfit::cli

@@ -1,0 +1,26 @@
+// Small pieces every command shares: loading a case with errors printed, summaries.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/case_data.h"
+#include "core/diagnostics.h"
+
+namespace chordfit::cli {
+
+// Loads and validates a case; on problems prints them ("error: file: where: what") to stderr
+// and returns nullopt.
+std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir);
+
+// Prints the diagnostics to stderr and returns kExitBadInput.
+int reportProblems(const Diagnostics& diagnostics);
+
+// "P2, A2" or "none".
+std::string joinSegments(const std::vector<std::string>& segments);
+
+// Multi-line human summary of a case (mesh, leaflets, annulus, tracings, tips, cords).
+std::string caseSummary(const ValveCase& valve_case);
+
+}  // namespace chordfit::cli

@@ -1,0 +1,45 @@
+// The chordfit commands behind plain option structs. main.cpp (the only file that sees CLI11)
+// parses the command line into these and calls run*. Each returns the process exit code:
+//   0 success, 1 unexpected failure (e.g. cannot write output), 2 bad input or usage,
+//   3 simulation failure (divergence).
+#pragma once
+
+#include <string>
+
+namespace chordfit::cli {
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailure = 1;
+constexpr int kExitBadInput = 2;
+constexpr int kExitSimulationFailed = 3;
+
+struct ValidateOptions {
+  std::string case_dir;
+};
+int runValidate(const ValidateOptions& options);
+
+struct MakeValveOptions {
+  std::string out_dir;
+  double edge_mm = 1.5;
+  std::string annulus_file;  // optional user annulus polyline
+  std::string name = "parametric-mitral";
+};
+int runMakeValve(const MakeValveOptions& options);
+
+struct HeuristicCommandOptions {
+  std::string case_dir;
+  std::string out_file;
+  double primary_spacing_mm = 4.0;
+  double secondary_spacing_mm = 6.0;
+  double secondary_depth_mm = 7.0;
+};
+int runHeuristic(const HeuristicCommandOptions& options);
+
+struct MetricsOptions {
+  std::string case_dir;
+  std::string mesh_file;
+  std::string out_file;  // optional
+};
+int runMetrics(const MetricsOptions& options);
+
+}  // namespace chordfit::cli

@@ -1,0 +1,59 @@
+#include <cstdio>
+#include <iostream>
+#include <map>
+
+#include "core/cordset_io.h"
+#include "core/heuristic.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+void printCordSummary(const CordSet& set, const ValveMesh& mesh) {
+  for (const PmTip& tip : set.tips) {
+    std::printf("  tip %-14s at (%7.2f, %7.2f, %7.2f) mm\n", tip.name.c_str(), tip.position.x(),
+                tip.position.y(), tip.position.z());
+  }
+  struct GroupStats {
+    int primary = 0, secondary = 0;
+    double length_sum = 0.0;
+  };
+  std::map<std::string, GroupStats> groups;
+  for (const Cord& cord : set.cords) {
+    GroupStats& g = groups[groupName(cord, mesh.leaflet, mesh.leaflet_names, set.tips)];
+    (cord.kind == CordKind::kPrimary ? g.primary : g.secondary) += 1;
+    g.length_sum += cord.rest_length;
+  }
+  std::printf("  %-30s %8s %10s %16s\n", "group (leaflet/tip)", "primary", "secondary",
+              "mean l0 (mm)");
+  for (const auto& [name, g] : groups) {
+    std::printf("  %-30s %8d %10d %16.2f\n", name.c_str(), g.primary, g.secondary,
+                g.length_sum / (g.primary + g.secondary));
+  }
+}
+
+}  // namespace
+
+int runHeuristic(const HeuristicCommandOptions& options) {
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  HeuristicOptions heuristic;
+  heuristic.primary_spacing_mm = options.primary_spacing_mm;
+  heuristic.secondary_spacing_mm = options.secondary_spacing_mm;
+  heuristic.secondary_depth_mm = options.secondary_depth_mm;
+  const CordSet set = heuristicCordSet(*valve_case, heuristic);
+  if (set.cords.empty()) {
+    std::cerr << "error: " << options.case_dir
+              << ": cords: the heuristic placed no cords (no free edge found?)\n";
+    return kExitBadInput;
+  }
+  writeCordSet(options.out_file, set, &valve_case->mesh);
+  std::cout << "heuristic cord set: " << set.cords.size() << " cords on " << set.tips.size()
+            << " PM tips -> " << options.out_file << "\n";
+  printCordSummary(set, valve_case->mesh);
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli

@@ -1,0 +1,47 @@
+#include <iostream>
+
+#include "core/atomic_file.h"
+#include "core/metrics.h"
+#include "core/metrics_json.h"
+#include "core/mesh_checks.h"
+#include "core/mesh_io.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+int runMetrics(const MetricsOptions& options) {
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  Diagnostics diagnostics;
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  if (!readMesh(options.mesh_file, V, F, diagnostics, options.mesh_file) ||
+      !checkMesh(V, F, options.mesh_file, diagnostics)) {
+    return reportProblems(diagnostics);
+  }
+  // Metrics need the case's leaflet labels and annulus ring: same vertices, same triangles.
+  if (V.rows() != valve_case->mesh.V.rows() || F != valve_case->mesh.F) {
+    diagnostics.error(options.mesh_file, "",
+                      "mesh does not have the case mesh's topology (" + std::to_string(V.rows()) +
+                          " vertices / " + std::to_string(F.rows()) + " triangles vs " +
+                          std::to_string(valve_case->mesh.V.rows()) + " / " +
+                          std::to_string(valve_case->mesh.F.rows()) + ")");
+    return reportProblems(diagnostics);
+  }
+  const ValveMetrics metrics = computeMetrics(*valve_case, V);
+  std::cout << table1Header() << table1Row(valve_case->name, metrics);
+  std::cout << "prolapse (mesh): " << joinSegments(metrics.mesh_prolapse.segments)
+            << " (max height above annulus " << metrics.mesh_prolapse.max_height_mm << " mm)\n";
+  if (metrics.has_tracings) {
+    std::cout << "prolapse (tracings): " << joinSegments(metrics.tracing_prolapse.segments)
+              << "\n";
+  }
+  if (!options.out_file.empty()) {
+    writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");
+    std::cout << "wrote " << options.out_file << "\n";
+  }
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli
