@@ -1,7 +1,7 @@
 #include "core/annulus_plane.h"
 
-#include <Eigen/Geometry>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 
 namespace chordfit {
 
@@ -58,8 +58,7 @@ AnnulusFrame openAnnulusFrame(const ValveMesh& mesh) {
   const Eigen::MatrixXd ring = ringPositions(mesh);
   Plane plane = fitPlane(ring);
   // Leaflets hang into the ventricle in the open state: the atrial side is where they are not.
-  const double mean_signed =
-      ((mesh.V.rowwise() - plane.centre.transpose()) * plane.normal).mean();
+  const double mean_signed = ((mesh.V.rowwise() - plane.centre.transpose()) * plane.normal).mean();
   if (mean_signed > 0.0) plane.normal = -plane.normal;
   return frameFrom(plane, ring, mesh);
 }

@@ -99,8 +99,7 @@ int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
     if (leaflet >= 0 && arc.leaflet != leaflet) continue;
     const double fraction = arcFraction(arc, theta);
     // How far outside [0, 1] (in radians), 0 when inside: picks the containing/nearest arc.
-    const double outside =
-        std::max({0.0, -fraction, fraction - 1.0}) * std::abs(arc.sweep);
+    const double outside = std::max({0.0, -fraction, fraction - 1.0}) * std::abs(arc.sweep);
     if (outside < best_outside) {
       best_outside = outside;
       best = &arc;
@@ -116,12 +115,11 @@ int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
 std::string segmentName(const SegmentMap& map, int segment_id) {
   if (segment_id < 0) return "?";
   const int leaflet = segment_id / 3;
-  std::string prefix = leaflet < static_cast<int>(map.leaflet_names.size()) &&
-                               !map.leaflet_names[leaflet].empty()
-                           ? std::string(1, static_cast<char>(std::toupper(
-                                                static_cast<unsigned char>(
-                                                    map.leaflet_names[leaflet][0]))))
-                           : "L" + std::to_string(leaflet);
+  std::string prefix =
+      leaflet < static_cast<int>(map.leaflet_names.size()) && !map.leaflet_names[leaflet].empty()
+          ? std::string(1, static_cast<char>(std::toupper(
+                               static_cast<unsigned char>(map.leaflet_names[leaflet][0]))))
+          : "L" + std::to_string(leaflet);
   return prefix + std::to_string(segment_id % 3 + 1);
 }
 

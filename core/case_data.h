@@ -24,8 +24,8 @@ struct Tracing {
 
 struct ValveCase {
   std::string name;
-  ValveMesh mesh;                    // open state
-  Eigen::MatrixXd annulus_closed;    // #ring by 3 closed-state positions of mesh.annulus
+  ValveMesh mesh;                  // open state
+  Eigen::MatrixXd annulus_closed;  // #ring by 3 closed-state positions of mesh.annulus
   std::vector<Tracing> tracings;
   std::optional<std::vector<PmTip>> tips;  // optional PM tips (else heuristic)
   std::optional<CordSet> cords;            // optional cords (else automatic + heuristic)

@@ -48,8 +48,8 @@ bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
   if (labels == nullptr || !fields.integers(*labels, "labels", c.mesh.leaflet)) return false;
   if (c.mesh.leaflet.size() != c.mesh.V.rows()) {
     fields.error("labels", std::to_string(c.mesh.leaflet.size()) +
-                               " leaflet labels for a mesh of " +
-                               std::to_string(c.mesh.V.rows()) + " vertices");
+                               " leaflet labels for a mesh of " + std::to_string(c.mesh.V.rows()) +
+                               " vertices");
     return false;
   }
   const int leaflet_count = static_cast<int>(c.mesh.leaflet_names.size());
@@ -74,8 +74,7 @@ bool readRing(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
 
 // Leaflet of a tracing: a leaflet name, a label number, or null / absent (unknown).
 bool readTracingLeaflet(const json& value, const std::string& where,
-                        const std::vector<std::string>& names, JsonFields& fields,
-                        int& leaflet) {
+                        const std::vector<std::string>& names, JsonFields& fields, int& leaflet) {
   if (value.is_string()) {
     const std::string name = value.get<std::string>();
     for (std::size_t i = 0; i < names.size(); ++i) {
@@ -146,8 +145,7 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
   }
   if (ok && tracing.points.rows() < 2) {
     fields.error(fieldPath(where, points != nullptr ? "points" : "file"),
-                 "a tracing needs at least 2 points, got " +
-                     std::to_string(tracing.points.rows()));
+                 "a tracing needs at least 2 points, got " + std::to_string(tracing.points.rows()));
     ok = false;
   }
   return ok;
@@ -202,8 +200,8 @@ bool readVersion(const json& document, JsonFields& fields) {
   if (version == nullptr || !fields.integer(*version, "version", v)) return false;
   if (v != kCaseFormatVersion) {
     fields.error("version", "unsupported format version " + std::to_string(v) +
-                                " (this build reads version " +
-                                std::to_string(kCaseFormatVersion) + ")");
+                                " (this build reads version " + std::to_string(kCaseFormatVersion) +
+                                ")");
     return false;
   }
   return true;
@@ -230,8 +228,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   Diagnostics& diagnostics = fields.diagnostics();
   bool ok = true;
   const auto mesh_file = sideFile(document, "", "mesh", true, dir, fields);
-  bool mesh_ok = mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics,
-                                       mesh_file->name);
+  bool mesh_ok =
+      mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics, mesh_file->name);
   mesh_ok = mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics);
   ok &= mesh_ok;
 
@@ -269,8 +267,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   return ok;
 }
 
-bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fields,
-                       bool mesh_ok, ValveCase& c) {
+bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fields, bool mesh_ok,
+                       ValveCase& c) {
   Diagnostics& diagnostics = fields.diagnostics();
   bool ok = true;
   if (const auto tracings = sideFile(document, "", "tracings", false, dir, fields)) {
@@ -282,8 +280,8 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
   if (const auto cords = sideFile(document, "", "cords", false, dir, fields)) {
     CordSet set;
     if (readCordSet(cords->path, cords->name, set, diagnostics)) {
-      if (mesh_ok) ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name,
-                                           diagnostics);
+      if (mesh_ok)
+        ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name, diagnostics);
       c.cords = set;
     } else {
       ok = false;
@@ -320,7 +318,8 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
 
   ValveCase c;
   c.name = directory.filename().string();
-  if (const json* name = fields.member(*document, "", "name", false)) fields.text(*name, "name", c.name);
+  if (const json* name = fields.member(*document, "", "name", false))
+    fields.text(*name, "name", c.name);
   const bool valve_ok = readValve(*document, directory, fields, c);
   readOptionalParts(*document, directory, fields, c.mesh.V.rows() > 0 && valve_ok, c);
   if (diagnostics.problems().size() != problems_before) return std::nullopt;
@@ -359,7 +358,8 @@ void writeCase(const fs::path& directory, const ValveCase& c) {
     document["tracings"] = "tracings.json";
   }
   if (c.tips) {
-    writeFileAtomically(directory / "pm_tips.json", json{{"tips", tipsJson(*c.tips)}}.dump(2) + "\n");
+    writeFileAtomically(directory / "pm_tips.json",
+                        json{{"tips", tipsJson(*c.tips)}}.dump(2) + "\n");
     document["pm_tips"] = "pm_tips.json";
   }
   if (c.cords) {

@@ -14,8 +14,7 @@ constexpr int kCaseFormatVersion = 1;
 // Reads and validates a case directory. Reports every problem it can find (missing files,
 // malformed JSON, wrong types, unknown version, bad mesh, bad annulus ring, count mismatches,
 // short tracings, dangling cord references) and returns nullopt if there was any.
-std::optional<ValveCase> loadCase(const std::filesystem::path& directory,
-                                  Diagnostics& diagnostics);
+std::optional<ValveCase> loadCase(const std::filesystem::path& directory, Diagnostics& diagnostics);
 
 // Writes a case directory: open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
 // and tracings.json / pm_tips.json / cords.json when present, then case.json last (so an

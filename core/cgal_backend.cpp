@@ -46,8 +46,8 @@ namespace {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 
-using ReadKernel = CGAL::Simple_cartesian<double>;
-using ReadPoint = ReadKernel::Point_3;
+using DoubleKernel = CGAL::Simple_cartesian<double>;
+using DoublePoint = DoubleKernel::Point_3;
 using Polygon = std::vector<std::size_t>;
 
 // ---------------------------------------------------------------------------------------
@@ -58,6 +58,18 @@ std::string lowercase(std::string s) {
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return s;
 }
+
+// A word from the file as it may appear in a message (a corrupt file can hold any bytes).
+std::string printable(const std::string& word) {
+  constexpr std::size_t kMaxShown = 40;
+  std::string shown;
+  for (char c : word.substr(0, kMaxShown))
+    shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  if (word.size() > kMaxShown) shown += "...";
+  return shown;
+}
+
+std::string quotedWord(const std::string& word) { return "'" + printable(word) + "'"; }
 
 bool parseCount(const std::string& text, unsigned long long& value) {
   if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) return false;
@@ -123,12 +135,12 @@ std::string parsePlyProperty(std::istringstream& line, PlyElement& element) {
     p.is_list = true;
     if (!(line >> p.size_type >> p.type >> p.name)) return "incomplete list property line";
     if (!isPlyIntegerType(p.size_type))
-      return "list length type '" + p.size_type + "' is not an integer type";
-    if (plyTypeSize(p.type) == 0) return "unknown list item type '" + p.type + "'";
+      return "list length type " + quotedWord(p.size_type) + " is not an integer type";
+    if (plyTypeSize(p.type) == 0) return "unknown list item type " + quotedWord(p.type);
   } else {
     p.type = type;
     if (!(line >> p.name)) return "property without a name";
-    if (plyTypeSize(p.type) == 0) return "unknown property type '" + p.type + "'";
+    if (plyTypeSize(p.type) == 0) return "unknown property type " + quotedWord(p.type);
   }
   element.properties.push_back(p);
   return "";
@@ -161,7 +173,7 @@ std::string parsePlyHeader(const std::string& bytes, PlyHeader& header) {
       } else if (format == "binary_big_endian") {
         header.format = PlyFormat::kBinaryBig;
       } else {
-        return where + "unknown format '" + format + "'";
+        return where + "unknown format " + quotedWord(format);
       }
       continue;
     }
@@ -174,6 +186,10 @@ std::string parsePlyHeader(const std::string& bytes, PlyHeader& header) {
       std::string count;
       if (!(line >> element.name >> count) || !parseCount(count, element.count))
         return where + "expected 'element <name> <count>'";
+      // Every item takes at least a byte; CGAL loops over the count even for an element
+      // without properties, so a corrupt count could otherwise spin for ages.
+      if (element.count > bytes.size())
+        return where + "element count " + count + " is larger than the file";
       header.elements.push_back(element);
     } else if (keyword == "property") {
       if (header.elements.empty()) return where + "property before any element";
@@ -226,14 +242,14 @@ std::uint64_t readUnsigned(const char* data, int size, bool big_endian) {
 std::uint64_t readBinaryListLength(const char* data, const std::string& type, bool big_endian) {
   const int size = plyTypeSize(type);
   const std::uint64_t raw = readUnsigned(data, size, big_endian);
-  const bool is_signed = type == "char" || type == "int8" || type == "short" ||
-                         type == "int16" || type == "int" || type == "int32";
+  const bool is_signed = type == "char" || type == "int8" || type == "short" || type == "int16" ||
+                         type == "int" || type == "int32";
   if (is_signed && (raw >> (8 * size - 1)) != 0) return std::numeric_limits<std::uint64_t>::max();
   return raw;
 }
 
 std::string plyItemWhere(const PlyElement& e, unsigned long long item) {
-  return "element " + e.name + " " + std::to_string(item) + ": ";
+  return "element " + printable(e.name) + " " + std::to_string(item) + ": ";
 }
 
 std::string walkPlyBinary(const std::string& bytes, const PlyHeader& header) {
@@ -251,8 +267,8 @@ std::string walkPlyBinary(const std::string& bytes, const PlyHeader& header) {
         }
         const std::size_t length_size = static_cast<std::size_t>(plyTypeSize(p.size_type));
         if (remaining < length_size) return plyItemWhere(e, item) + "file is truncated";
-        const std::uint64_t length = readBinaryListLength(bytes.data() + pos, p.size_type,
-                                                          big_endian);
+        const std::uint64_t length =
+            readBinaryListLength(bytes.data() + pos, p.size_type, big_endian);
         pos += length_size;
         const std::size_t item_size = static_cast<std::size_t>(plyTypeSize(p.type));
         if (length > (bytes.size() - pos) / item_size)
@@ -283,11 +299,10 @@ std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header) {
         if (!p.is_list) continue;
         unsigned long long length = 0;
         if (!parseCount(token, length))
-          return plyItemWhere(e, item) + "list length '" + token + "' is not a count";
+          return plyItemWhere(e, item) + "list length " + quotedWord(token) + " is not a count";
         // Every list entry needs at least one character and one separator.
         if (length > (bytes.size() - pos) / 2 + 1)
-          return plyItemWhere(e, item) + "list length " + token +
-                 " runs past the end of the file";
+          return plyItemWhere(e, item) + "list length " + token + " runs past the end of the file";
         for (unsigned long long k = 0; k < length; ++k) {
           if (nextToken(bytes, pos).empty()) return plyItemWhere(e, item) + "file is truncated";
         }
@@ -336,28 +351,67 @@ std::string prepareStl(std::string& bytes) {
 }
 
 // ---------------------------------------------------------------------------------------
-// OFF pre-check: CGAL resizes its point and polygon vectors to the header counts.
+// OFF pre-check: CGAL resizes its point and polygon vectors to the header counts and each
+// polygon to the corner count at the start of its line, unchecked. The check assumes the
+// usual layout, one vertex or face per line (CGAL itself reads faces line by line).
+
+struct OffLine {
+  int number = 0;  // 1-based
+  std::vector<std::string> words;
+};
+
+// Non-empty lines with '#' comments removed.
+std::vector<OffLine> offLines(const std::string& bytes) {
+  std::vector<OffLine> lines;
+  std::size_t pos = 0;
+  int number = 0;
+  while (pos < bytes.size()) {
+    std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    ++number;
+    std::string text = bytes.substr(pos, eol - pos);
+    text = text.substr(0, text.find('#'));
+    std::istringstream in(text);
+    OffLine line{number, {}};
+    for (std::string word; in >> word;) line.words.push_back(word);
+    if (!line.words.empty()) lines.push_back(std::move(line));
+    pos = eol + 1;
+  }
+  return lines;
+}
 
 std::string checkOff(const std::string& bytes) {
-  std::size_t pos = 0;
-  std::string keyword = nextToken(bytes, pos);
-  if (keyword.find("OFF") == std::string::npos) return "not an OFF file (no OFF keyword)";
-  std::vector<unsigned long long> counts;
-  while (counts.size() < 2) {
-    const std::string token = nextToken(bytes, pos);
-    if (token.empty()) return "header is truncated";
-    if (token == "BINARY") return "";  // counts are binary; CGAL reads them incrementally
-    if (token[0] == '#') {
-      pos = bytes.find('\n', pos);
-      if (pos == std::string::npos) return "header is truncated";
-      continue;
-    }
-    unsigned long long value = 0;
-    if (!parseCount(token, value)) return "header: '" + token + "' is not a count";
-    counts.push_back(value);
+  const std::vector<OffLine> lines = offLines(bytes);
+  if (lines.empty() || lines[0].words[0].find("OFF") == std::string::npos)
+    return "line 1: not an OFF file (no OFF keyword)";
+  const std::string& keyword = lines[0].words[0];
+  if (lines[0].words.size() > 1 && lines[0].words[1] == "BINARY")
+    return "line " + std::to_string(lines[0].number) + ": binary OFF is not supported";
+  // The counts may follow the keyword on its line; "nOFF" puts a dimension first.
+  std::vector<std::string> header(lines[0].words.begin() + 1, lines[0].words.end());
+  std::size_t next = 1;
+  const std::size_t needed = keyword.find("nOFF") != std::string::npos ? 3 : 2;
+  while (header.size() < needed && next < lines.size()) {
+    header.insert(header.end(), lines[next].words.begin(), lines[next].words.end());
+    ++next;
   }
-  if (counts[0] > bytes.size() / 2 || counts[1] > bytes.size() / 2)
+  unsigned long long counts[2] = {0, 0};
+  for (int k = 0; k < 2; ++k) {
+    const std::size_t at = needed - 2 + static_cast<std::size_t>(k);
+    if (at >= header.size() || !parseCount(header[at], counts[k]))
+      return "header: expected vertex and face counts";
+  }
+  if (counts[0] > lines.size() || counts[1] > lines.size())
     return "header: vertex or face count is larger than the file";
+  const std::size_t first_face = next + static_cast<std::size_t>(counts[0]);
+  for (std::size_t f = 0; f < counts[1]; ++f) {
+    if (first_face + f >= lines.size()) return "header: the file has fewer faces than declared";
+    const OffLine& line = lines[first_face + f];
+    unsigned long long corners = 0;
+    if (!parseCount(line.words[0], corners) || corners > line.words.size() - 1)
+      return "line " + std::to_string(line.number) + ": face " + std::to_string(f) +
+             " does not list the corners it declares";
+  }
   return "";
 }
 
@@ -407,7 +461,7 @@ int toIndex(std::size_t index) {
 
 // Fan-triangulates; polygons with fewer than 3 corners (points, lines) are dropped.
 // Indices are copied unchecked: the mesh validator reports out-of-range ones by face.
-void soupToEigen(const std::vector<ReadPoint>& points, const std::vector<Polygon>& polygons,
+void soupToEigen(const std::vector<DoublePoint>& points, const std::vector<Polygon>& polygons,
                  Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
   V.resize(static_cast<Eigen::Index>(points.size()), 3);
   for (std::size_t i = 0; i < points.size(); ++i) {
@@ -440,7 +494,7 @@ bool allIndicesBelow(const std::vector<Polygon>& polygons, std::size_t n) {
 
 // Runs the CGAL reader for `extension` on the (pre-checked) bytes.
 bool readSoup(const std::string& extension, const std::string& bytes,
-              std::vector<ReadPoint>& points, std::vector<Polygon>& polygons) {
+              std::vector<DoublePoint>& points, std::vector<Polygon>& polygons) {
   std::istringstream in(bytes, std::ios::in | std::ios::binary);
   const auto quiet = CGAL::parameters::verbose(false);
   if (extension == ".ply") {
@@ -461,12 +515,11 @@ bool readSoup(const std::string& extension, const std::string& bytes,
   return false;
 }
 
-bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
-                          Eigen::MatrixXi& F, std::string& error) {
+bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
+                          std::string& error) {
   const std::string extension = lowercase(path.extension().string());
-  if (extension != ".ply" && extension != ".obj" && extension != ".off" &&
-      extension != ".stl") {
-    error = "unsupported extension '" + path.extension().string() + "'";
+  if (extension != ".ply" && extension != ".obj" && extension != ".off" && extension != ".stl") {
+    error = "unsupported extension " + quotedWord(path.extension().string());
     return false;
   }
   std::string bytes;
@@ -480,7 +533,7 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
   if (extension == ".obj") dropObjLines(bytes);
   if (!error.empty()) return false;
 
-  std::vector<ReadPoint> points;
+  std::vector<DoublePoint> points;
   std::vector<Polygon> polygons;
   if (!readSoup(extension, bytes, points, polygons)) {
     const bool text = extension != ".ply" || bytes.find("format ascii") != std::string::npos;
@@ -501,16 +554,15 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
 // ---------------------------------------------------------------------------------------
 // Self-intersections.
 
-using ExactKernel = CGAL::Exact_predicates_inexact_constructions_kernel;
-using ExactPoint = ExactKernel::Point_3;
+// Exact predicates: an intersection test must not flip on rounding for touching neighbours.
+using EpickKernel = CGAL::Exact_predicates_inexact_constructions_kernel;
+using EpickPoint = EpickKernel::Point_3;
 
-bool isDegenerate(const std::array<ExactPoint, 3>& t) {
-  return CGAL::collinear(t[0], t[1], t[2]);
-}
+bool isDegenerate(const std::array<EpickPoint, 3>& t) { return CGAL::collinear(t[0], t[1], t[2]); }
 
 // Same rules as CGAL's do_faces_intersect, but adjacency comes from shared vertex indices
 // instead of mesh connectivity, so it works on non-manifold soups.
-bool soupFacesIntersect(const std::vector<ExactPoint>& points, const Eigen::MatrixXi& F, int a,
+bool soupFacesIntersect(const std::vector<EpickPoint>& points, const Eigen::MatrixXi& F, int a,
                         int b) {
   std::array<int, 3> ia{F(a, 0), F(a, 1), F(a, 2)};
   std::array<int, 3> ib{F(b, 0), F(b, 1), F(b, 2)};
@@ -518,35 +570,37 @@ bool soupFacesIntersect(const std::vector<ExactPoint>& points, const Eigen::Matr
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j)
       if (ia[i] == ib[j]) shared.emplace_back(i, j);
-  const auto P = [&](int index) { return points[static_cast<std::size_t>(index)]; };
-  const ExactKernel::Triangle_3 ta(P(ia[0]), P(ia[1]), P(ia[2]));
-  const ExactKernel::Triangle_3 tb(P(ib[0]), P(ib[1]), P(ib[2]));
+  const auto P = [&](int index) -> const EpickPoint& {
+    return points[static_cast<std::size_t>(index)];
+  };
+  const EpickKernel::Triangle_3 ta(P(ia[0]), P(ia[1]), P(ia[2]));
+  const EpickKernel::Triangle_3 tb(P(ib[0]), P(ib[1]), P(ib[2]));
   if (shared.size() >= 3) return true;  // the same triangle twice
   if (shared.size() == 2) {
     // Across a shared edge only a coplanar fold-over counts.
     const int oa = 3 - shared[0].first - shared[1].first;
     const int ob = 3 - shared[0].second - shared[1].second;
-    const ExactPoint& p = P(ia[shared[0].first]);
-    const ExactPoint& q = P(ia[shared[1].first]);
+    const EpickPoint& p = P(ia[shared[0].first]);
+    const EpickPoint& q = P(ia[shared[1].first]);
     return CGAL::coplanar(p, q, P(ia[oa]), P(ib[ob])) &&
            CGAL::coplanar_orientation(p, q, P(ia[oa]), P(ib[ob])) == CGAL::POSITIVE;
   }
   if (shared.size() == 1) {
     const int i = shared[0].first;
     const int j = shared[0].second;
-    const ExactKernel::Segment_3 sa(P(ia[(i + 1) % 3]), P(ia[(i + 2) % 3]));
-    const ExactKernel::Segment_3 sb(P(ib[(j + 1) % 3]), P(ib[(j + 2) % 3]));
+    const EpickKernel::Segment_3 sa(P(ia[(i + 1) % 3]), P(ia[(i + 2) % 3]));
+    const EpickKernel::Segment_3 sb(P(ib[(j + 1) % 3]), P(ib[(j + 2) % 3]));
     return CGAL::do_intersect(ta, sb) || CGAL::do_intersect(tb, sa);
   }
   return CGAL::do_intersect(ta, tb);
 }
 
-int countSoupSelfIntersections(const std::vector<ExactPoint>& points, const Eigen::MatrixXi& F) {
+int countSoupSelfIntersections(const std::vector<EpickPoint>& points, const Eigen::MatrixXi& F) {
   using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, int,
-                                                         CGAL::Box_intersection_d::ID_EXPLICIT>;
+                                                        CGAL::Box_intersection_d::ID_EXPLICIT>;
   std::vector<Box> boxes;
   for (int f = 0; f < F.rows(); ++f) {
-    const std::array<ExactPoint, 3> t{points[static_cast<std::size_t>(F(f, 0))],
+    const std::array<EpickPoint, 3> t{points[static_cast<std::size_t>(F(f, 0))],
                                       points[static_cast<std::size_t>(F(f, 1))],
                                       points[static_cast<std::size_t>(F(f, 2))]};
     if (isDegenerate(t)) continue;  // as in CGAL: a degenerate face has no box
@@ -555,18 +609,17 @@ int countSoupSelfIntersections(const std::vector<ExactPoint>& points, const Eige
   std::vector<const Box*> pointers;
   for (const Box& b : boxes) pointers.push_back(&b);
   std::set<std::pair<int, int>> pairs;
-  CGAL::box_self_intersection_d(pointers.begin(), pointers.end(),
-                                [&](const Box* x, const Box* y) {
-                                  const int a = std::min(x->info(), y->info());
-                                  const int b = std::max(x->info(), y->info());
-                                  if (soupFacesIntersect(points, F, a, b)) pairs.emplace(a, b);
-                                });
+  CGAL::box_self_intersection_d(pointers.begin(), pointers.end(), [&](const Box* x, const Box* y) {
+    const int a = std::min(x->info(), y->info());
+    const int b = std::max(x->info(), y->info());
+    if (soupFacesIntersect(points, F, a, b)) pairs.emplace(a, b);
+  });
   return static_cast<int>(pairs.size());
 }
 
-int countMeshSelfIntersections(const std::vector<ExactPoint>& points,
+int countMeshSelfIntersections(const std::vector<EpickPoint>& points,
                                const std::vector<std::array<std::size_t, 3>>& faces) {
-  using Mesh = CGAL::Surface_mesh<ExactPoint>;
+  using Mesh = CGAL::Surface_mesh<EpickPoint>;
   using Face = boost::graph_traits<Mesh>::face_descriptor;
   Mesh mesh;
   PMP::polygon_soup_to_polygon_mesh(points, faces, mesh);
@@ -574,16 +627,16 @@ int countMeshSelfIntersections(const std::vector<ExactPoint>& points,
   PMP::self_intersections(mesh, std::back_inserter(pairs));
   // CGAL reports a degenerate face as the pair (f, f); that is not a pair of triangles
   // (the mesh checks report degenerate faces on their own).
-  return static_cast<int>(std::count_if(pairs.begin(), pairs.end(),
-                                        [](const auto& p) { return p.first != p.second; }));
+  return static_cast<int>(
+      std::count_if(pairs.begin(), pairs.end(), [](const auto& p) { return p.first != p.second; }));
 }
 
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
 
-bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V,
-                          Eigen::MatrixXi& F, std::string& error) {
+bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
+                          std::string& error) {
   error.clear();
   try {
     return readTriangleSoupImpl(path, V, F, error);
@@ -596,10 +649,10 @@ bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V,
 }
 
 struct SurfaceDistance::Impl {
-  using Triangle = ReadKernel::Triangle_3;
+  using Triangle = DoubleKernel::Triangle_3;
   using Iterator = std::vector<Triangle>::const_iterator;
-  using Primitive = CGAL::AABB_triangle_primitive<ReadKernel, Iterator>;
-  using Traits = CGAL::AABB_traits<ReadKernel, Primitive>;
+  using Primitive = CGAL::AABB_triangle_primitive<DoubleKernel, Iterator>;
+  using Traits = CGAL::AABB_traits<DoubleKernel, Primitive>;
   using Tree = CGAL::AABB_tree<Traits>;
 
   std::vector<Triangle> triangles;  // must outlive and never move under `tree`
@@ -610,7 +663,7 @@ struct SurfaceDistance::Impl {
 // a measurement, and the mesh checks are where bad indices get reported.
 SurfaceDistance::SurfaceDistance(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F)
     : impl_(std::make_unique<Impl>()) {
-  const auto point = [&](int i) { return ReadPoint(V(i, 0), V(i, 1), V(i, 2)); };
+  const auto point = [&](int i) { return DoublePoint(V(i, 0), V(i, 1), V(i, 2)); };
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     bool valid = true;
     for (int k = 0; k < 3; ++k) valid = valid && F(f, k) >= 0 && F(f, k) < V.rows();
@@ -634,8 +687,8 @@ double SurfaceDistance::distance(const Eigen::Vector3d& p, Eigen::Vector3d* clos
     if (closest != nullptr) closest->setConstant(std::numeric_limits<double>::quiet_NaN());
     return std::numeric_limits<double>::infinity();
   }
-  const ReadPoint query(p.x(), p.y(), p.z());
-  const ReadPoint c = impl_->tree.closest_point(query);
+  const DoublePoint query(p.x(), p.y(), p.z());
+  const DoublePoint c = impl_->tree.closest_point(query);
   if (closest != nullptr) *closest = Eigen::Vector3d(c.x(), c.y(), c.z());
   return std::sqrt(CGAL::squared_distance(query, c));
 }
@@ -649,14 +702,15 @@ int countSelfIntersections(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F) {
   try {
     if (V.cols() != 3 || F.cols() != 3 || !V.allFinite()) return -1;
     if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows())) return -1;
-    std::vector<ExactPoint> points;
+    std::vector<EpickPoint> points;
     points.reserve(static_cast<std::size_t>(V.rows()));
     for (Eigen::Index i = 0; i < V.rows(); ++i) points.emplace_back(V(i, 0), V(i, 1), V(i, 2));
     std::vector<std::array<std::size_t, 3>> faces;
     for (Eigen::Index f = 0; f < F.rows(); ++f)
       faces.push_back({static_cast<std::size_t>(F(f, 0)), static_cast<std::size_t>(F(f, 1)),
                        static_cast<std::size_t>(F(f, 2))});
-    if (PMP::is_polygon_soup_a_polygon_mesh(faces)) return countMeshSelfIntersections(points, faces);
+    if (PMP::is_polygon_soup_a_polygon_mesh(faces))
+      return countMeshSelfIntersections(points, faces);
     return countSoupSelfIntersections(points, F);
   } catch (...) {
     return -1;

@@ -34,7 +34,9 @@ class SurfaceDistance {
 };
 
 // Number of pairs of non-adjacent triangles that intersect (CGAL
-// Polygon_mesh_processing::self_intersections on the triangle soup as a Surface_mesh).
+// Polygon_mesh_processing::self_intersections on a Surface_mesh; a box-intersection search
+// on the soup when F is not a polygon mesh). Returns -1 for an out-of-range index, a
+// non-finite coordinate, or a CGAL failure.
 int countSelfIntersections(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
 
 }  // namespace chordfit

@@ -36,7 +36,7 @@ ContactDetector::ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::Mat
   double mean_edge = 0.0;
   for (int e = 0; e < E.rows(); ++e) mean_edge += (V_rest.row(E(e, 0)) - V_rest.row(E(e, 1))).norm();
   mean_edge = E.rows() > 0 ? mean_edge / E.rows() : 1.0;
-  cell_size_ = std::max(mean_edge, options_.thickness_mm + options_.margin_mm);
+  cell_size_ = std::max(mean_edge, options_.thickness_mm + options_.margin_mm + options_.skin_mm);
   if (!(cell_size_ > 0.0)) cell_size_ = 1.0;
   bucket_start_.assign(2 * static_cast<size_t>(std::max(n, 1)) + 1, 0);
   bucket_entries_.assign(n, 0);
@@ -52,50 +52,42 @@ bool ContactDetector::excluded(int p, int a, int b, int c) const {
   return false;
 }
 
-void ContactDetector::detect(const double* x_start, const double* x_pred, const double* w,
-                             std::vector<ContactConstraint>& out) {
-  out.clear();
+void ContactDetector::buildCandidates(const double* x, const double* w) {
+  ++rebuilds_;
+  candidates_.clear();
   const int n = static_cast<int>(bucket_entries_.size());
-  if (n == 0) return;
+  x_built_.assign(x, x + 3 * static_cast<size_t>(n));
   const int buckets = static_cast<int>(bucket_start_.size()) - 1;
   const double inv_cell = 1.0 / cell_size_;
 
-  // Counting sort of the vertices (predicted positions) into hash buckets.
+  // Counting sort of the vertices into hash buckets.
   std::fill(bucket_start_.begin(), bucket_start_.end(), 0);
   for (int i = 0; i < n; ++i) {
-    for (int d = 0; d < 3; ++d) cell_[3 * i + d] = cellOf(x_pred[3 * i + d], inv_cell);
+    for (int d = 0; d < 3; ++d) cell_[3 * i + d] = cellOf(x[3 * i + d], inv_cell);
     ++bucket_start_[hashCell(cell_[3 * i], cell_[3 * i + 1], cell_[3 * i + 2], buckets)];
   }
   for (int b = 0, sum = 0; b <= buckets; ++b) {
     sum += bucket_start_[b];
-    bucket_start_[b] = sum;  // end of bucket b (exclusive prefix after the fill below)
+    bucket_start_[b] = sum;  // end of bucket b; the fill below moves it to its start
   }
   for (int i = n - 1; i >= 0; --i) {
     const int b = hashCell(cell_[3 * i], cell_[3 * i + 1], cell_[3 * i + 2], buckets);
     bucket_entries_[--bucket_start_[b]] = i;  // vertices of a bucket end up in index order
   }
 
-  const double reach = options_.thickness_mm + options_.margin_mm;
-  const double reach2 = reach * reach;
+  const double reach = options_.thickness_mm + options_.margin_mm + options_.skin_mm;
   for (int f = 0; f < F_.rows(); ++f) {
     const int ia = F_(f, 0), ib = F_(f, 1), ic = F_(f, 2);
-    const CMap3 a(x_pred + 3 * ia), b(x_pred + 3 * ib), c(x_pred + 3 * ic);
+    const CMap3 a(x + 3 * ia), b(x + 3 * ib), c(x + 3 * ic);
     const bool triangle_fixed = w[ia] == 0.0 && w[ib] == 0.0 && w[ic] == 0.0;
-    Vec3 lo = a.cwiseMin(b).cwiseMin(c), hi = a.cwiseMax(b).cwiseMax(c);
-    lo -= Vec3::Constant(reach);
-    hi += Vec3::Constant(reach);
+    const Vec3 lo = a.cwiseMin(b).cwiseMin(c) - Vec3::Constant(reach);
+    const Vec3 hi = a.cwiseMax(b).cwiseMax(c) + Vec3::Constant(reach);
     int clo[3], chi[3];
     for (int d = 0; d < 3; ++d) {
       clo[d] = cellOf(lo(d), inv_cell);
       chi[d] = cellOf(hi(d), inv_cell);
     }
-    const CMap3 a0(x_start + 3 * ia), b0(x_start + 3 * ib), c0(x_start + 3 * ic);
-    Vec3 normal_pred = (b - a).cross(c - a);
-    const double npl = normal_pred.norm();
-    if (npl < 1e-14) continue;  // degenerate triangle: no usable normal
-    normal_pred /= npl;
-    const Vec3 normal_start = (b0 - a0).cross(c0 - a0);
-
+    const size_t first = candidates_.size();
     for (int ix = clo[0]; ix <= chi[0]; ++ix)
       for (int iy = clo[1]; iy <= chi[1]; ++iy)
         for (int iz = clo[2]; iz <= chi[2]; ++iz) {
@@ -104,34 +96,54 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
             const int p = bucket_entries_[e];
             if (cell_[3 * p] != ix || cell_[3 * p + 1] != iy || cell_[3 * p + 2] != iz) continue;
             if (triangle_fixed && w[p] == 0.0) continue;
-            const CMap3 xp(x_pred + 3 * p);
+            const CMap3 xp(x + 3 * p);
             if ((xp.array() < lo.array()).any() || (xp.array() > hi.array()).any()) continue;
             if (excluded(p, ia, ib, ic)) continue;
             double ba, bb, bc;
-            const int region = closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
-            const Vec3 q = ba * a + bb * b + bc * c;
-            const Vec3 d = xp - q;
-            const double dist2 = d.squaredNorm();
-            if (dist2 >= reach2) continue;
-            Vec3 nrm;
-            if (region == 0) {
-              // Side of the start-of-step plane of T (non-penetrating by induction).
-              const double side_start = normal_start.dot(CMap3(x_start + 3 * p) - a0);
-              const double side = side_start != 0.0 ? side_start : normal_pred.dot(d);
-              nrm = side >= 0.0 ? normal_pred : Vec3(-normal_pred);
-            } else {
-              const double dist = std::sqrt(dist2);
-              if (dist < 1e-12) continue;
-              nrm = d / dist;
-            }
-            ContactConstraint k;
-            k.p = p, k.a = ia, k.b = ib, k.c = ic;
-            k.ba = ba, k.bb = bb, k.bc = bc;
-            k.n[0] = nrm(0), k.n[1] = nrm(1), k.n[2] = nrm(2);
-            k.thickness = options_.thickness_mm;
-            out.push_back(k);
+            closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
+            if ((xp - (ba * a + bb * b + bc * c)).squaredNorm() >= reach * reach) continue;
+            candidates_.emplace_back(f, p);
           }
         }
+    // Cells are visited in grid order; sort this triangle's vertices by index.
+    std::sort(candidates_.begin() + first, candidates_.end());
+  }
+}
+
+void ContactDetector::detect(const double* x_start, const double* x_pred, const double* w,
+                             std::vector<ContactConstraint>& out) {
+  out.clear();
+  const int n = static_cast<int>(bucket_entries_.size());
+  if (n == 0) return;
+  // Rebuild the Verlet list when a vertex moved more than skin / 2 since the last build.
+  bool rebuild = x_built_.size() != 3 * static_cast<size_t>(n);
+  if (!rebuild) {
+    const double limit2 = 0.25 * options_.skin_mm * options_.skin_mm;
+    for (int i = 0; i < n && !rebuild; ++i)
+      rebuild = (CMap3(x_pred + 3 * i) - CMap3(&x_built_[3 * i])).squaredNorm() > limit2;
+  }
+  if (rebuild) buildCandidates(x_pred, w);
+
+  const double reach = options_.thickness_mm + options_.margin_mm;
+  const double reach2 = reach * reach;
+  for (size_t pair = 0; pair < candidates_.size(); ++pair) {
+    const auto [f, p] = candidates_[pair];
+    const int ia = F_(f, 0), ib = F_(f, 1), ic = F_(f, 2);
+    const CMap3 a(x_pred + 3 * ia), b(x_pred + 3 * ib), c(x_pred + 3 * ic);
+    const CMap3 xp(x_pred + 3 * p);
+    double ba, bb, bc;
+    closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
+    if ((xp - (ba * a + bb * b + bc * c)).squaredNorm() >= reach2) continue;
+    // Side: of the start-of-step plane of the triangle (non-penetrating by induction); if the
+    // vertex lies in that plane, of the predicted one.
+    const CMap3 a0(x_start + 3 * ia), b0(x_start + 3 * ib), c0(x_start + 3 * ic);
+    double side = (b0 - a0).cross(c0 - a0).dot(CMap3(x_start + 3 * p) - a0);
+    if (side == 0.0) side = (b - a).cross(c - a).dot(xp - a);
+    ContactConstraint k;
+    k.p = p, k.a = ia, k.b = ib, k.c = ic;
+    k.side = side >= 0.0 ? 1.0 : -1.0;
+    k.thickness = options_.thickness_mm;
+    out.push_back(k);
   }
 }
 

@@ -13,12 +13,16 @@
 // within `exclusion_radius` of p in the rest (open) state, so that bending of the sheet itself
 // does not register as contact.
 //
-// Broad phase: a uniform grid hashed into a table of 2 #V buckets (Teschner et al. 2003,
-// "Optimized spatial hashing for collision detection of deformable objects"; Mueller's Ten
-// Minute Physics "self-collision" lesson): vertices are counting-sorted into buckets, every
-// triangle visits the cells overlapped by its (start u predicted) bounding box inflated by
-// thickness + margin. Hash collisions are filtered by comparing the integer cell coordinates.
-// The output order is by triangle, then by bucket order: deterministic.
+// Broad phase: a Verlet list of candidate pairs within thickness + margin + skin, rebuilt
+// only when some vertex has moved more than skin / 2 since the last build (then no pair
+// outside the list can have come within thickness + margin: a vertex-triangle distance
+// changes by at most twice the largest vertex displacement). The list is built with a
+// uniform grid hashed into 2 #V buckets (Teschner et al. 2003, "Optimized spatial hashing for
+// collision detection of deformable objects"; Mueller's Ten Minute Physics "self-collision"
+// lesson): vertices are counting-sorted into buckets, every triangle visits the cells
+// overlapped by its bounding box inflated by the list radius; hash collisions are filtered by
+// comparing integer cell coordinates. Candidates are ordered by triangle, then vertex index,
+// so the output is deterministic.
 #pragma once
 
 #include <vector>
@@ -33,6 +37,7 @@ struct ContactOptions {
   double thickness_mm = 1.0;         // target separation of a vertex from a triangle
   double margin_mm = 0.5;            // pairs within thickness + margin become constraints
   double exclusion_radius_mm = 2.0;  // rest-state neighbourhood ignored (see above)
+  double skin_mm = 1.0;              // Verlet-list skin (see above)
 };
 
 class ContactDetector {
@@ -49,9 +54,12 @@ class ContactDetector {
               std::vector<ContactConstraint>& out);
 
   const ContactOptions& options() const { return options_; }
+  int rebuilds() const { return rebuilds_; }    // candidate-list builds so far
+  int candidates() const { return static_cast<int>(candidates_.size()); }
 
  private:
   bool excluded(int p, int a, int b, int c) const;
+  void buildCandidates(const double* x, const double* w);
 
   ContactOptions options_;
   Eigen::MatrixXi F_;
@@ -61,6 +69,10 @@ class ContactDetector {
   // bucket_entries_ (#V) as a counting sort; cell_ holds each vertex's integer cell.
   std::vector<int> bucket_start_, bucket_entries_;
   std::vector<int> cell_;  // 3 #V
+  // Verlet list: (triangle, vertex) pairs and the positions they were built from.
+  std::vector<std::pair<int, int>> candidates_;
+  std::vector<double> x_built_;
+  int rebuilds_ = 0;
 };
 
 }  // namespace chordfit

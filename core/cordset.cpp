@@ -2,15 +2,16 @@
 
 namespace chordfit {
 
-const char* toString(CordKind kind) {
-  return kind == CordKind::kPrimary ? "primary" : "secondary";
-}
+const char* toString(CordKind kind) { return kind == CordKind::kPrimary ? "primary" : "secondary"; }
 
 const char* toString(Provenance provenance) {
   switch (provenance) {
-    case Provenance::kHeuristic: return "heuristic";
-    case Provenance::kManual: return "manual";
-    case Provenance::kFitted: return "fitted";
+    case Provenance::kHeuristic:
+      return "heuristic";
+    case Provenance::kManual:
+      return "manual";
+    case Provenance::kFitted:
+      return "fitted";
   }
   return "heuristic";
 }

@@ -36,12 +36,19 @@ bool toLps(const json& object, const std::string& where, JsonFields& fields,
 }
 
 // Positions are millimetres everywhere in chordfit; other units would be silently wrong.
+// Slicer writes the units as a string ("mm") or as a coded entry {"CodeValue": "mm", ...}.
 bool checkUnits(const json& markup, const std::string& where, JsonFields& fields) {
   const json* value = fields.member(markup, where, "coordinateUnits", false);
-  if (value == nullptr || !value->is_string()) return true;  // Slicer also writes a code object
+  if (value == nullptr) return true;
+  std::string field = fieldPath(where, "coordinateUnits");
+  if (value->is_object() && value->contains("CodeValue")) {
+    value = &(*value)["CodeValue"];
+    field = fieldPath(field, "CodeValue");
+  }
+  if (!value->is_string()) return true;  // nothing we can interpret; Slicer's default is mm
   const std::string units = value->get<std::string>();
   if (units == "mm") return true;
-  fields.error(fieldPath(where, "coordinateUnits"), "expected \"mm\", got \"" + units + "\"");
+  fields.error(field, "expected \"mm\", got \"" + units + "\"");
   return false;
 }
 
@@ -92,8 +99,8 @@ bool readMarkups(const json& document, JsonFields& fields, int markup_index, Cur
     return false;
   }
   if (markup_index < 0 || static_cast<std::size_t>(markup_index) >= markups.size()) {
-    fields.error("markups", "markup " + std::to_string(markup_index) + " requested, but the file has " +
-                                std::to_string(markups.size()));
+    fields.error("markups", "markup " + std::to_string(markup_index) +
+                                " requested, but the file has " + std::to_string(markups.size()));
     return false;
   }
   const std::string where = indexPath("markups", static_cast<std::size_t>(markup_index));
@@ -167,16 +174,14 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
 
 // Throws std::invalid_argument for a matrix that is not #P by 3 or holds a non-finite
 // value (JSON has no NaN), std::runtime_error on I/O failure.
-void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points,
-                    bool closed) {
+void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points, bool closed) {
   if (points.cols() != 3 && points.rows() != 0)
     throw std::invalid_argument(path.string() + ": points must have 3 columns");
-  if (!points.allFinite())
-    throw std::invalid_argument(path.string() + ": points must be finite");
+  if (!points.allFinite()) throw std::invalid_argument(path.string() + ": points must be finite");
   // One point per line keeps the files readable and diffable; nlohmann prints the
   // shortest text that reads back to the same double.
-  std::string out = "{\n  \"closed\": " + std::string(closed ? "true" : "false") +
-                    ",\n  \"points\": [";
+  std::string out =
+      "{\n  \"closed\": " + std::string(closed ? "true" : "false") + ",\n  \"points\": [";
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
     out += i == 0 ? "\n    [" : ",\n    [";
     for (int k = 0; k < 3; ++k) {

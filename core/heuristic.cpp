@@ -30,10 +30,9 @@ double meanEdgeLength(const ValveMesh& mesh) {
 
 // Primary cords: n = round(L / spacing) points evenly spaced in arc length along a free-edge
 // loop, starting at its most anterior vertex so the layout is symmetric about A2/P2.
-void placePrimaries(const ValveMesh& mesh, const AnnulusFrame& frame,
-                    const std::vector<int>& loop, const Eigen::VectorXd& annulus_distance,
-                    const HeuristicOptions& options, std::vector<CordAttachment>& out,
-                    std::set<int>& used) {
+void placePrimaries(const ValveMesh& mesh, const AnnulusFrame& frame, const std::vector<int>& loop,
+                    const Eigen::VectorXd& annulus_distance, const HeuristicOptions& options,
+                    std::vector<CordAttachment>& out, std::set<int>& used) {
   const int n = static_cast<int>(loop.size());
   if (n < 2) return;
   int start = 0;
@@ -45,8 +44,8 @@ void placePrimaries(const ValveMesh& mesh, const AnnulusFrame& frame,
   }
   std::vector<double> arc(n + 1, 0.0);  // arc length from `start` to loop[(start + i) % n]
   for (int i = 0; i < n; ++i) {
-    arc[i + 1] = arc[i] + (mesh.V.row(loop[(start + i) % n]) -
-                           mesh.V.row(loop[(start + i + 1) % n])).norm();
+    arc[i + 1] =
+        arc[i] + (mesh.V.row(loop[(start + i) % n]) - mesh.V.row(loop[(start + i + 1) % n])).norm();
   }
   const double length = arc[n];
   const int count = std::max(1, static_cast<int>(std::lround(length / options.primary_spacing_mm)));
@@ -100,7 +99,8 @@ void placeSecondaries(const ValveMesh& mesh, const AnnulusFrame& frame,
 }
 
 std::vector<int> nearestTipInPlane(const ValveMesh& mesh, const Plane& plane,
-                                   const std::vector<PmTip>& tips, const std::vector<int>& vertices) {
+                                   const std::vector<PmTip>& tips,
+                                   const std::vector<int>& vertices) {
   auto in_plane = [&](const Eigen::Vector3d& p) -> Eigen::Vector3d {
     return p - plane.signedDistance(p) * plane.normal;
   };
@@ -124,7 +124,8 @@ std::vector<std::vector<int>> freeEdgeLoops(const ValveMesh& mesh) {
   const std::set<int> ring(mesh.annulus.data(), mesh.annulus.data() + mesh.annulus.size());
   std::vector<std::vector<int>> loops;
   for (std::vector<int>& loop : boundaryLoops(mesh.F)) {
-    const bool on_ring = std::all_of(loop.begin(), loop.end(), [&](int v) { return ring.count(v); });
+    const bool on_ring =
+        std::all_of(loop.begin(), loop.end(), [&](int v) { return ring.count(v); });
     if (!on_ring) loops.push_back(std::move(loop));
   }
   return loops;

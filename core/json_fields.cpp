@@ -47,7 +47,8 @@ std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
                                            const std::string& file, Diagnostics& diagnostics) {
   std::string text;
   if (!readWholeFile(path, text)) {
-    diagnostics.error(file, "", std::filesystem::exists(path) ? "cannot be read" : "file not found");
+    diagnostics.error(file, "",
+                      std::filesystem::exists(path) ? "cannot be read" : "file not found");
     return std::nullopt;
   }
   return parseJson(text, file, diagnostics);
@@ -138,8 +139,7 @@ bool JsonFields::boolean(const nlohmann::json& value, const std::string& where, 
   return true;
 }
 
-bool JsonFields::vec3(const nlohmann::json& value, const std::string& where,
-                      Eigen::Vector3d& out) {
+bool JsonFields::vec3(const nlohmann::json& value, const std::string& where, Eigen::Vector3d& out) {
   if (!value.is_array() || value.size() != 3) {
     error(where, "expected an array of 3 numbers, got " +
                      (value.is_array() ? "an array of " + std::to_string(value.size())

@@ -51,8 +51,7 @@ class JsonFields {
   bool integers(const nlohmann::json& value, const std::string& where, Eigen::VectorXi& out);
 
   void error(const std::string& where, const std::string& what);
-  void typeError(const std::string& where, const std::string& expected,
-                 const nlohmann::json& got);
+  void typeError(const std::string& where, const std::string& expected, const nlohmann::json& got);
 
  private:
   std::string file_;

@@ -20,8 +20,8 @@ class CappedReporter {
       : file_(file), diagnostics_(diagnostics), summary_(std::move(summary)) {}
   ~CappedReporter() {
     if (count_ > kMaxReportedPerKind) {
-      diagnostics_.error(file_, "", std::to_string(count_ - kMaxReportedPerKind) + " more " +
-                                         summary_);
+      diagnostics_.error(file_, "",
+                         std::to_string(count_ - kMaxReportedPerKind) + " more " + summary_);
     }
   }
   void report(const std::string& where, const std::string& what) {
@@ -53,9 +53,9 @@ bool checkIndices(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std:
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     for (int k = 0; k < 3; ++k) {
       if (F(f, k) < 0 || F(f, k) >= V.rows()) {
-        out.report("face " + std::to_string(f),
-                   "vertex index " + std::to_string(F(f, k)) + " out of range (mesh has " +
-                       std::to_string(V.rows()) + " vertices)");
+        out.report("face " + std::to_string(f), "vertex index " + std::to_string(F(f, k)) +
+                                                    " out of range (mesh has " +
+                                                    std::to_string(V.rows()) + " vertices)");
         break;
       }
     }
@@ -68,9 +68,8 @@ bool checkFinite(const Eigen::MatrixXd& V, const std::string& file, Diagnostics&
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     for (int k = 0; k < 3; ++k) {
       if (!std::isfinite(V(v, k))) {
-        out.report("vertex " + std::to_string(v),
-                   std::string("coordinate ") + "xyz"[k] + " is " +
-                       (std::isnan(V(v, k)) ? "NaN" : "infinite"));
+        out.report("vertex " + std::to_string(v), std::string("coordinate ") + "xyz"[k] + " is " +
+                                                      (std::isnan(V(v, k)) ? "NaN" : "infinite"));
         break;
       }
     }
@@ -78,8 +77,8 @@ bool checkFinite(const Eigen::MatrixXd& V, const std::string& file, Diagnostics&
   return out.count() == 0;
 }
 
-bool checkDegenerate(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
-                     const std::string& file, Diagnostics& diagnostics) {
+bool checkDegenerate(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
+                     Diagnostics& diagnostics) {
   // Zero area relative to the mesh size: |cross| below 1e-12 of the squared bounding-box
   // diagonal is round-off, not geometry.
   const double diagonal = (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
@@ -112,8 +111,9 @@ bool checkManifoldEdges(const Eigen::MatrixXi& F, const std::string& file,
 bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
                Diagnostics& diagnostics) {
   if (V.rows() < 3 || F.rows() < 1) {
-    diagnostics.error(file, "", "mesh has " + std::to_string(V.rows()) + " vertices and " +
-                                    std::to_string(F.rows()) + " triangles; need a surface");
+    diagnostics.error(file, "",
+                      "mesh has " + std::to_string(V.rows()) + " vertices and " +
+                          std::to_string(F.rows()) + " triangles; need a surface");
     return false;
   }
   const bool finite = checkFinite(V, file, diagnostics);
@@ -125,11 +125,10 @@ bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::st
 }
 
 bool checkAnnulusRing(const Eigen::MatrixXi& F, int vertex_count, const Eigen::VectorXi& ring,
-                      const std::string& file, const std::string& where,
-                      Diagnostics& diagnostics) {
+                      const std::string& file, const std::string& where, Diagnostics& diagnostics) {
   if (ring.size() < 3) {
-    diagnostics.error(file, where, "annulus ring needs at least 3 vertices, got " +
-                                       std::to_string(ring.size()));
+    diagnostics.error(file, where,
+                      "annulus ring needs at least 3 vertices, got " + std::to_string(ring.size()));
     return false;
   }
   bool ok = true;
@@ -141,9 +140,9 @@ bool checkAnnulusRing(const Eigen::MatrixXi& F, int vertex_count, const Eigen::V
                             std::to_string(vertex_count) + " vertices)");
       ok = false;
     } else if (!seen.insert(ring(i)).second) {
-      diagnostics.error(file, where + "[" + std::to_string(i) + "]",
-                        "vertex " + std::to_string(ring(i)) +
-                            " appears twice; the ring must be a simple loop");
+      diagnostics.error(
+          file, where + "[" + std::to_string(i) + "]",
+          "vertex " + std::to_string(ring(i)) + " appears twice; the ring must be a simple loop");
       ok = false;
     }
   }
@@ -154,8 +153,8 @@ bool checkAnnulusRing(const Eigen::MatrixXi& F, int vertex_count, const Eigen::V
     const int a = ring(i);
     const int b = ring((i + 1) % ring.size());
     const auto it = counts.find(undirected(a, b));
-    const std::string step = where + "[" + std::to_string(i) + "]->[" +
-                             std::to_string((i + 1) % ring.size()) + "]";
+    const std::string step =
+        where + "[" + std::to_string(i) + "]->[" + std::to_string((i + 1) % ring.size()) + "]";
     if (it == counts.end()) {
       out.report(step, "vertices " + std::to_string(a) + " and " + std::to_string(b) +
                            " are not joined by a mesh edge; the ring is not a closed loop");

@@ -23,7 +23,6 @@ bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::st
 // in-range vertices, and every consecutive pair (last -> first included) joined by a
 // boundary edge (an edge of exactly one triangle). `file`/`where` name the ring's source.
 bool checkAnnulusRing(const Eigen::MatrixXi& F, int vertex_count, const Eigen::VectorXi& ring,
-                      const std::string& file, const std::string& where,
-                      Diagnostics& diagnostics);
+                      const std::string& file, const std::string& where, Diagnostics& diagnostics);
 
 }  // namespace chordfit

@@ -31,6 +31,17 @@ std::string lowercase(std::string s) {
 
 bool isSpace(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
 
+// A word from the file as it may appear in a message: a corrupt binary file can put any
+// bytes where a keyword was expected.
+std::string quotedWord(const std::string& word) {
+  constexpr std::size_t kMaxShown = 40;
+  std::string shown;
+  for (char c : word.substr(0, kMaxShown))
+    shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
+  if (word.size() > kMaxShown) shown += "...";
+  return "'" + shown + "'";
+}
+
 // ---------------------------------------------------------------------------------------
 // Legacy VTK polydata reader.
 
@@ -45,11 +56,11 @@ enum class CellKind { kPolygons, kStrips, kIgnored };
 // The element types a legacy file may declare, with their binary size.
 int vtkTypeSize(const std::string& type) {
   static const std::pair<const char*, int> kTypes[] = {
-      {"unsigned_char", 1}, {"char", 1},          {"signed_char", 1},   {"unsigned_short", 2},
-      {"short", 2},         {"unsigned_int", 4},  {"int", 4},           {"unsigned_long", 8},
-      {"long", 8},          {"float", 4},         {"double", 8},        {"vtkidtype", 8},
-      {"vtktypeint8", 1},   {"vtktypeuint8", 1},  {"vtktypeint16", 2},  {"vtktypeuint16", 2},
-      {"vtktypeint32", 4},  {"vtktypeuint32", 4}, {"vtktypeint64", 8},  {"vtktypeuint64", 8},
+      {"unsigned_char", 1},  {"char", 1},          {"signed_char", 1},  {"unsigned_short", 2},
+      {"short", 2},          {"unsigned_int", 4},  {"int", 4},          {"unsigned_long", 8},
+      {"long", 8},           {"float", 4},         {"double", 8},       {"vtkidtype", 8},
+      {"vtktypeint8", 1},    {"vtktypeuint8", 1},  {"vtktypeint16", 2}, {"vtktypeuint16", 2},
+      {"vtktypeint32", 4},   {"vtktypeuint32", 4}, {"vtktypeint64", 8}, {"vtktypeuint64", 8},
       {"vtktypefloat32", 4}, {"vtktypefloat64", 8}};
   for (const auto& [name, size] : kTypes)
     if (type == name) return size;
@@ -74,7 +85,8 @@ class VtkParser {
     bool have_points = false;
     while (true) {
       const std::size_t keyword_pos = skipSpace();
-      const std::string keyword = lowercase(token());
+      const std::string word = token();
+      const std::string keyword = lowercase(word);
       if (keyword.empty() || keyword == "point_data" || keyword == "cell_data") break;
       if (keyword == "dataset") {
         parseDataset(keyword_pos);
@@ -96,7 +108,7 @@ class VtkParser {
       } else if (keyword == "metadata") {
         skipMetadata();
       } else {
-        fail(keyword_pos, "unexpected keyword '" + keyword + "'");
+        fail(keyword_pos, "unexpected keyword " + quotedWord(word));
       }
     }
     if (!have_points) fail(pos_, "no POINTS section");
@@ -154,11 +166,11 @@ class VtkParser {
     const std::size_t at = skipSpace();
     const std::string text = token();
     if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0])))
-      fail(at, "expected " + what + ", got '" + text + "'");
+      fail(at, "expected " + what + ", got " + quotedWord(text));
     errno = 0;
     char* end = nullptr;
     const unsigned long long value = std::strtoull(text.c_str(), &end, 10);
-    if (errno != 0 || *end != '\0') fail(at, "expected " + what + ", got '" + text + "'");
+    if (errno != 0 || *end != '\0') fail(at, "expected " + what + ", got " + quotedWord(text));
     return value;
   }
 
@@ -175,14 +187,15 @@ class VtkParser {
     if (format == "binary") {
       binary_ = true;
     } else if (format != "ascii") {
-      fail(format_pos, "expected ASCII or BINARY, got '" + format + "'");
+      fail(format_pos, "expected ASCII or BINARY, got " + quotedWord(format));
     }
   }
 
   void parseDataset(std::size_t keyword_pos) {
     const std::string type = token();
     if (lowercase(type) != "polydata")
-      fail(keyword_pos, "unsupported dataset type '" + type + "' (only POLYDATA can be read)");
+      fail(keyword_pos,
+           "unsupported dataset type " + quotedWord(type) + " (only POLYDATA can be read)");
     have_dataset_ = true;
   }
 
@@ -193,8 +206,7 @@ class VtkParser {
   std::string dataType(const std::string& section) {
     const std::size_t at = skipSpace();
     const std::string type = lowercase(token());
-    if (vtkTypeSize(type) == 0)
-      fail(at, section + ": unsupported data type '" + type + "'");
+    if (vtkTypeSize(type) == 0) fail(at, section + ": unsupported data type " + quotedWord(type));
     return type;
   }
 
@@ -257,7 +269,7 @@ class VtkParser {
     const double value = std::strtod(bytes_.c_str() + at, &end);
     const auto consumed = static_cast<std::size_t>(end - bytes_.c_str());
     if (consumed == at || (consumed < bytes_.size() && !isSpace(bytes_[consumed])))
-      fail(at, "'" + peekToken() + "' is not a number");
+      fail(at, quotedWord(peekToken()) + " is not a number");
     pos_ = consumed;
     return value;
   }
@@ -269,9 +281,8 @@ class VtkParser {
     errno = 0;
     const long long value = std::strtoll(bytes_.c_str() + at, &end, 10);
     const auto consumed = static_cast<std::size_t>(end - bytes_.c_str());
-    if (consumed == at || errno != 0 ||
-        (consumed < bytes_.size() && !isSpace(bytes_[consumed])))
-      fail(at, "'" + peekToken() + "' is not an integer");
+    if (consumed == at || errno != 0 || (consumed < bytes_.size() && !isSpace(bytes_[consumed])))
+      fail(at, quotedWord(peekToken()) + " is not an integer");
     pos_ = consumed;
     return value;
   }
@@ -282,8 +293,8 @@ class VtkParser {
     requireRoom(n, type, section);
     std::vector<long long> values(static_cast<std::size_t>(n));
     const int size = vtkTypeSize(type);
-    for (long long& v : values) v = binary_ ? binaryInteger(bigEndian(size), size, type)
-                                            : asciiInteger();
+    for (long long& v : values)
+      v = binary_ ? binaryInteger(bigEndian(size), size, type) : asciiInteger();
     binary_data_seen_ = binary_data_seen_ || binary_;
     return values;
   }
@@ -301,7 +312,8 @@ class VtkParser {
   void parsePoints(std::size_t keyword_pos, Eigen::MatrixXd& V) {
     const unsigned long long n = count("a point count");
     const std::string type = dataType("POINTS");
-    if (n > std::numeric_limits<unsigned long long>::max() / 3) fail(keyword_pos, "too many points");
+    if (n > std::numeric_limits<unsigned long long>::max() / 3)
+      fail(keyword_pos, "too many points");
     requireRoom(3 * n, type, "POINTS");
     V.resize(static_cast<Eigen::Index>(n), 3);
     for (Eigen::Index i = 0; i < V.rows(); ++i)
@@ -332,8 +344,7 @@ class VtkParser {
   }
 
   std::vector<std::vector<long long>> classicCells(std::size_t keyword_pos,
-                                                   const std::string& section,
-                                                   unsigned long long n,
+                                                   const std::string& section, unsigned long long n,
                                                    unsigned long long size) {
     const std::vector<long long> data = integers(size, binary_ ? "int" : "vtktypeint64", section);
     if (n > data.size()) fail(keyword_pos, section + ": more cells than connectivity entries");
@@ -342,8 +353,8 @@ class VtkParser {
     for (auto& cell : cells) {
       const long long corners = at < data.size() ? data[at] : -1;
       if (corners < 0 || static_cast<unsigned long long>(corners) > data.size() - at - 1)
-        fail(keyword_pos, section + ": cell list does not match the declared size " +
-                              std::to_string(size));
+        fail(keyword_pos,
+             section + ": cell list does not match the declared size " + std::to_string(size));
       cell.assign(data.begin() + static_cast<std::ptrdiff_t>(at + 1),
                   data.begin() + static_cast<std::ptrdiff_t>(at + 1 + corners));
       at += 1 + static_cast<std::size_t>(corners);
@@ -363,16 +374,15 @@ class VtkParser {
   }
 
   std::vector<std::vector<long long>> offsetCells(std::size_t keyword_pos,
-                                                  const std::string& section,
-                                                  unsigned long long n,
+                                                  const std::string& section, unsigned long long n,
                                                   unsigned long long size) {
     const std::vector<long long> offsets = namedArray("offsets", n, section + " OFFSETS");
     const std::vector<long long> connectivity =
         namedArray("connectivity", size, section + " CONNECTIVITY");
     if (offsets.empty()) return {};
     if (offsets.front() != 0 || offsets.back() != static_cast<long long>(size))
-      fail(keyword_pos, section + ": offsets must run from 0 to the connectivity size " +
-                            std::to_string(size));
+      fail(keyword_pos,
+           section + ": offsets must run from 0 to the connectivity size " + std::to_string(size));
     for (std::size_t c = 0; c + 1 < offsets.size(); ++c) {
       if (offsets[c + 1] < offsets[c])
         fail(keyword_pos, section + ": offsets decrease at cell " + std::to_string(c));
@@ -426,10 +436,11 @@ class VtkParser {
       const std::size_t type_pos = skipSpace();
       const std::string type = lowercase(token());
       if (vtkTypeSize(type) == 0)
-        fail(type_pos, "FIELD array '" + name + "': cannot skip data of type '" + type + "'");
+        fail(type_pos,
+             "FIELD array " + quotedWord(name) + ": cannot skip data of type " + quotedWord(type));
       if (tuples != 0 && components > std::numeric_limits<unsigned long long>::max() / tuples)
-        fail(keyword_pos, "FIELD array '" + name + "' is too large");
-      skipValues(components * tuples, type, "FIELD array '" + name + "'");
+        fail(keyword_pos, "FIELD array " + quotedWord(name) + " is too large");
+      skipValues(components * tuples, type, "FIELD array " + quotedWord(name));
     }
   }
 
@@ -450,8 +461,8 @@ class VtkParser {
   std::vector<std::array<int, 3>> triangles_;
 };
 
-bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V,
-             Eigen::MatrixXi& F, Diagnostics& diagnostics) {
+bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
+             Diagnostics& diagnostics) {
   std::string bytes;
   if (!readWholeFile(path, bytes)) {
     diagnostics.error(file, "", "cannot be read");
@@ -470,8 +481,7 @@ bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V,
 
 // cgalReadTriangleSoup's message may start with a location ("line 7: ...",
 // "element face 3: ...", "facet 12: ...", "header: ..."); it belongs in Problem::where.
-void reportSoupError(const std::string& file, const std::string& error,
-                     Diagnostics& diagnostics) {
+void reportSoupError(const std::string& file, const std::string& error, Diagnostics& diagnostics) {
   const std::size_t colon = error.find(": ");
   if (colon != std::string::npos) {
     const std::string prefix = error.substr(0, colon);

@@ -40,9 +40,7 @@ DeviationStats summarizeDeviation(const Eigen::VectorXd& distances) {
   const std::size_t mid = sorted.size() / 2;
   s.median = sorted.size() % 2 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
   s.mean = distances.mean();
-  s.sd = s.count > 1
-             ? std::sqrt((distances.array() - s.mean).square().sum() / (s.count - 1))
-             : 0.0;
+  s.sd = s.count > 1 ? std::sqrt((distances.array() - s.mean).square().sum() / (s.count - 1)) : 0.0;
   return s;
 }
 
@@ -135,8 +133,8 @@ Eigen::VectorXd heightAboveAnnulus(const AnnulusFrame& frame, const Eigen::Matri
 ClosedAnnulus closedAnnulus(const ValveCase& valve_case) {
   ClosedAnnulus closed;
   closed.ring = valve_case.annulus_closed;
-  closed.frame = annulusFrameFromRing(closed.ring, valve_case.mesh,
-                                      openAnnulusFrame(valve_case.mesh));
+  closed.frame =
+      annulusFrameFromRing(closed.ring, valve_case.mesh, openAnnulusFrame(valve_case.mesh));
   closed.segments = buildSegmentMap(closed.ring, valve_case.mesh, closed.frame);
   return closed;
 }
@@ -209,9 +207,8 @@ std::string table1Row(const std::string& label, const ValveMetrics& m) {
   char buffer[256];
   if (m.has_tracings) {
     std::snprintf(buffer, sizeof buffer, "| %s | %.0f | %.2f | %.2f | %.2f | %.2f ± %.2f | %s |\n",
-                  label.c_str(), m.area_mm2, m.deviation.min, m.deviation.median,
-                  m.deviation.max, m.deviation.mean, m.deviation.sd,
-                  m.prolapse_reconstructed ? "Yes" : "No");
+                  label.c_str(), m.area_mm2, m.deviation.min, m.deviation.median, m.deviation.max,
+                  m.deviation.mean, m.deviation.sd, m.prolapse_reconstructed ? "Yes" : "No");
   } else {
     std::snprintf(buffer, sizeof buffer, "| %s | %.0f | – | – | – | – | – (no tracings) |\n",
                   label.c_str(), m.area_mm2);

@@ -13,8 +13,8 @@
 #include <Eigen/Core>
 
 #include "core/annulus_plane.h"
-#include "core/case_data.h"
 #include "core/carpentier.h"
+#include "core/case_data.h"
 
 namespace chordfit {
 

@@ -36,7 +36,7 @@
 //       alpha(s) = a0 + k s,  k = (a1 - a0) / H,
 //       inward(s) = (cos a0 - cos(a0 + k s)) / k,  down(s) = (sin(a0 + k s) - sin a0) / k.
 //     Since |d(inward, down)/ds| = 1, the leaflet heights are true lengths. The free-edge
-//     tilt was tuned so that, with the defaults, the projected orifice is 4.3 cm^2 = 56% of
+//     tilt was tuned so that, with the defaults, the projected orifice is 4.1 cm^2 = 53% of
 //     the 7.7 cm^2 projected annulus: inside the normal mitral valve area of 4-6 cm^2 and
 //     still clearly narrower than the annulus. Larger tilts shrink the anterior free edge's
 //     column spacing (radial convergence) below ~0.4 target edge.
@@ -537,9 +537,12 @@ void checkFreeEdgeRadius(const RingFrame& frame, const Column& column, int index
   const double radius = frame.radius(column.annulus);
   if (inward > (1.0 - kMinFreeEdgeRadiusFraction) * radius) {
     throw std::invalid_argument(
-        "leaflet heights too large for the annulus: the free edge of column " +
-        std::to_string(index) + " (height " + formatNumber(column.height) +
-        " mm) would reach the valve axis (annulus radius " + formatNumber(radius) + " mm)");
+        std::string("leaflet heights too large for the annulus: the free edge of column ") +
+        std::to_string(index) + " (" + (column.leaflet == 0 ? "anterior" : "posterior") +
+        ", height " + formatNumber(column.height) +
+        " mm) would reach the valve axis (annulus radius " + formatNumber(radius) +
+        " mm); reduce " + (column.leaflet == 0 ? "anterior_height_mm" : "posterior_height_mm") +
+        " or enlarge the annulus");
   }
 }
 

@@ -52,7 +52,7 @@ struct SimulationSettings {
   // leaflet velocity relaxes toward it with time constant drag_time_ms. After the ramp the
   // field is zero, so the drag only damps and the equilibrium does not depend on it.
   double flow_speed_mm_per_ms = 0.0;
-  double drag_time_ms = 0.1;
+  double drag_time_ms = 1.0;
   // Duration of the boundary interpolation (annulus, PM tips) and of the pressure ramp
   // (smoothstep 0 -> 1).
   double ramp_ms = 1.0;
@@ -60,8 +60,12 @@ struct SimulationSettings {
   // ratio k dt^2 / m equals `stiffness_ratio` (XPBD converges in few iterations for ratios
   // of order 1).
   double dt_ms = 0.0;
-  double stiffness_ratio = 1.0;
+  double stiffness_ratio = 10.0;
   int iterations = 2;  // Gauss-Seidel sweeps per time step
+  // Carry lambda across steps and apply the last step's constraint impulses in the
+  // prediction (xpbd_constraints.h): the equilibrium is then the elastic one for any number
+  // of iterations. false = textbook XPBD (lambda reset every step).
+  bool warm_start_lambda = true;
   // Largest allowed vertex displacement per step before the constraints (velocity clamp);
   // keeps contact detection from missing a crossing. <= 0: 0.25 * contact thickness.
   double max_step_mm = 0.0;

@@ -10,8 +10,8 @@
 namespace chordfit {
 
 struct ValveMesh {
-  Eigen::MatrixXd V;  // #V by 3 vertex positions, mm
-  Eigen::MatrixXi F;  // #F by 3 triangle vertex indices into V
+  Eigen::MatrixXd V;        // #V by 3 vertex positions, mm
+  Eigen::MatrixXi F;        // #F by 3 triangle vertex indices into V
   Eigen::VectorXi leaflet;  // #V leaflet label per vertex, index into leaflet_names
   // Names of the leaflets, by label. Mitral default: {"anterior", "posterior"}.
   std::vector<std::string> leaflet_names{"anterior", "posterior"};

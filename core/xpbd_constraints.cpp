@@ -14,8 +14,17 @@ inline Map3 at(double* x, int i) { return Map3(x + 3 * static_cast<long>(i)); }
 
 }  // namespace
 
-void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2,
-                      double* x, const double* w, double* lambda) {
+namespace {
+
+// acc (optional): receives grad_i C * lambda for every vertex of every constraint, with the
+// total lambda after the update (the constraint impulse, used to warm-start the next step).
+inline void accumulate(double* acc, int i, const Vec3& g, double lambda) {
+  Map3(acc + 3 * static_cast<long>(i)) += lambda * g;
+}
+
+template <bool kAcc>
+void distanceSweep(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+                   const double* w, double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const DistanceConstraint& k = constraints[c];
@@ -29,14 +38,30 @@ void projectDistances(const std::vector<DistanceConstraint>& constraints, double
     // grad_i C = d/|d|, grad_j C = -d/|d|, |grad|^2 = 1.
     const double dl = (-(len - k.rest) - alpha * lambda[c]) / (wsum + alpha);
     lambda[c] += dl;
-    const Vec3 step = (dl / len) * d;
-    xi += w[k.i] * step;
-    xj -= w[k.j] * step;
+    const Vec3 n_ij = d / len;
+    xi += (w[k.i] * dl) * n_ij;
+    xj -= (w[k.j] * dl) * n_ij;
+    if (kAcc) {
+      accumulate(acc, k.i, n_ij, lambda[c]);
+      accumulate(acc, k.j, -n_ij, lambda[c]);
+    }
   }
 }
 
-double dihedralAngle(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
-                     const Eigen::Vector3d& xk, const Eigen::Vector3d& xl, Eigen::Vector3d* grad) {
+}  // namespace
+
+void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+                      const double* w, double* lambda, double* acc) {
+  if (acc)
+    distanceSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+  else
+    distanceSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+}
+
+namespace {
+
+template <class V>
+inline double dihedralAngleImpl(const V& xi, const V& xj, const V& xk, const V& xl, Vec3* grad) {
   // Bridson et al. 2003 with x3 = xi, x4 = xj (hinge E = x4 - x3), x1 = xk, x2 = xl:
   // N1 = (x1 - x3) x (x1 - x4), N2 = (x2 - x4) x (x2 - x3) (= the faces' winding normals).
   const Vec3 e = xj - xi;
@@ -60,35 +85,8 @@ double dihedralAngle(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
   return theta;
 }
 
-void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
-                    const double* w, double* lambda) {
-  const int n = static_cast<int>(constraints.size());
-  for (int c = 0; c < n; ++c) {
-    const BendingConstraint& k = constraints[c];
-    const double wi = w[k.i], wj = w[k.j], wk = w[k.k], wl = w[k.l];
-    if (wi + wj + wk + wl == 0.0) continue;
-    Map3 xi = at(x, k.i), xj = at(x, k.j), xk = at(x, k.k), xl = at(x, k.l);
-    Vec3 g[4];
-    const double theta = dihedralAngle(xi, xj, xk, xl, g);
-    const double denom_w = wi * g[0].squaredNorm() + wj * g[1].squaredNorm() +
-                           wk * g[2].squaredNorm() + wl * g[3].squaredNorm();
-    if (denom_w < 1e-24) continue;
-    const double alpha = k.compliance * inv_dt2;
-    double C = theta - k.rest_angle;
-    // Keep C in (-pi, pi] so a fold through +-pi does not flip the restoring direction.
-    if (C > M_PI) C -= 2.0 * M_PI;
-    if (C < -M_PI) C += 2.0 * M_PI;
-    const double dl = (-C - alpha * lambda[c]) / (denom_w + alpha);
-    lambda[c] += dl;
-    xi += (wi * dl) * g[0];
-    xj += (wj * dl) * g[1];
-    xk += (wk * dl) * g[2];
-    xl += (wl * dl) * g[3];
-  }
-}
-
-double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
-                    const Eigen::Vector3d& xc, Eigen::Vector3d* grad) {
+template <class V>
+inline double triangleAreaImpl(const V& xa, const V& xb, const V& xc, Vec3* grad) {
   const Vec3 N = (xb - xa).cross(xc - xa);
   const double len = N.norm();
   if (grad) {
@@ -105,8 +103,57 @@ double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
   return 0.5 * len;
 }
 
-void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
-                  const double* w, double* lambda) {
+}  // namespace
+
+double dihedralAngle(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
+                     const Eigen::Vector3d& xk, const Eigen::Vector3d& xl, Eigen::Vector3d* grad) {
+  return dihedralAngleImpl(xi, xj, xk, xl, grad);
+}
+
+double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb, const Eigen::Vector3d& xc,
+                    Eigen::Vector3d* grad) {
+  return triangleAreaImpl(xa, xb, xc, grad);
+}
+
+namespace {
+
+template <bool kAcc>
+void bendingSweep(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+                  const double* w, double* lambda, double* acc) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const BendingConstraint& k = constraints[c];
+    const double wi = w[k.i], wj = w[k.j], wk = w[k.k], wl = w[k.l];
+    if (wi + wj + wk + wl == 0.0) continue;
+    Map3 xi = at(x, k.i), xj = at(x, k.j), xk = at(x, k.k), xl = at(x, k.l);
+    Vec3 g[4];
+    const double theta = dihedralAngleImpl(xi, xj, xk, xl, g);
+    const double denom_w = wi * g[0].squaredNorm() + wj * g[1].squaredNorm() +
+                           wk * g[2].squaredNorm() + wl * g[3].squaredNorm();
+    if (denom_w < 1e-24) continue;
+    const double alpha = k.compliance * inv_dt2;
+    double C = theta - k.rest_angle;
+    // Keep C in (-pi, pi] so a fold through +-pi does not flip the restoring direction.
+    if (C > M_PI) C -= 2.0 * M_PI;
+    if (C < -M_PI) C += 2.0 * M_PI;
+    const double dl = (-C - alpha * lambda[c]) / (denom_w + alpha);
+    lambda[c] += dl;
+    xi += (wi * dl) * g[0];
+    xj += (wj * dl) * g[1];
+    xk += (wk * dl) * g[2];
+    xl += (wl * dl) * g[3];
+    if (kAcc) {
+      accumulate(acc, k.i, g[0], lambda[c]);
+      accumulate(acc, k.j, g[1], lambda[c]);
+      accumulate(acc, k.k, g[2], lambda[c]);
+      accumulate(acc, k.l, g[3], lambda[c]);
+    }
+  }
+}
+
+template <bool kAcc>
+void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+               const double* w, double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const AreaConstraint& k = constraints[c];
@@ -114,8 +161,9 @@ void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2
     if (wa + wb + wc == 0.0) continue;
     Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
     Vec3 g[3];
-    const double area = triangleArea(xa, xb, xc, g);
-    const double denom_w = wa * g[0].squaredNorm() + wb * g[1].squaredNorm() + wc * g[2].squaredNorm();
+    const double area = triangleAreaImpl(xa, xb, xc, g);
+    const double denom_w =
+        wa * g[0].squaredNorm() + wb * g[1].squaredNorm() + wc * g[2].squaredNorm();
     if (denom_w < 1e-24) continue;
     const double alpha = k.compliance * inv_dt2;
     const double dl = (-(area - k.rest_area) - alpha * lambda[c]) / (denom_w + alpha);
@@ -123,11 +171,17 @@ void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2
     xa += (wa * dl) * g[0];
     xb += (wb * dl) * g[1];
     xc += (wc * dl) * g[2];
+    if (kAcc) {
+      accumulate(acc, k.a, g[0], lambda[c]);
+      accumulate(acc, k.b, g[1], lambda[c]);
+      accumulate(acc, k.c, g[2], lambda[c]);
+    }
   }
 }
 
-void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
-                  const double* tips, double* x, const double* w, double* lambda) {
+template <bool kAcc>
+void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, const double* tips,
+               double* x, const double* w, double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const CordConstraint& k = constraints[c];
@@ -146,34 +200,97 @@ void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2
     const double total = std::min(lambda[c] + dl, 0.0);
     dl = total - lambda[c];
     lambda[c] = total;
-    xv += (wv * dl / len) * d;
+    const Vec3 g = d / len;
+    xv += (wv * dl) * g;
+    if (kAcc) accumulate(acc, k.vertex, g, total);
   }
 }
 
-void projectContacts(const std::vector<ContactConstraint>& constraints, double* x,
-                     const double* w, double* lambda) {
+// Contact distance C and its unit direction u (see ContactConstraint).
+inline bool contactState(const ContactConstraint& k, const double* x, double& C, Vec3& u,
+                         double bary[3]) {
+  const CMap3 xp(x + 3 * static_cast<long>(k.p)), xa(x + 3 * static_cast<long>(k.a)),
+      xb(x + 3 * static_cast<long>(k.b)), xc(x + 3 * static_cast<long>(k.c));
+  const int region = closestPointOnTriangle(xp, xa, xb, xc, bary[0], bary[1], bary[2]);
+  const Vec3 d = xp - (bary[0] * xa + bary[1] * xb + bary[2] * xc);
+  if (region == 0) {
+    const Vec3 n = (xb - xa).cross(xc - xa);
+    const double len = n.norm();
+    if (len < 1e-14) return false;
+    u = (k.side / len) * n;
+    C = u.dot(d) - k.thickness;
+  } else {
+    const double len = d.norm();
+    if (len < 1e-12) return false;
+    u = d / len;
+    C = len - k.thickness;
+  }
+  return true;
+}
+
+template <bool kAcc>
+void contactSweep(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
+                  double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const ContactConstraint& k = constraints[c];
-    const double wp = w[k.p], wa = w[k.a] * k.ba * k.ba, wb = w[k.b] * k.bb * k.bb,
-                 wc = w[k.c] * k.bc * k.bc;
-    const double denom = wp + wa + wb + wc;
-    if (denom == 0.0) continue;
-    Map3 xp = at(x, k.p), xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
-    const CMap3 nrm(k.n);
-    const double C = nrm.dot(xp - k.ba * xa - k.bb * xb - k.bc * xc) - k.thickness;
+    double C, b[3];
+    Vec3 u;
+    if (!contactState(k, x, C, u, b)) continue;
     if (C > 0.0 && lambda[c] == 0.0) continue;
+    const double denom =
+        w[k.p] + w[k.a] * b[0] * b[0] + w[k.b] * b[1] * b[1] + w[k.c] * b[2] * b[2];
+    if (denom == 0.0) continue;
     double dl = -C / denom;
     // A contact only pushes: accumulated lambda stays >= 0.
     const double total = std::max(lambda[c] + dl, 0.0);
     dl = total - lambda[c];
     lambda[c] = total;
-    // grad_p C = n, grad_a C = -ba n, ...
-    xp += (w[k.p] * dl) * nrm;
-    xa -= (w[k.a] * k.ba * dl) * nrm;
-    xb -= (w[k.b] * k.bb * dl) * nrm;
-    xc -= (w[k.c] * k.bc * dl) * nrm;
+    at(x, k.p) += (w[k.p] * dl) * u;
+    at(x, k.a) -= (w[k.a] * b[0] * dl) * u;
+    at(x, k.b) -= (w[k.b] * b[1] * dl) * u;
+    at(x, k.c) -= (w[k.c] * b[2] * dl) * u;
+    if (kAcc) {
+      accumulate(acc, k.p, u, total);
+      accumulate(acc, k.a, -b[0] * u, total);
+      accumulate(acc, k.b, -b[1] * u, total);
+      accumulate(acc, k.c, -b[2] * u, total);
+    }
   }
+}
+
+}  // namespace
+
+void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+                    const double* w, double* lambda, double* acc) {
+  if (acc)
+    bendingSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+  else
+    bendingSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+}
+
+void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+                  const double* w, double* lambda, double* acc) {
+  if (acc)
+    areaSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+  else
+    areaSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+}
+
+void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
+                  const double* tips, double* x, const double* w, double* lambda, double* acc) {
+  if (acc)
+    cordSweep<true>(constraints, inv_dt2, tips, x, w, lambda, acc);
+  else
+    cordSweep<false>(constraints, inv_dt2, tips, x, w, lambda, acc);
+}
+
+void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
+                     double* lambda, double* acc) {
+  if (acc)
+    contactSweep<true>(constraints, x, w, lambda, acc);
+  else
+    contactSweep<false>(constraints, x, w, lambda, acc);
 }
 
 int closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,

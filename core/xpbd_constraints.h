@@ -12,8 +12,21 @@
 //
 // Unilateral constraints (cords, contacts) keep their accumulated lambda on the admissible
 // sign (projected Gauss-Seidel): a cord only pulls, a contact only pushes.
+//
+// Warm start: lambda is NOT reset between steps by the simulator. The constraint impulse of
+// the last sweep, sum_j grad C_j lambda_j, is accumulated into `acc` (optional; a flat 3 #V
+// array the caller zeroes) and applied in the next step's prediction, x~ += w * acc. At a
+// steady state this makes every sweep a no-op exactly when C + alpha~ lambda = 0 and the
+// forces balance, so the quasi-static equilibrium is the elastic one whatever the number of
+// iterations (with lambda reset each step, a non-converged Gauss-Seidel solve leaves an
+// iteration-dependent, too-soft material; see tests/test_xpbd_hencky.cpp). For a single
+// linear constraint the warm-started step equals the reset XPBD step: only the initial guess
+// of the implicit solve changes.
 #pragma once
 
+#include <algorithm>
+#include <array>
+#include <cstdint>
 #include <vector>
 
 #include <Eigen/Core>
@@ -54,28 +67,68 @@ struct CordConstraint {
   double compliance = 0.0;
 };
 
-// Vertex-triangle proximity contact, linearised once per time step: with the closest point
-// q = ba x_a + bb x_b + bc x_c (barycentrics frozen) and the separating direction n (unit,
-// frozen), C = n . (x_p - q) - thickness >= 0. Hard (compliance 0), pushes only.
+// Vertex-triangle proximity contact (Bridson, Fedkiw, Anderson 2002, "Robust treatment of
+// collisions, contact and friction for cloth animation", proximity with thickness):
+//   C = |x_p - q| - thickness >= 0, q the closest point of triangle (a, b, c) to x_p,
+// evaluated afresh at every projection (barycentrics b_m by Ericson 2005). When q is interior
+// to the triangle, |x_p - q| is replaced by side * n . (x_p - q) (n the unit normal, side
+// = +-1 the side of the triangle x_p must stay on, fixed by the detector), so that a vertex
+// that crossed the sheet is pushed back; both forms agree, with their gradients, on the
+// boundary of the interior region. Gradients: grad_p C = u, grad_m C = -b_m u with u the unit
+// direction of C's increase (exact: the derivative of the normal is orthogonal to x_p - q).
+// Hard (compliance 0), pushes only.
 struct ContactConstraint {
   int p = 0, a = 0, b = 0, c = 0;
-  double ba = 0.0, bb = 0.0, bc = 0.0;
-  double n[3] = {0.0, 0.0, 0.0};
+  double side = 1.0;  // +1: x_p stays on the side the winding normal points to; -1: other
   double thickness = 0.0;
 };
 
-// Batch projections. inv_dt2 = 1 / dt^2; lambda has one entry per constraint.
+// Batch projections. inv_dt2 = 1 / dt^2; lambda has one entry per constraint; acc optional
+// (see above).
 void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2,
-                      double* x, const double* w, double* lambda);
+                      double* x, const double* w, double* lambda, double* acc = nullptr);
 void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
-                    const double* w, double* lambda);
+                    const double* w, double* lambda, double* acc = nullptr);
 void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
-                  const double* w, double* lambda);
+                  const double* w, double* lambda, double* acc = nullptr);
 // tips: flat tip positions tips[3 * t + d].
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
-                  const double* tips, double* x, const double* w, double* lambda);
+                  const double* tips, double* x, const double* w, double* lambda,
+                  double* acc = nullptr);
 void projectContacts(const std::vector<ContactConstraint>& constraints, double* x,
-                     const double* w, double* lambda);
+                     const double* w, double* lambda, double* acc = nullptr);
+
+// Reorders constraints by a greedy vertex colouring (stable within a colour): constraints of
+// one colour share no vertex, so consecutive projections do not wait on each other's writes
+// (a Gauss-Seidel sweep in natural order is latency-bound: each projection reads the vertex
+// the previous one just wrote). Any fixed order is a valid Gauss-Seidel order; this one is a
+// deterministic function of the input order. vertices_of(c) returns a std::array<int, N>.
+template <class Constraint, class VerticesOf>
+void orderByColour(std::vector<Constraint>& constraints, VerticesOf vertices_of) {
+  int max_vertex = -1;
+  for (const Constraint& c : constraints)
+    for (int v : vertices_of(c)) max_vertex = std::max(max_vertex, v);
+  std::vector<std::uint64_t> used(static_cast<size_t>(max_vertex + 1), 0);
+  std::vector<std::pair<int, int>> key(constraints.size());  // (colour, original index)
+  for (size_t k = 0; k < constraints.size(); ++k) {
+    std::uint64_t mask = 0;
+    for (int v : vertices_of(constraints[k])) mask |= used[v];
+    int colour = 64;  // all 64 colours taken: a last, shared class
+    for (int b = 0; b < 64; ++b)
+      if (!(mask & (std::uint64_t{1} << b))) {
+        colour = b;
+        break;
+      }
+    if (colour < 64)
+      for (int v : vertices_of(constraints[k])) used[v] |= std::uint64_t{1} << colour;
+    key[k] = {colour, static_cast<int>(k)};
+  }
+  std::sort(key.begin(), key.end());
+  std::vector<Constraint> sorted;
+  sorted.reserve(constraints.size());
+  for (const auto& [colour, k] : key) sorted.push_back(constraints[k]);
+  constraints.swap(sorted);
+}
 
 // Single-constraint evaluations (used to set up rest values and in tests).
 // Signed dihedral angle at hinge (i, j) (see BendingConstraint); grad (optional) receives

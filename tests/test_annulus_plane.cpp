@@ -1,7 +1,7 @@
 #include <cmath>
 
-#include <Eigen/Geometry>
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 
 #include "core/annulus_plane.h"
 #include "tests/test_support.h"

@@ -36,8 +36,8 @@ RingValve circularRing(bool reverse_order) {
 
 std::string segmentAt(const SegmentMap& map, double degrees, int leaflet) {
   const double phi = degrees * M_PI / 180.0;
-  return segmentName(map, segmentOf(map, Eigen::Vector3d(8 * std::cos(phi), 8 * std::sin(phi), -3),
-                                    leaflet));
+  return segmentName(
+      map, segmentOf(map, Eigen::Vector3d(8 * std::cos(phi), 8 * std::sin(phi), -3), leaflet));
 }
 
 class CarpentierSegments : public ::testing::TestWithParam<bool> {};
@@ -64,7 +64,7 @@ TEST_P(CarpentierSegments, NumbersThirdsFromTheAnterolateralCommissure) {
 TEST_P(CarpentierSegments, ClampsPointsJustPastTheirLeafletsCommissure) {
   const RingValve r = circularRing(GetParam());
   const SegmentMap map = buildSegmentMap(r.ring, r.mesh, openAnnulusFrame(r.mesh));
-  EXPECT_EQ(segmentAt(map, 65, 0), "A1");   // anterior point a little into the posterior range
+  EXPECT_EQ(segmentAt(map, 65, 0), "A1");  // anterior point a little into the posterior range
   EXPECT_EQ(segmentAt(map, 55, 1), "P1");
 }
 

@@ -24,7 +24,9 @@ class ValidateCommand : public ::testing::Test {
  protected:
   void SetUp() override { writeCase(dir_.path(), valve_); }
 
-  testing::CommandResult validate() { return runChordfit("validate '" + dir_.path().string() + "'"); }
+  testing::CommandResult validate() {
+    return runChordfit("validate '" + dir_.path().string() + "'");
+  }
 
   // Asserts exit code 2, no crash, and an error line for `file` whose text matches `pattern`.
   void expectError(const std::string& file, const std::string& pattern) {
@@ -121,8 +123,12 @@ TEST_F(ValidateCommand, ReportsAnAnnulusRingThatIsNotAClosedBoundaryLoop) {
   // Skipping vertex 4 leaves a step 3 -> 5 that is no mesh edge.
   writeText(dir_ / "annulus_ring.json", R"({"vertices": [0, 1, 2, 3, 5, 6, 7]})");
   writeText(dir_ / "annulus_closed.json",
-            nlohmann::json{{"points", nlohmann::json::array({{10, 0, 0}, {7, 7, 0}, {0, 10, 0},
-                                                             {-7, 7, 0}, {-7, -7, 0}, {0, -10, 0},
+            nlohmann::json{{"points", nlohmann::json::array({{10, 0, 0},
+                                                             {7, 7, 0},
+                                                             {0, 10, 0},
+                                                             {-7, 7, 0},
+                                                             {-7, -7, 0},
+                                                             {0, -10, 0},
                                                              {7, -7, 0}})}}
                 .dump());
   expectError("annulus_ring\\.json", "vertices\\[3\\]->\\[4\\]: .*not a closed loop");

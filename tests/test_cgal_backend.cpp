@@ -74,8 +74,8 @@ TEST(SurfaceDistance, EmptySurfaceIsInfinitelyFarAway) {
 // A closed, consistently oriented icosahedron with circumradius sqrt(1 + t^2).
 void icosahedron(Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  V = Eigen::MatrixXd{{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                      {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  V = Eigen::MatrixXd{{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                      {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   F = Eigen::MatrixXi{{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
                       {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
                       {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
@@ -133,8 +133,8 @@ TEST(CgalSelfIntersections, NeighboursSharingAVertexOrEdgeDoNotCount) {
 
 TEST(CgalSelfIntersections, NonManifoldSoupFallsBackToTheSoupVersion) {
   // Three fins on one edge (not a polygon mesh), plus a triangle that pierces fin 0 only.
-  Eigen::MatrixXd V{{0, 0, 0},     {0, 0, 1},   {1, 0, 0.5},    {-1, 0.1, 0.5},
-                    {0, -1, 0.5},  {0.5, -0.5, 0.4}, {0.5, 0.5, 0.4}, {0.6, 0, 0.9}};
+  Eigen::MatrixXd V{{0, 0, 0},    {0, 0, 1},        {1, 0, 0.5},     {-1, 0.1, 0.5},
+                    {0, -1, 0.5}, {0.5, -0.5, 0.4}, {0.5, 0.5, 0.4}, {0.6, 0, 0.9}};
   Eigen::MatrixXi F{{0, 1, 2}, {1, 0, 3}, {0, 1, 4}};
   EXPECT_EQ(countSelfIntersections(V, F), 0);
   Eigen::MatrixXi pierced(4, 3);

@@ -55,7 +55,8 @@ TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
 }
 
 TEST(ChordfitCli, ValidatesTheDocumentedExampleCase) {
-  const auto r = runChordfit(std::string("validate '") + CHORDFIT_SOURCE_DIR + "/docs/example-case'");
+  const auto r =
+      runChordfit(std::string("validate '") + CHORDFIT_SOURCE_DIR + "/docs/example-case'");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("tracings:  3 polylines, 10 points"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("4 cords on 2 tips"), std::string::npos) << r.out;

@@ -7,8 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "core/curve_io.h"
-
-#include <unistd.h>
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -17,15 +16,6 @@ namespace fs = std::filesystem;
 
 class CurveIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("chordfit_curve_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   fs::path write(const std::string& name, const std::string& text) const {
     const fs::path path = dir_ / name;
     std::ofstream(path) << text;
@@ -53,7 +43,8 @@ class CurveIoTest : public ::testing::Test {
     return diagnostics.problems()[0];
   }
 
-  fs::path dir_;
+  testing::TempDir temp_;
+  const fs::path dir_ = temp_.path();
 };
 
 const char* kSchema =
@@ -63,8 +54,8 @@ const char* kSchema =
 // A Slicer markups file with one markup; `system` is spliced in verbatim (may be empty).
 std::string markupsFile(const std::string& type, const std::string& system,
                         const std::string& control_points) {
-  return std::string("{") + kSchema + ",\n\"markups\": [{\"type\": \"" + type + "\"," +
-         system + "\n\"controlPoints\": [" + control_points + "]}]}\n";
+  return std::string("{") + kSchema + ",\n\"markups\": [{\"type\": \"" + type + "\"," + system +
+         "\n\"controlPoints\": [" + control_points + "]}]}\n";
 }
 
 const char* kThreePoints =
@@ -78,17 +69,17 @@ Eigen::MatrixXd threePointsLps() {
 }
 
 TEST_F(CurveIoTest, SlicerClosedCurveInLpsIsReadUnchanged) {
-  const Curve c = readOk(
-      write("annulus.mrk.json", markupsFile("ClosedCurve", "\"coordinateSystem\": \"LPS\",",
-                                            kThreePoints)));
+  const Curve c =
+      readOk(write("annulus.mrk.json",
+                   markupsFile("ClosedCurve", "\"coordinateSystem\": \"LPS\",", kThreePoints)));
   EXPECT_TRUE(c.closed);
   EXPECT_EQ(c.points, threePointsLps());
 }
 
 TEST_F(CurveIoTest, SlicerClosedCurveInRasHasXAndYNegated) {
-  const Curve c = readOk(
-      write("annulus.mrk.json", markupsFile("ClosedCurve", "\"coordinateSystem\": \"RAS\",",
-                                            kThreePoints)));
+  const Curve c =
+      readOk(write("annulus.mrk.json",
+                   markupsFile("ClosedCurve", "\"coordinateSystem\": \"RAS\",", kThreePoints)));
   Eigen::MatrixXd expected = threePointsLps();
   expected.col(0) *= -1.0;
   expected.col(1) *= -1.0;
@@ -159,6 +150,11 @@ TEST_F(CurveIoTest, WrongTypesAreReportedWithTheirFieldPath) {
        "markups[0].coordinateSystem", "\"LPS\" or \"RAS\""},
       {markupsFile("Curve", "\"coordinateUnits\": \"um\",", kThreePoints),
        "markups[0].coordinateUnits", "\"mm\""},
+      {markupsFile("Curve",
+                   "\"coordinateUnits\": {\"CodeValue\": \"um\", \"CodingSchemeDesignator\": "
+                   "\"UCUM\"},",
+                   kThreePoints),
+       "markups[0].coordinateUnits.CodeValue", "\"mm\""},
       {markupsFile("Plane", "", kThreePoints), "markups[0].type", "\"Plane\""},
       {markupsFile("Curve", "", ""), "markups[0].controlPoints", "no placed control points"},
       {"{\"markups\": {}}", "markups", "expected an array"},

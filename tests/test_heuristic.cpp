@@ -105,7 +105,8 @@ class AutomaticPlacement : public ::testing::Test {
 
 TEST_F(AutomaticPlacement, PutsPrimariesOnTheFreeEdgeAndSecondariesOnTheBelly) {
   const auto attachments = placeCordAttachments(valve_.valve_case.mesh, options_);
-  std::set<int> free_edge(valve_.free_edge.data(), valve_.free_edge.data() + valve_.free_edge.size());
+  std::set<int> free_edge(valve_.free_edge.data(),
+                          valve_.free_edge.data() + valve_.free_edge.size());
   int primaries = 0, secondaries = 0;
   for (const CordAttachment& a : attachments) {
     if (a.kind == CordKind::kPrimary) {
@@ -125,7 +126,8 @@ TEST_F(AutomaticPlacement, SpacesPrimariesAsAskedAlongTheFreeEdge) {
   double free_edge_length = 0.0;
   for (Eigen::Index i = 0; i < valve_.free_edge.size(); ++i) {
     free_edge_length += (mesh.V.row(valve_.free_edge(i)) -
-                         mesh.V.row(valve_.free_edge((i + 1) % valve_.free_edge.size()))).norm();
+                         mesh.V.row(valve_.free_edge((i + 1) % valve_.free_edge.size())))
+                            .norm();
   }
   int primaries = 0;
   for (const CordAttachment& a : placeCordAttachments(mesh, options_)) {

@@ -15,8 +15,7 @@
 
 #include "core/atomic_file.h"
 #include "core/mesh_io.h"
-
-#include <unistd.h>
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -29,15 +28,6 @@ constexpr double kFloatTolerance = 1e-6;
 
 class MeshIoTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-    dir_ = fs::temp_directory_path() /
-           ("chordfit_mesh_io_" + std::string(info->name()) + "_" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   fs::path write(const std::string& name, const std::string& bytes) const {
     const fs::path path = dir_ / name;
     std::ofstream(path, std::ios::binary) << bytes;
@@ -52,8 +42,7 @@ class MeshIoTest : public ::testing::Test {
 
   // Writes `bytes` to a fresh file, reads it and deletes it. A fresh name per call matters:
   // truncating and rewriting one file makes ext4 flush it on close, 40x slower.
-  bool readFresh(const std::string& extension, const std::string& bytes,
-                 Diagnostics& diagnostics) {
+  bool readFresh(const std::string& extension, const std::string& bytes, Diagnostics& diagnostics) {
     const fs::path path = write("fresh" + std::to_string(fresh_++) + extension, bytes);
     Eigen::MatrixXd V;
     Eigen::MatrixXi F;
@@ -84,7 +73,8 @@ class MeshIoTest : public ::testing::Test {
     return diagnostics.problems().empty() ? Problem{} : diagnostics.problems().front();
   }
 
-  fs::path dir_;
+  testing::TempDir temp_;
+  const fs::path dir_ = temp_.path();
   int fresh_ = 0;
 };
 
@@ -100,7 +90,9 @@ Eigen::MatrixXi squareFaces() { return Eigen::MatrixXi{{0, 1, 2}, {0, 2, 3}}; }
 
 // The same square as one quad: readers must fan-triangulate it to squareFaces().
 const char* kQuadPositions = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
-Eigen::MatrixXd quadVertices() { return Eigen::MatrixXd{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}}; }
+Eigen::MatrixXd quadVertices() {
+  return Eigen::MatrixXd{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+}
 
 // --- binary helpers ---------------------------------------------------------------------
 
@@ -176,6 +168,23 @@ TEST_F(MeshIoTest, AsciiPlyQuadIsFanTriangulated) {
   EXPECT_EQ(F, squareFaces());
 }
 
+TEST_F(MeshIoTest, BigEndianPlyWithVertexIndexListIsRead) {
+  std::string bytes =
+      "ply\nformat binary_big_endian 1.0\nelement vertex 4\nproperty double x\n"
+      "property double y\nproperty double z\nelement face 1\n"
+      "property list uchar uint vertex_index\nend_header\n";
+  const Eigen::MatrixXd quad = quadVertices();
+  for (Eigen::Index i = 0; i < 4; ++i)
+    for (int k = 0; k < 3; ++k) appendBigEndian<double>(bytes, quad(i, k));
+  bytes += static_cast<char>(4);
+  for (std::uint32_t v : {0u, 1u, 2u, 3u}) appendBigEndian<std::uint32_t>(bytes, v);
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  readOk(write("big.ply", bytes), V, F);
+  EXPECT_EQ(V, quad);
+  EXPECT_EQ(F, squareFaces());
+}
+
 TEST_F(MeshIoTest, UppercaseExtensionIsAccepted) {
   const fs::path path = dir_ / "SQUARE.PLY";
   writePly(path, squareVertices(), squareFaces());
@@ -186,11 +195,11 @@ TEST_F(MeshIoTest, UppercaseExtensionIsAccepted) {
 }
 
 TEST_F(MeshIoTest, OutOfRangeAndNegativePlyIndicesAreCopiedForTheValidator) {
-  const fs::path path = write(
-      "bad_index.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
-                       "property double y\nproperty double z\nelement face 2\n"
-                       "property list uchar int vertex_indices\nend_header\n"
-                       "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n3 0 -1 2\n");
+  const fs::path path = write("bad_index.ply",
+                              "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\n"
+                              "property double y\nproperty double z\nelement face 2\n"
+                              "property list uchar int vertex_indices\nend_header\n"
+                              "0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n3 0 -1 2\n");
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
   readOk(path, V, F);
@@ -230,11 +239,17 @@ TEST_F(MeshIoTest, MalformedPlyHeadersAreReportedNotCrashedOn) {
       {"ply\nformat ascii 1.0\nelement vertex 1\n" + vertex_props, "end_header"},
       {"ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n" + vertex_props +
            "end_header\n",
-       "truncated"},
+       "larger than the file"},
+      {"ply\nformat binary_little_endian 1.0\nelement vertex 2\n" + vertex_props + "end_header\n" +
+           std::string(30, '\0'),
+       "element vertex 1: file is truncated"},
       {"ply\nformat ascii 1.0\nelement vertex 1\n" + vertex_props +
            "element face 1\nproperty list int int vertex_indices\nend_header\n0 0 0\n"
            "2000000000 0 0 0\n",
        "runs past the end"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\n" + vertex_props +
+           "element junk 999999999999999\nend_header\n",
+       "larger than the file"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty quux x\nend_header\n",
        "unknown property type"},
       {"not a ply at all", "not a PLY file"},
@@ -316,8 +331,15 @@ TEST_F(MeshIoTest, OffQuadIsFanTriangulated) {
   readOk(write("quad.off", std::string("OFF\n4 1 0\n") + kQuadPositions + "4 0 1 2 3\n"), V, F);
   EXPECT_EQ(V, quadVertices());
   EXPECT_EQ(F, squareFaces());
-  const Problem p = readFails(write("huge.off", "OFF\n900000000 900000000 0\n0 0 0\n"));
-  EXPECT_EQ(p.where, "header");
+}
+
+TEST_F(MeshIoTest, OffCountsThatCgalWouldAllocateBlindlyAreRefused) {
+  EXPECT_EQ(readFails(write("huge.off", "OFF\n900000000 900000000 0\n0 0 0\n")).where, "header");
+  const Problem corners =
+      readFails(write("corners.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n999999999 0 1 2\n"));
+  EXPECT_EQ(corners.where, "line 6");
+  EXPECT_NE(readFails(write("binary.off", "OFF BINARY\n")).what.find("binary OFF"),
+            std::string::npos);
 }
 
 // --- STL --------------------------------------------------------------------------------
@@ -523,8 +545,7 @@ TEST_F(MeshIoTest, MalformedVtkIsReportedWithALine) {
 }
 
 TEST_F(MeshIoTest, TruncatedAndCorruptedVtkNeverCrash) {
-  for (const std::string& bytes :
-       {std::string(kVtkClassic), binaryVtk(false), binaryVtk(true)}) {
+  for (const std::string& bytes : {std::string(kVtkClassic), binaryVtk(false), binaryVtk(true)}) {
     for (std::size_t cut = 0; cut < bytes.size(); ++cut) {
       Diagnostics diagnostics;
       const bool ok = readFresh(".vtk", bytes.substr(0, cut), diagnostics);

@@ -109,10 +109,10 @@ TEST(Prolapse, FindsTheSegmentOfPointsMoreThanTwoMillimetresAboveTheAnnulus) {
   const SaddleCase s = saddle();
   const ClosedAnnulus annulus = closedAnnulus(s.c);
   Eigen::MatrixXd points(4, 3);
-  points.row(0) << -8.0, 0.0, s.h + 3.0;   // posterior, centre of P2, 3 mm up: prolapse
-  points.row(1) << -8.0, 0.5, s.h + 2.5;   // P2 again
-  points.row(2) << 8.0, 0.0, s.h + 1.5;    // anterior, 1.5 mm: not prolapse
-  points.row(3) << 0.0, 8.0, -s.h + 1.0;   // commissural zone, below threshold
+  points.row(0) << -8.0, 0.0, s.h + 3.0;  // posterior, centre of P2, 3 mm up: prolapse
+  points.row(1) << -8.0, 0.5, s.h + 2.5;  // P2 again
+  points.row(2) << 8.0, 0.0, s.h + 1.5;   // anterior, 1.5 mm: not prolapse
+  points.row(3) << 0.0, 8.0, -s.h + 1.0;  // commissural zone, below threshold
   Eigen::VectorXi leaflets(4);
   leaflets << 1, 1, 0, -1;
   const ProlapseResult result = prolapseOfPoints(annulus, points, leaflets, ProlapseOptions{});

@@ -444,12 +444,12 @@ TEST(ParametricValve, BenchmarkResolutionsGiveTheirVertexCounts) {
     int vertices;
   };
   constexpr double kCountTolerance = 0.05;  // relative
-  for (const Size& size : {Size{1.6, 500}, Size{0.78, 2000}, Size{0.385, 8000}}) {
+  for (const Size& size : {Size{1.7, 500}, Size{0.82, 2000}, Size{0.4, 8000}}) {
     const auto count = makeParametricValve(withEdge(size.edge)).valve_case.mesh.V.rows();
     EXPECT_NEAR(static_cast<double>(count), size.vertices, kCountTolerance * size.vertices)
         << "edge " << size.edge;
   }
-  for (double edge : {0.385, 0.5, 0.78, 1.0, 1.5, 1.6, 2.0, 3.0}) {
+  for (double edge : {0.4, 0.5, 0.82, 1.0, 1.5, 1.7, 2.0, 3.0}) {
     const ValveMesh& mesh = makeParametricValve(withEdge(edge)).valve_case.mesh;
     std::printf("[ info ] target_edge_mm %.2f: %ld vertices, %ld faces, %ld annulus columns\n",
                 edge, static_cast<long>(mesh.V.rows()), static_cast<long>(mesh.F.rows()),
@@ -487,7 +487,8 @@ TEST(ParametricValve, InvalidParametersThrowNamingTheParameter) {
   expectInvalid(bad([](auto& p) { p.indentation_depth = 1.0; }), "indentation_depth");
   expectInvalid(bad([](auto& p) { p.target_edge_mm = 0.1; }), "target_edge_mm");
   expectInvalid(bad([](auto& p) { p.target_edge_mm = 11.0; }), "target_edge_mm");
-  expectInvalid(bad([](auto& p) { p.anterior_height_mm = 80.0; }), "leaflet heights");
+  expectInvalid(bad([](auto& p) { p.anterior_height_mm = 80.0; }), "anterior_height_mm");
+  expectInvalid(bad([](auto& p) { p.posterior_height_mm = 60.0; }), "posterior_height_mm");
   expectInvalid(bad([](auto& p) { p.annulus_polyline = circlePolyline(15.0, 7, false); }),
                 "annulus_polyline");
   expectInvalid(bad([](auto& p) {
@@ -540,6 +541,32 @@ TEST(ParametricValve, UserAnnulusPolylineIsUsed) {
   EXPECT_GT(mesh.V(mesh.annulus(0), 0), 0.0);
   EXPECT_GT(mesh.V(mesh.annulus(1), 1), 0.0);
   for (int v = 0; v < mesh.V.rows(); ++v) EXPECT_LE(mesh.V(v, 2), 1e-9);
+}
+
+TEST(ParametricValve, RepeatedClosingPointOfThePolylineIsIgnored) {
+  ValveParameters open_loop, closed_loop;
+  open_loop.annulus_polyline = circlePolyline(15.0, 64, false);
+  Eigen::MatrixXd P(65, 3);
+  P << *open_loop.annulus_polyline, open_loop.annulus_polyline->row(0);
+  closed_loop.annulus_polyline = P;
+  const ValveMesh& a = makeParametricValve(open_loop).valve_case.mesh;
+  const ValveMesh& b = makeParametricValve(closed_loop).valve_case.mesh;
+  ASSERT_EQ(a.V.rows(), b.V.rows());
+  EXPECT_LT((a.V - b.V).cwiseAbs().maxCoeff(), 1e-9);
+}
+
+TEST(ParametricValve, NonStarShapedPolylineIsRejected) {
+  // A loop that doubles back: angles about its centroid do not increase monotonically.
+  Eigen::MatrixXd P(12, 3);
+  for (int i = 0; i < 12; ++i) {
+    const double t = 2.0 * kPi * i / 12;
+    const double r = (i == 4) ? 2.0 : 15.0;  // deep notch
+    P.row(i) << r * std::cos(t), r * std::sin(t), 0.0;
+  }
+  P.row(5) << 15.0 * std::cos(2.0 * kPi * 3.5 / 12), 15.0 * std::sin(2.0 * kPi * 3.5 / 12), 0;
+  ValveParameters p;
+  p.annulus_polyline = P;
+  expectInvalid(p, "annulus_polyline");
 }
 
 TEST(ParametricValve, ClockwisePolylineGivesTheSameValve) {

@@ -4,6 +4,8 @@
 #include <sstream>
 
 #include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/heuristic.h"
 #include "core/metrics.h"
 #include "tools/commands.h"
 
@@ -14,8 +16,7 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
   std::optional<ValveCase> loaded = loadCase(case_dir, diagnostics);
   if (!loaded) {
     // Problems inside the case name files relative to it; say which case they belong to.
-    std::cerr << "case " << case_dir << ": " << diagnostics.problems().size()
-              << " problem(s)\n";
+    std::cerr << "case " << case_dir << ": " << diagnostics.problems().size() << " problem(s)\n";
     diagnostics.print(std::cerr);
   }
   return loaded;
@@ -24,6 +25,22 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
 int reportProblems(const Diagnostics& diagnostics) {
   diagnostics.print(std::cerr);
   return kExitBadInput;
+}
+
+std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file) {
+  if (cords_file.empty()) {
+    if (valve_case.cords) return valve_case.cords;
+    return heuristicCordSet(valve_case);
+  }
+  Diagnostics diagnostics;
+  CordSet set;
+  if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
+      !checkCordVertices(set, static_cast<int>(valve_case.mesh.V.rows()), cords_file,
+                         diagnostics)) {
+    diagnostics.print(std::cerr);
+    return std::nullopt;
+  }
+  return set;
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {
@@ -45,8 +62,8 @@ std::string caseSummary(const ValveCase& c) {
         << (mesh.leaflet.array() == static_cast<int>(l)).count();
   }
   out << " vertices)\n";
-  out << "  annulus:   ring of " << mesh.annulus.size() << " vertices, "
-      << c.annulus_closed.rows() << " closed-state positions\n";
+  out << "  annulus:   ring of " << mesh.annulus.size() << " vertices, " << c.annulus_closed.rows()
+      << " closed-state positions\n";
   Eigen::Index points = 0;
   for (const Tracing& t : c.tracings) points += t.points.rows();
   out << "  tracings:  " << c.tracings.size() << " polylines, " << points << " points\n";

@@ -17,6 +17,11 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir);
 // Prints the diagnostics to stderr and returns kExitBadInput.
 int reportProblems(const Diagnostics& diagnostics);
 
+// The cord set a command works with: `cords_file` when given (checked against the case
+// mesh), else the case's own cords, else the paper's heuristic. Prints problems and returns
+// nullopt on bad input.
+std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
+
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 

@@ -43,3 +43,36 @@ struct MetricsOptions {
 int runMetrics(const MetricsOptions& options);
 
 }  // namespace chordfit::cli
+
+namespace chordfit::cli {
+
+struct SimulateOptions {
+  std::string case_dir;
+  std::string cords_file;     // optional; else the case's cords, else the heuristic
+  std::string phase = "close";  // close | open (open = close, then open from the closed state)
+  std::string out_dir;
+  bool quiet = false;
+};
+int runSimulate(const SimulateOptions& options);
+
+}  // namespace chordfit::cli
+
+#include <cstdint>
+
+namespace chordfit::cli {
+
+// make-case: a synthetic case with ground truth (core/synthetic_case.h).
+struct MakeCaseOptions {
+  std::string preset;
+  std::string out_dir;
+  std::uint64_t seed = 1;
+  int planes = 6;
+  double noise_mm = 0.3;
+  double dropout = 0.1;
+  double edge_mm = 1.5;
+  bool list = false;  // print the presets and exit
+  bool quiet = false;
+};
+int runMakeCase(const MakeCaseOptions& options);
+
+}  // namespace chordfit::cli

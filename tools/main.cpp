@@ -52,6 +52,36 @@ void addMetrics(CLI::App& app, MetricsOptions& o) {
   cmd->add_option("--out", o.out_file, "Write metrics JSON here");
 }
 
+void addSimulate(CLI::App& app, SimulateOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "simulate", "Close the valve with XPBD to equilibrium; write closed.ply/.vtk + metrics");
+  cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
+  cmd->add_option("--cords", o.cords_file,
+                  "CordSet JSON (default: the case's cords, else the heuristic)");
+  cmd->add_option("--phase", o.phase,
+                  "close, or open (close, then reverse the fields and open again)")
+      ->capture_default_str();
+  cmd->add_option("--out", o.out_dir, "Output directory")->required();
+  cmd->add_flag("--quiet", o.quiet, "No progress lines");
+}
+
+void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "make-case", "Write a synthetic case with known truth (cohort preset; truth in DIR/truth)");
+  cmd->add_option("--preset", o.preset, "Cohort preset (see --list)");
+  cmd->add_option("--out", o.out_dir, "Output case directory");
+  cmd->add_option("--seed", o.seed, "Patient seed (same seed => identical files)")
+      ->capture_default_str();
+  cmd->add_option("--planes", o.planes, "Long-axis tracing planes")->capture_default_str();
+  cmd->add_option("--noise", o.noise_mm, "Tracing noise SD, mm (in-plane)")->capture_default_str();
+  cmd->add_option("--dropout", o.dropout, "Fraction of the traced length lost to dropout")
+      ->capture_default_str();
+  cmd->add_option("--edge", o.edge_mm, "Case mesh edge length, mm (truth: edge / 2)")
+      ->capture_default_str();
+  cmd->add_flag("--list", o.list, "List the presets and what each models");
+  cmd->add_flag("--quiet", o.quiet, "No progress lines");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -62,10 +92,14 @@ int main(int argc, char** argv) {
   MakeValveOptions make_valve;
   HeuristicCommandOptions heuristic;
   MetricsOptions metrics;
+  SimulateOptions simulate;
+  MakeCaseOptions make_case;
   addValidate(app, validate);
   addMakeValve(app, make_valve);
   addHeuristic(app, heuristic);
   addMetrics(app, metrics);
+  addSimulate(app, simulate);
+  addMakeCase(app, make_case);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -77,6 +111,8 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("make-valve")) return runMakeValve(make_valve);
     if (app.got_subcommand("heuristic")) return runHeuristic(heuristic);
     if (app.got_subcommand("metrics")) return runMetrics(metrics);
+    if (app.got_subcommand("simulate")) return runSimulate(simulate);
+    if (app.got_subcommand("make-case")) return runMakeCase(make_case);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

@@ -1,10 +1,10 @@
 #include <iostream>
 
 #include "core/atomic_file.h"
-#include "core/metrics.h"
-#include "core/metrics_json.h"
 #include "core/mesh_checks.h"
 #include "core/mesh_io.h"
+#include "core/metrics.h"
+#include "core/metrics_json.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 
@@ -34,8 +34,7 @@ int runMetrics(const MetricsOptions& options) {
   std::cout << "prolapse (mesh): " << joinSegments(metrics.mesh_prolapse.segments)
             << " (max height above annulus " << metrics.mesh_prolapse.max_height_mm << " mm)\n";
   if (metrics.has_tracings) {
-    std::cout << "prolapse (tracings): " << joinSegments(metrics.tracing_prolapse.segments)
-              << "\n";
+    std::cout << "prolapse (tracings): " << joinSegments(metrics.tracing_prolapse.segments) << "\n";
   }
   if (!options.out_file.empty()) {
     writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");

@@ -1,0 +1,271 @@
+// Preset anatomy sources: normal dimensions as in parametric_valve.cpp (Kaplan et al. 2000;
+// Ranganathan et al. 1970). Barlow's disease: dilated annulus (AP ~ 35 mm, CC ~ 40+ mm),
+// enlarged, billowing leaflets with elongated cords on both leaflets and a flattened saddle
+// (Anyanwu & Adams, Semin Thorac Cardiovasc Surg 2007;19:90; Lee et al., Circ Cardiovasc
+// Imaging 2013 report loss of annular saddle shape in bileaflet prolapse).
+#include "core/cohort_presets.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace chordfit {
+
+namespace {
+
+constexpr double kTwoPi = 6.283185307179586;
+constexpr double kAnatomyClamp = 2.5;  // SDs
+constexpr int kVariationHarmonics = 3;
+
+std::uint64_t splitmix64(std::uint64_t z) {
+  z += 0x9E3779B97F4A7C15ull;
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+ValveParameters normalAnatomy() { return ValveParameters{}; }
+
+// A second normal patient type: a larger annulus with a deeper saddle and taller leaflets
+// (still within normal adult ranges: AP 25-33 mm, A2 20-27 mm, P2 11-17 mm).
+ValveParameters normal2Anatomy() {
+  ValveParameters p;
+  p.ap_diameter_mm = 31.0;
+  p.cc_diameter_mm = 37.0;
+  p.saddle_height_mm = 6.0;
+  p.closed_saddle_height_mm = 8.5;
+  p.anterior_height_mm = 25.0;
+  p.posterior_height_mm = 15.5;
+  p.posterior_side_height_mm = 12.0;
+  p.commissural_height_mm = 9.0;
+  return p;
+}
+
+ValveParameters barlowAnatomy() {
+  ValveParameters p;
+  p.ap_diameter_mm = 34.0;
+  p.cc_diameter_mm = 41.0;
+  p.saddle_height_mm = 3.5;
+  p.closed_saddle_height_mm = 4.5;
+  p.anterior_height_mm = 28.0;
+  p.posterior_height_mm = 19.0;
+  p.posterior_side_height_mm = 15.0;
+  p.commissural_height_mm = 10.0;
+  p.indentation_depth = 0.4;
+  return p;
+}
+
+std::vector<CohortPreset> buildPresets() {
+  std::vector<CohortPreset> presets;
+  {
+    CohortPreset p;
+    p.name = "normal-1";
+    p.summary = "normal valve, average adult anatomy (AP 28 mm, CC 35 mm, A2 23 mm, P2 14 mm)";
+    p.anatomy = normalAnatomy();
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "normal-2";
+    p.summary =
+        "normal valve, larger annulus, deeper saddle, taller leaflets (AP 31, CC 37, A2 25, P2 "
+        "15.5 mm)";
+    p.anatomy = normal2Anatomy();
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "prolapse-P2";
+    p.summary = "isolated P2 prolapse: P2 cords elongated (x1.35)";
+    p.anatomy = normalAnatomy();
+    p.segment_factor = {1, 1, 1, 1, 1.35, 1};
+    p.intended_prolapse = {"P2"};
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "prolapse-A2";
+    p.summary = "isolated A2 prolapse: A2 cords elongated (x1.3)";
+    p.anatomy = normalAnatomy();
+    p.segment_factor = {1, 1.3, 1, 1, 1, 1};
+    p.intended_prolapse = {"A2"};
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "prolapse-P3";
+    p.summary = "commissural (posteromedial) prolapse: P3 cords elongated (x1.4)";
+    p.anatomy = normalAnatomy();
+    p.segment_factor = {1, 1, 1, 1, 1, 1.4};
+    p.intended_prolapse = {"P3"};
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "bileaflet";
+    p.summary =
+        "Barlow-like bileaflet prolapse: dilated flat annulus, enlarged leaflets, A2 and P2 "
+        "cords elongated (x1.3)";
+    p.anatomy = barlowAnatomy();
+    p.segment_factor = {1, 1.3, 1, 1, 1.3, 1};
+    p.intended_prolapse = {"A2", "P2"};
+    presets.push_back(p);
+  }
+  {
+    CohortPreset p;
+    p.name = "flail-P2";
+    p.summary = "flail P2: one or two ruptured primary cords in the middle of P2";
+    p.anatomy = normalAnatomy();
+    p.ruptured_segment = "P2";
+    p.min_ruptured = 1;
+    p.max_ruptured = 2;
+    p.intended_prolapse = {"P2"};
+    presets.push_back(p);
+  }
+  return presets;
+}
+
+double vary(double value, double sd, SeededRandom& random) {
+  return value * (1.0 + sd * random.clampedGaussian(kAnatomyClamp));
+}
+
+// Position around the whole annulus in [0, 1): anterior arc from the anterolateral commissure
+// (t = 0) to the posteromedial one (t = share), then the posterior arc back (t -> 1).
+double loopPosition(const AnatomicalAttachment& a, double anterior_share) {
+  return a.leaflet == 0 ? a.fraction * anterior_share
+                        : anterior_share + (1.0 - a.fraction) * (1.0 - anterior_share);
+}
+
+}  // namespace
+
+SeededRandom SeededRandom::stream(std::uint64_t seed, std::uint64_t stream) {
+  return SeededRandom(splitmix64(seed ^ splitmix64(stream + 0x5851F42D4C957F2Dull)));
+}
+
+double SeededRandom::uniform() {
+  return static_cast<double>(engine_() >> 11) * (1.0 / 9007199254740992.0);  // 2^-53
+}
+
+double SeededRandom::uniform(double lo, double hi) { return lo + (hi - lo) * uniform(); }
+
+double SeededRandom::gaussian() {
+  if (has_spare_) {
+    has_spare_ = false;
+    return spare_;
+  }
+  const double u1 = 1.0 - uniform();  // (0, 1]: log is finite
+  const double u2 = uniform();
+  const double r = std::sqrt(-2.0 * std::log(u1));
+  spare_ = r * std::sin(kTwoPi * u2);
+  has_spare_ = true;
+  return r * std::cos(kTwoPi * u2);
+}
+
+double SeededRandom::clampedGaussian(double limit) {
+  return std::clamp(gaussian(), -limit, limit);
+}
+
+const std::vector<CohortPreset>& cohortPresets() {
+  static const std::vector<CohortPreset> presets = buildPresets();
+  return presets;
+}
+
+const CohortPreset* findCohortPreset(const std::string& name) {
+  for (const CohortPreset& p : cohortPresets()) {
+    if (p.name == name) return &p;
+  }
+  return nullptr;
+}
+
+std::string cohortPresetNames() {
+  std::string names;
+  for (const CohortPreset& p : cohortPresets()) {
+    names += (names.empty() ? "" : ", ") + p.name;
+  }
+  return names;
+}
+
+int mitralSegmentId(const std::string& name) {
+  if (name.size() != 2 || (name[0] != 'A' && name[0] != 'P') || name[1] < '1' || name[1] > '3') {
+    return -1;
+  }
+  return (name[0] == 'A' ? 0 : 3) + (name[1] - '1');
+}
+
+ValveParameters samplePatientAnatomy(const CohortPreset& preset, SeededRandom& random) {
+  const ValveParameters& mean = preset.anatomy;
+  const double sd = preset.anatomy_sd;
+  ValveParameters p = mean;
+  p.ap_diameter_mm = vary(mean.ap_diameter_mm, sd, random);
+  p.cc_diameter_mm = vary(mean.cc_diameter_mm, sd, random);
+  p.saddle_height_mm = vary(mean.saddle_height_mm, 2.0 * sd, random);
+  p.closed_saddle_height_mm =
+      mean.saddle_height_mm > 0.0
+          ? p.saddle_height_mm * mean.closed_saddle_height_mm / mean.saddle_height_mm
+          : mean.closed_saddle_height_mm;
+  p.anterior_height_mm = vary(mean.anterior_height_mm, sd, random);
+  p.posterior_height_mm = vary(mean.posterior_height_mm, sd, random);
+  p.posterior_side_height_mm = vary(mean.posterior_side_height_mm, sd, random);
+  p.commissural_height_mm = vary(mean.commissural_height_mm, sd, random);
+  return p;
+}
+
+std::vector<double> trueCordScales(const CohortPreset& preset,
+                                   const std::vector<AnatomicalAttachment>& attachments,
+                                   SeededRandom& random, std::vector<bool>* ruptured,
+                                   double variation) {
+  // Smooth variation: E[v^2] = s^2 sum_k 1/k^2 over the harmonics.
+  double harmonic_weight = 0.0;
+  for (int k = 1; k <= kVariationHarmonics; ++k) harmonic_weight += 1.0 / (k * k);
+  const double s = variation / std::sqrt(harmonic_weight);
+  double a[kVariationHarmonics], b[kVariationHarmonics];
+  for (int k = 0; k < kVariationHarmonics; ++k) {
+    a[k] = s * random.gaussian();
+    b[k] = s * random.gaussian();
+  }
+  std::array<double, 6> factor = preset.segment_factor;
+  for (double& f : factor) {
+    const double jitter = random.uniform(-preset.factor_spread, preset.factor_spread);
+    if (f != 1.0) f += jitter;
+  }
+  const double draw = random.uniform();
+  const int rupture_count =
+      preset.max_ruptured > 0
+          ? preset.min_ruptured +
+                std::min(preset.max_ruptured - preset.min_ruptured,
+                         static_cast<int>(draw * (preset.max_ruptured - preset.min_ruptured + 1)))
+          : 0;
+
+  std::vector<double> scales;
+  for (const AnatomicalAttachment& att : attachments) {
+    const double t = loopPosition(att, preset.anatomy.anterior_fraction);
+    double v = 0.0;
+    for (int k = 1; k <= kVariationHarmonics; ++k) {
+      v += (a[k - 1] * std::cos(kTwoPi * k * t) + b[k - 1] * std::sin(kTwoPi * k * t)) / k;
+    }
+    v = std::clamp(v, -3.0 * variation, 3.0 * variation);
+    scales.push_back(kNormalCordScale * (1.0 + v) * factor[att.segment()]);
+  }
+
+  std::vector<bool> flags(attachments.size(), false);
+  const int segment = mitralSegmentId(preset.ruptured_segment);
+  if (segment >= 0 && rupture_count > 0) {
+    const double centre = ((segment % 3) + 0.5) / 3.0;
+    std::vector<std::size_t> candidates;
+    for (std::size_t i = 0; i < attachments.size(); ++i) {
+      if (attachments[i].kind == CordKind::kPrimary && attachments[i].segment() == segment) {
+        candidates.push_back(i);
+      }
+    }
+    std::stable_sort(candidates.begin(), candidates.end(), [&](std::size_t x, std::size_t y) {
+      return std::abs(attachments[x].fraction - centre) < std::abs(attachments[y].fraction - centre);
+    });
+    for (int r = 0; r < rupture_count && r < static_cast<int>(candidates.size()); ++r) {
+      flags[candidates[r]] = true;
+      scales[candidates[r]] = kRupturedCordScale;
+    }
+  }
+  if (ruptured) *ruptured = flags;
+  return scales;
+}
+
+}  // namespace chordfit

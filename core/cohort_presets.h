@@ -1,0 +1,103 @@
+// Synthetic cohort presets (DESIGN §8, issue "Synthetic cohort"): named patients-to-be, each a
+// parametric mitral anatomy plus a chordal pathology, and the seeded randomness that turns a
+// preset into one patient (a seed is a new patient).
+//
+// Truth cord scales. Every true cord's rest length is the paper's heuristic l0 (an upper
+// bound: dist(V, AP) + |V - tip|) times
+//   kNormalCordScale                      calibrated so that normal valves close without
+//                                         prolapse (see experiments/README.md),
+//   x (1 + smooth random variation)       a few percent, smooth along the annulus,
+//   x pathology factor                    > 1 on the elongated segments' cords,
+// and a ruptured cord (flail) gets kRupturedCordScale, long enough never to become taut, so
+// truth and case cords still correspond one to one.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "core/cord_attachments.h"
+#include "core/parametric_valve.h"
+
+namespace chordfit {
+
+// Portable seeded random numbers. std::mt19937_64 is fully specified by the standard, but the
+// standard distributions are not (libstdc++ and libc++ give different normals), so the
+// distributions are written out here: uniform from the top 53 bits, normal by Box-Muller.
+class SeededRandom {
+ public:
+  explicit SeededRandom(std::uint64_t seed) : engine_(seed) {}
+  // An independent stream for one purpose (anatomy, cords, tracings, ...): its seed is a
+  // splitmix64 mix of (seed, stream), so adding draws to one stream never shifts another.
+  static SeededRandom stream(std::uint64_t seed, std::uint64_t stream);
+
+  double uniform();                      // [0, 1), 53 random bits
+  double uniform(double lo, double hi);  // [lo, hi)
+  // Standard normal by the Box-Muller transform (Box & Muller, Ann. Math. Stat. 1958;29:610):
+  //   z0 = sqrt(-2 ln u1) cos(2 pi u2), z1 = sqrt(-2 ln u1) sin(2 pi u2); z1 is kept for the
+  //   next call.
+  double gaussian();
+  // Standard normal clamped to [-limit, limit] (keeps anatomy inside validated ranges).
+  double clampedGaussian(double limit);
+
+ private:
+  std::mt19937_64 engine_;
+  bool has_spare_ = false;
+  double spare_ = 0.0;
+};
+
+// Rest-length scale of every normal true cord (calibrated; see the file comment).
+constexpr double kNormalCordScale = 0.85;
+// Rest-length scale of a ruptured cord: the cord never becomes taut, so it is inert.
+constexpr double kRupturedCordScale = 10.0;
+
+struct CohortPreset {
+  std::string name;
+  std::string summary;     // one line: what the preset models
+  ValveParameters anatomy;  // mean anatomy; target_edge_mm is ignored
+  // Relative SD of each anatomical dimension across seeds (clamped at 2.5 SD).
+  double anatomy_sd = 0.04;
+  // Pathology: rest-length factor per Carpentier segment (A1, A2, A3, P1, P2, P3), applied to
+  // the primary and secondary cords attached there. 1 = normal.
+  std::array<double, 6> segment_factor{1, 1, 1, 1, 1, 1};
+  // Half-width of the seed-to-seed uniform variation of every factor != 1.
+  double factor_spread = 0.05;
+  // Flail: this many of the primary cords nearest the middle of `ruptured_segment` rupture
+  // (the seed picks a number in [min, max]).
+  std::string ruptured_segment;
+  int min_ruptured = 0;
+  int max_ruptured = 0;
+  // Segments where the true closed valve is meant to prolapse (sorted; empty = none).
+  std::vector<std::string> intended_prolapse;
+};
+
+// All presets in a fixed order: normal-1, normal-2, prolapse-P2, prolapse-A2, prolapse-P3,
+// bileaflet, flail-P2.
+const std::vector<CohortPreset>& cohortPresets();
+// nullptr when unknown.
+const CohortPreset* findCohortPreset(const std::string& name);
+// "normal-1, normal-2, ..." for messages.
+std::string cohortPresetNames();
+
+// Segment id (leaflet * 3 + 0..2) of "A1".."P3"; -1 when not a mitral segment name.
+int mitralSegmentId(const std::string& name);
+
+// One patient's anatomy: every dimension of the preset times (1 + anatomy_sd * z), z a
+// clamped standard normal; the closed saddle keeps the preset's closed/open ratio.
+ValveParameters samplePatientAnatomy(const CohortPreset& preset, SeededRandom& random);
+
+// The patient's true cord scales, one per attachment (see the file comment):
+//   scale_i = kNormalCordScale * (1 + v(t_i)) * factor(segment_i)   or kRupturedCordScale.
+// v is a smooth random periodic function of the position t in [0, 1) around the whole
+// annulus (anterior arc then posterior arc, from the anterolateral commissure):
+//   v(t) = sum_{k=1..3} (a_k cos 2 pi k t + b_k sin 2 pi k t) / k,  a_k, b_k ~ N(0, s^2),
+// with s chosen so that the SD of v is `variation` (default 3%).
+// `ruptured` (optional) receives one flag per attachment.
+std::vector<double> trueCordScales(const CohortPreset& preset,
+                                   const std::vector<AnatomicalAttachment>& attachments,
+                                   SeededRandom& random, std::vector<bool>* ruptured = nullptr,
+                                   double variation = 0.03);
+
+}  // namespace chordfit

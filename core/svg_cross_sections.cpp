@@ -1,0 +1,223 @@
+#include "core/svg_cross_sections.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+namespace chordfit {
+
+namespace {
+
+constexpr double kMarginLeft = 48.0;    // px, room for y tick labels
+constexpr double kMarginBottom = 36.0;  // px, x tick labels and axis label
+constexpr double kMarginTop = 24.0;     // px, panel title
+constexpr double kMarginRight = 12.0;
+constexpr double kFigureTitle = 30.0;  // px
+constexpr double kLegendRow = 20.0;    // px per legend row
+constexpr double kLegendEntry = 210.0;  // px per legend entry
+
+std::string escapeXml(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string number(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%.2f", value);
+  return buffer;
+}
+
+struct Bounds {
+  double x0 = std::numeric_limits<double>::infinity(), x1 = -x0;
+  double y0 = x0, y1 = -x0;
+  void add(double x, double y) {
+    x0 = std::min(x0, x);
+    x1 = std::max(x1, x);
+    y0 = std::min(y0, y);
+    y1 = std::max(y1, y);
+  }
+  bool empty() const { return !(x1 >= x0 && y1 >= y0); }
+};
+
+// Tick step among 1, 2, 5, 10, 20, ... mm giving at most ~8 ticks over `range`.
+double tickStep(double range) {
+  for (double step : {1.0, 2.0, 5.0, 10.0, 20.0, 50.0, 100.0}) {
+    if (range / step <= 8.0) return step;
+  }
+  return 200.0;
+}
+
+// Maps panel mm to figure px.
+struct Transform {
+  double left = 0, top = 0, scale = 1;  // px origin of the plot area, px per mm
+  Bounds bounds;
+  double x(double u) const { return left + (u - bounds.x0) * scale; }
+  double y(double w) const { return top + (bounds.y1 - w) * scale; }
+};
+
+void drawAxes(std::ostringstream& svg, const Transform& t, const SvgFigureOptions& options) {
+  const Bounds& b = t.bounds;
+  const double width = (b.x1 - b.x0) * t.scale;
+  const double height = (b.y1 - b.y0) * t.scale;
+  const double step = tickStep(std::max(b.x1 - b.x0, b.y1 - b.y0));
+  svg << "<g stroke=\"#e3e3e3\" stroke-width=\"0.6\">\n";
+  for (double u = std::ceil(b.x0 / step) * step; u <= b.x1; u += step) {
+    svg << "<line x1=\"" << number(t.x(u)) << "\" y1=\"" << number(t.top) << "\" x2=\""
+        << number(t.x(u)) << "\" y2=\"" << number(t.top + height) << "\"/>\n";
+  }
+  for (double w = std::ceil(b.y0 / step) * step; w <= b.y1; w += step) {
+    svg << "<line x1=\"" << number(t.left) << "\" y1=\"" << number(t.y(w)) << "\" x2=\""
+        << number(t.left + width) << "\" y2=\"" << number(t.y(w)) << "\"/>\n";
+  }
+  svg << "</g>\n";
+  svg << "<rect x=\"" << number(t.left) << "\" y=\"" << number(t.top) << "\" width=\""
+      << number(width) << "\" height=\"" << number(height)
+      << "\" fill=\"none\" stroke=\"#444\" stroke-width=\"0.8\"/>\n";
+  svg << "<g font-family=\"sans-serif\" font-size=\"9\" fill=\"#333\">\n";
+  for (double u = std::ceil(b.x0 / step) * step; u <= b.x1; u += step) {
+    svg << "<text x=\"" << number(t.x(u)) << "\" y=\"" << number(t.top + height + 11)
+        << "\" text-anchor=\"middle\">" << std::lround(u) << "</text>\n";
+  }
+  for (double w = std::ceil(b.y0 / step) * step; w <= b.y1; w += step) {
+    svg << "<text x=\"" << number(t.left - 4) << "\" y=\"" << number(t.y(w) + 3)
+        << "\" text-anchor=\"end\">" << std::lround(w) << "</text>\n";
+  }
+  svg << "<text x=\"" << number(t.left + 0.5 * width) << "\" y=\""
+      << number(t.top + height + 25) << "\" text-anchor=\"middle\">"
+      << escapeXml(options.x_label) << "</text>\n";
+  svg << "<text transform=\"translate(" << number(t.left - 34) << ","
+      << number(t.top + 0.5 * height) << ") rotate(-90)\" text-anchor=\"middle\">"
+      << escapeXml(options.y_label) << "</text>\n";
+  svg << "</g>\n";
+}
+
+void drawSeries(std::ostringstream& svg, const Transform& t, const SvgSeries& series) {
+  for (const Eigen::MatrixXd& part : series.parts) {
+    if (part.rows() == 0) continue;
+    if (series.kind == SvgSeries::Kind::kLine) {
+      svg << "<polyline fill=\"none\" stroke=\"" << series.colour << "\" stroke-width=\""
+          << number(series.size) << "\" stroke-linejoin=\"round\"";
+      if (series.dashed) svg << " stroke-dasharray=\"4,3\"";
+      svg << " points=\"";
+      for (Eigen::Index i = 0; i < part.rows(); ++i) {
+        svg << (i ? " " : "") << number(t.x(part(i, 0))) << "," << number(t.y(part(i, 1)));
+      }
+      svg << "\"/>\n";
+      continue;
+    }
+    svg << "<g fill=\"" << series.colour << "\">\n";
+    for (Eigen::Index i = 0; i < part.rows(); ++i) {
+      const double x = t.x(part(i, 0)), y = t.y(part(i, 1)), r = series.size;
+      if (series.kind == SvgSeries::Kind::kDots) {
+        svg << "<circle cx=\"" << number(x) << "\" cy=\"" << number(y) << "\" r=\"" << number(r)
+            << "\"/>\n";
+      } else {
+        svg << "<rect x=\"" << number(x - r) << "\" y=\"" << number(y - r) << "\" width=\""
+            << number(2 * r) << "\" height=\"" << number(2 * r) << "\"/>\n";
+      }
+    }
+    svg << "</g>\n";
+  }
+}
+
+void drawLegendEntry(std::ostringstream& svg, double x, double y, const SvgSeries& series) {
+  if (series.kind == SvgSeries::Kind::kLine) {
+    svg << "<line x1=\"" << number(x) << "\" y1=\"" << number(y) << "\" x2=\"" << number(x + 24)
+        << "\" y2=\"" << number(y) << "\" stroke=\"" << series.colour << "\" stroke-width=\""
+        << number(series.size) << "\"" << (series.dashed ? " stroke-dasharray=\"4,3\"" : "")
+        << "/>\n";
+  } else if (series.kind == SvgSeries::Kind::kDots) {
+    svg << "<circle cx=\"" << number(x + 12) << "\" cy=\"" << number(y) << "\" r=\""
+        << number(std::max(2.0, series.size)) << "\" fill=\"" << series.colour << "\"/>\n";
+  } else {
+    const double r = std::max(2.5, series.size);
+    svg << "<rect x=\"" << number(x + 12 - r) << "\" y=\"" << number(y - r) << "\" width=\""
+        << number(2 * r) << "\" height=\"" << number(2 * r) << "\" fill=\"" << series.colour
+        << "\"/>\n";
+  }
+  svg << "<text x=\"" << number(x + 30) << "\" y=\"" << number(y + 4)
+      << "\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">"
+      << escapeXml(series.label) << "</text>\n";
+}
+
+}  // namespace
+
+std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigureOptions& options) {
+  Bounds bounds;
+  std::vector<const SvgSeries*> legend;
+  for (const SvgPanel& panel : panels) {
+    for (const SvgSeries& series : panel.series) {
+      for (const Eigen::MatrixXd& part : series.parts) {
+        for (Eigen::Index i = 0; i < part.rows(); ++i) bounds.add(part(i, 0), part(i, 1));
+      }
+      if (series.label.empty()) continue;
+      const bool seen = std::any_of(legend.begin(), legend.end(), [&](const SvgSeries* s) {
+        return s->label == series.label;
+      });
+      if (!seen) legend.push_back(&series);
+    }
+  }
+  if (bounds.empty()) bounds = Bounds{-1.0, 1.0, -1.0, 1.0};
+  bounds.x0 -= options.padding_mm;
+  bounds.x1 += options.padding_mm;
+  bounds.y0 -= options.padding_mm;
+  bounds.y1 += options.padding_mm;
+
+  const int columns = std::max(1, options.columns);
+  const int rows = std::max(1, (static_cast<int>(panels.size()) + columns - 1) / columns);
+  const double plot_width = options.panel_width_px - kMarginLeft - kMarginRight;
+  const double scale = plot_width / (bounds.x1 - bounds.x0);
+  const double panel_height = kMarginTop + (bounds.y1 - bounds.y0) * scale + kMarginBottom;
+  const int legend_per_row = std::max(1, static_cast<int>(columns * options.panel_width_px /
+                                                          kLegendEntry));
+  const int legend_rows =
+      (static_cast<int>(legend.size()) + legend_per_row - 1) / legend_per_row;
+  const double header = kFigureTitle + legend_rows * kLegendRow + 6.0;
+  const double width = columns * options.panel_width_px;
+  const double height = header + rows * panel_height;
+
+  std::ostringstream svg;
+  svg << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << number(width) << "\" height=\""
+      << number(height) << "\" viewBox=\"0 0 " << number(width) << " " << number(height)
+      << "\">\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      << "<text x=\"" << number(0.5 * width)
+      << "\" y=\"20\" font-family=\"sans-serif\" font-size=\"15\" text-anchor=\"middle\" "
+         "fill=\"#111\">"
+      << escapeXml(options.title) << "</text>\n";
+  for (std::size_t i = 0; i < legend.size(); ++i) {
+    const double x = 16.0 + (i % legend_per_row) * kLegendEntry;
+    const double y = kFigureTitle + (i / legend_per_row) * kLegendRow + 6.0;
+    drawLegendEntry(svg, x, y, *legend[i]);
+  }
+  for (std::size_t p = 0; p < panels.size(); ++p) {
+    const double left = (p % columns) * options.panel_width_px;
+    const double top = header + (p / columns) * panel_height;
+    Transform t;
+    t.left = left + kMarginLeft;
+    t.top = top + kMarginTop;
+    t.scale = scale;
+    t.bounds = bounds;
+    svg << "<text x=\"" << number(t.left + 0.5 * plot_width) << "\" y=\"" << number(top + 16)
+        << "\" font-family=\"sans-serif\" font-size=\"12\" text-anchor=\"middle\" fill=\"#111\">"
+        << escapeXml(panels[p].title) << "</text>\n";
+    drawAxes(svg, t, options);
+    for (const SvgSeries& series : panels[p].series) drawSeries(svg, t, series);
+  }
+  svg << "</svg>\n";
+  return svg.str();
+}
+
+}  // namespace chordfit

@@ -1,0 +1,44 @@
+// A hand-written SVG figure of 2D panels in millimetres: one panel per image plane, each with
+// polylines and markers (cross-sections of meshes, tracing points, annulus points), shared
+// axes with ticks in mm, equal aspect, and one legend for the figure. Plain text output; no
+// plotting library.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace chordfit {
+
+struct SvgSeries {
+  enum class Kind { kLine, kDots, kSquares };
+  Kind kind = Kind::kLine;
+  // Polylines (kLine) or point sets (markers), each #P by 2 in panel coordinates (mm):
+  // column 0 horizontal, column 1 vertical (up).
+  std::vector<Eigen::MatrixXd> parts;
+  std::string colour = "#000000";
+  double size = 1.5;  // stroke width (lines) or marker radius / half side (markers), px
+  bool dashed = false;
+  std::string label;  // legend text; series with equal labels share one legend entry
+};
+
+struct SvgPanel {
+  std::string title;
+  std::vector<SvgSeries> series;
+};
+
+struct SvgFigureOptions {
+  std::string title;
+  std::string x_label = "mm";
+  std::string y_label = "mm";
+  int columns = 3;
+  double panel_width_px = 360.0;  // panel height follows from the data aspect ratio
+  double padding_mm = 2.0;        // around the common data bounds
+};
+
+// The whole figure as an SVG document. All panels share the same bounds (the union of all
+// data, padded) and scale, so shapes compare across planes.
+std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigureOptions& options);
+
+}  // namespace chordfit

@@ -1,0 +1,374 @@
+#include "core/synthetic_case.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <stdexcept>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/heuristic.h"
+#include "core/mesh_io.h"
+#include "core/metrics_json.h"
+#include "core/svg_cross_sections.h"
+
+namespace chordfit {
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+constexpr double kPi = 3.14159265358979323846;
+
+// Independent random streams of one patient (SeededRandom::stream).
+enum Stream : std::uint64_t { kAnatomyStream = 1, kCordStream = 2, kTipStream = 3, kTracingStream = 4 };
+
+// Colours of the cross-section figure.
+constexpr const char* kAnteriorColour = "#c0392b";
+constexpr const char* kPosteriorColour = "#1f5fa8";
+constexpr const char* kOpenColour = "#9a9a9a";
+constexpr const char* kTracingColour = "#111111";
+constexpr const char* kClosedAnnulusColour = "#e67e22";
+constexpr const char* kOpenAnnulusColour = "#f5cba7";
+
+void say(const SyntheticCaseOptions& options, const std::string& text) {
+  if (options.message) options.message(text);
+}
+
+void validateOptions(const SyntheticCaseOptions& o) {
+  if (findCohortPreset(o.preset) == nullptr) {
+    throw std::invalid_argument("--preset: unknown preset \"" + o.preset +
+                                "\" (known: " + cohortPresetNames() + ")");
+  }
+  auto require = [](bool ok, const std::string& what) {
+    if (!ok) throw std::invalid_argument(what);
+  };
+  require(std::isfinite(o.edge_mm) && o.edge_mm >= 0.5 && o.edge_mm <= 5.0,
+          "--edge: must be in [0.5, 5] mm");
+  require(o.truth_edge_ratio > 0.0 && o.truth_edge_ratio <= 1.0,
+          "truth_edge_ratio: must be in (0, 1]");
+  require(o.tracing.planes >= 1 && o.tracing.planes <= 36, "--planes: must be in [1, 36]");
+  require(std::isfinite(o.tracing.noise_mm) && o.tracing.noise_mm >= 0.0 &&
+              o.tracing.noise_mm <= 5.0,
+          "--noise: must be in [0, 5] mm");
+  require(std::isfinite(o.tracing.dropout_fraction) && o.tracing.dropout_fraction >= 0.0 &&
+              o.tracing.dropout_fraction <= 0.9,
+          "--dropout: must be in [0, 0.9]");
+  require(o.tip_offset_sd_mm >= 0.0, "tip_offset_sd_mm: must be >= 0");
+}
+
+std::string caseName(const SyntheticCaseOptions& o) {
+  return o.preset + "-s" + std::to_string(o.seed);
+}
+
+json settingsJson(const SimulationSettings& s) {
+  return {{"tolerance_mm", s.tolerance_mm}, {"window", s.window}, {"max_steps", s.max_steps}};
+}
+
+// ---------------------------------------------------------------------------------------
+// Figure
+// ---------------------------------------------------------------------------------------
+
+Eigen::MatrixXd project(const ImagePlane& plane, const Eigen::MatrixXd& P) {
+  Eigen::MatrixXd Q(P.rows(), 2);
+  for (Eigen::Index i = 0; i < P.rows(); ++i) {
+    const Eigen::Vector3d d = P.row(i).transpose() - plane.origin;
+    Q(i, 0) = plane.u.dot(d);
+    Q(i, 1) = plane.w.dot(d);
+  }
+  return Q;
+}
+
+// Where the closed polyline `ring` (#ring by 3) crosses the plane, projected (#hits by 2).
+Eigen::MatrixXd ringCrossings(const ImagePlane& plane, const Eigen::MatrixXd& ring) {
+  std::vector<Eigen::Vector3d> hits;
+  const Eigen::Index n = ring.rows();
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const Eigen::Vector3d p = ring.row(i).transpose(), q = ring.row((i + 1) % n).transpose();
+    const double dp = plane.normal.dot(p - plane.origin), dq = plane.normal.dot(q - plane.origin);
+    if ((dp >= 0.0) == (dq >= 0.0)) continue;
+    hits.push_back(p + dp / (dp - dq) * (q - p));
+  }
+  Eigen::MatrixXd P(hits.size(), 3);
+  for (std::size_t i = 0; i < hits.size(); ++i) P.row(i) = hits[i].transpose();
+  return project(plane, P);
+}
+
+std::string crossSectionFigure(const SyntheticCase& s) {
+  const ValveCase& truth = s.truth_case;
+  const ClosedAnnulus closed = closedAnnulus(truth);
+  const std::vector<ImagePlane> planes = longAxisPlanes(closed.frame, s.options.tracing.planes);
+  const Eigen::VectorXi face_leaflet = faceLeaflets(truth.mesh.F, truth.mesh.leaflet);
+  Eigen::MatrixXd open_ring(truth.mesh.annulus.size(), 3);
+  for (Eigen::Index i = 0; i < truth.mesh.annulus.size(); ++i) {
+    open_ring.row(i) = truth.mesh.V.row(truth.mesh.annulus(i));
+  }
+
+  std::vector<SvgPanel> panels;
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    const ImagePlane& plane = planes[i];
+    SvgPanel panel;
+    char title[96];
+    std::snprintf(title, sizeof title, "plane %zu: %.0f deg from the AP axis%s", i,
+                  plane.angle * 180.0 / kPi, i == 0 ? " (anteroposterior)" : "");
+    panel.title = title;
+
+    SvgSeries open{SvgSeries::Kind::kLine, {}, kOpenColour, 1.2, true, "open state (truth mesh)"};
+    for (const SectionPolyline& p :
+         planeSection(truth.mesh.V, truth.mesh.F, face_leaflet, plane.origin, plane.normal)) {
+      open.parts.push_back(project(plane, p.points));
+    }
+    SvgSeries anterior{SvgSeries::Kind::kLine, {}, kAnteriorColour, 2.0, false,
+                       "true closed, anterior"};
+    SvgSeries posterior{SvgSeries::Kind::kLine, {}, kPosteriorColour, 2.0, false,
+                        "true closed, posterior"};
+    for (const SectionPolyline& p : planeSection(s.truth_result.V, truth.mesh.F, face_leaflet,
+                                                 plane.origin, plane.normal)) {
+      (p.leaflet == 0 ? anterior : posterior).parts.push_back(project(plane, p.points));
+    }
+    SvgSeries tracing{SvgSeries::Kind::kDots, {}, kTracingColour, 1.1, false,
+                      "tracing points (noisy, with dropout)"};
+    for (const Tracing& t : s.valve_case.tracings) {
+      if ((t.plane_normal - plane.normal).norm() < 1e-9) tracing.parts.push_back(project(plane, t.points));
+    }
+    SvgSeries closed_ring{SvgSeries::Kind::kSquares, {ringCrossings(plane, truth.annulus_closed)},
+                          kClosedAnnulusColour, 3.0, false, "closed annulus"};
+    SvgSeries open_ring_points{SvgSeries::Kind::kSquares, {ringCrossings(plane, open_ring)},
+                               kOpenAnnulusColour, 3.0, false, "open annulus"};
+    panel.series = {open, open_ring_points, anterior, posterior, closed_ring, tracing};
+    panels.push_back(std::move(panel));
+  }
+  SvgFigureOptions options;
+  options.title = "Synthetic case " + s.valve_case.name + " (" + s.preset->name +
+                  "): true closed valve and tracings on " + std::to_string(planes.size()) +
+                  " long-axis planes";
+  options.x_label = "in-plane axis u (mm)";
+  options.y_label = "height along n_AP, atrium up (mm)";
+  options.columns = std::min<int>(3, static_cast<int>(planes.size()));
+  return crossSectionsSvg(panels, options);
+}
+
+}  // namespace
+
+SimulationSettings truthSimulationSettings() {
+  SimulationSettings s;
+  s.tolerance_mm *= 0.25;
+  s.window *= 2;
+  s.max_steps *= 4;
+  return s;
+}
+
+SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
+  validateOptions(options);
+  const auto start = std::chrono::steady_clock::now();
+  SyntheticCase s;
+  s.options = options;
+  s.preset = findCohortPreset(options.preset);
+
+  // 1-2. Patient and meshes.
+  SeededRandom anatomy_random = SeededRandom::stream(options.seed, kAnatomyStream);
+  s.anatomy = samplePatientAnatomy(*s.preset, anatomy_random);
+  s.anatomy.target_edge_mm = options.edge_mm;
+  ValveParameters fine = s.anatomy;
+  fine.target_edge_mm = options.edge_mm * options.truth_edge_ratio;
+  char text[160];
+  std::snprintf(text, sizeof text, "building meshes (case edge %.2f mm, truth edge %.2f mm)",
+                s.anatomy.target_edge_mm, fine.target_edge_mm);
+  say(options, text);
+  const ParametricValve case_valve = makeParametricValve(s.anatomy);
+  const ParametricValve truth_valve = makeParametricValve(fine);
+
+  // 3. Cords: one anatomical layout, decided on the fine mesh, mapped to both.
+  s.attachments = layoutAttachments(truth_valve, options.layout);
+  s.case_vertices = mapAttachments(case_valve, s.attachments);
+  s.truth_vertices = mapAttachments(truth_valve, s.attachments);
+
+  s.valve_case = case_valve.valve_case;
+  s.valve_case.name = caseName(options);
+  s.valve_case.cords = attachmentCordSet(s.attachments, s.case_vertices);
+  s.valve_case.cords = heuristicCordSet(s.valve_case);
+
+  s.truth_case = truth_valve.valve_case;
+  s.truth_case.name = caseName(options) + "-truth";
+  s.truth_case.cords = attachmentCordSet(s.attachments, s.truth_vertices);
+  CordSet truth_cords = heuristicCordSet(s.truth_case);
+  SeededRandom cord_random = SeededRandom::stream(options.seed, kCordStream);
+  s.true_scales = trueCordScales(*s.preset, s.attachments, cord_random, &s.ruptured);
+  for (std::size_t i = 0; i < truth_cords.cords.size(); ++i) {
+    Cord& cord = truth_cords.cords[i];
+    cord.rest_length = cord.seed_rest_length * s.true_scales[i];
+    cord.provenance = Provenance::kManual;  // set by the generator, not by any heuristic
+  }
+  SeededRandom tip_random = SeededRandom::stream(options.seed, kTipStream);
+  for (PmTip& tip : truth_cords.tips) {
+    for (int k = 0; k < 3; ++k) tip.position(k) += options.tip_offset_sd_mm * tip_random.gaussian();
+  }
+  s.truth_case.cords = truth_cords;
+
+  // 4. Truth closure.
+  s.truth_settings = truthSimulationSettings();
+  s.truth_case.simulation_json = settingsJson(s.truth_settings).dump();
+  if (options.simulation_progress) {
+    s.truth_settings.progress_every = 50;
+    s.truth_settings.progress = options.simulation_progress;
+  }
+  std::snprintf(text, sizeof text, "closing the true valve (%d vertices, %zu cords)",
+                static_cast<int>(s.truth_case.mesh.V.rows()), truth_cords.cords.size());
+  say(options, text);
+  s.truth_result = simulateClosure(s.truth_case, truth_cords, s.truth_settings);
+  s.truth_settings.progress = nullptr;
+  s.truth_settings.progress_every = 0;
+  if (!s.truth_result.ok()) {
+    throw std::runtime_error("truth simulation failed: " + s.truth_result.error);
+  }
+  std::snprintf(text, sizeof text, "truth closure %s after %d steps, %.1f s",
+                s.truth_result.converged ? "converged" : "did NOT converge",
+                s.truth_result.steps, s.truth_result.seconds);
+  say(options, text);
+
+  // 5-6. Tracings and noise floor.
+  SeededRandom tracing_random = SeededRandom::stream(options.seed, kTracingStream);
+  const ClosedAnnulus closed = closedAnnulus(s.truth_case);
+  const std::vector<Tracing> tracings =
+      sampleTracings(s.truth_result.V, s.truth_case.mesh.F, s.truth_case.mesh.leaflet,
+                     closed.frame, options.tracing, tracing_random);
+  s.valve_case.tracings = tracings;
+  s.truth_case.tracings = tracings;
+  s.truth_metrics = computeMetrics(s.truth_case, s.truth_result.V);
+  s.cross_sections_svg = crossSectionFigure(s);
+  s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return s;
+}
+
+std::string syntheticTruthJson(const SyntheticCase& s) {
+  const ValveParameters& a = s.anatomy;
+  const SyntheticCaseOptions& o = s.options;
+  json segment_factor = json::object();
+  static const char* kSegments[] = {"A1", "A2", "A3", "P1", "P2", "P3"};
+  for (int i = 0; i < 6; ++i) segment_factor[kSegments[i]] = s.preset->segment_factor[i];
+
+  json cords = json::array();
+  const CordSet& truth = *s.truth_case.cords;
+  const CordSet& seed = *s.valve_case.cords;
+  for (std::size_t i = 0; i < s.attachments.size(); ++i) {
+    const AnatomicalAttachment& att = s.attachments[i];
+    cords.push_back({{"index", i},
+                     {"leaflet", s.truth_case.mesh.leaflet_names.at(att.leaflet)},
+                     {"fraction", att.fraction},
+                     {"depth_mm", att.depth_mm},
+                     {"segment", kSegments[att.segment()]},
+                     {"kind", toString(att.kind)},
+                     {"tip", truth.tips.at(att.tip).name},
+                     {"case_vertex", s.case_vertices[i]},
+                     {"truth_vertex", s.truth_vertices[i]},
+                     {"true_scale", s.true_scales[i]},
+                     {"ruptured", static_cast<bool>(s.ruptured[i])},
+                     {"true_rest_length_mm", truth.cords[i].rest_length},
+                     {"truth_mesh_heuristic_rest_length_mm", truth.cords[i].seed_rest_length},
+                     {"case_heuristic_rest_length_mm", seed.cords[i].seed_rest_length},
+                     // What a fitter should recover on the case mesh: the true rest length
+                     // as a scale of the case's own heuristic seed.
+                     {"true_scale_of_case_seed",
+                      truth.cords[i].rest_length / seed.cords[i].seed_rest_length}});
+  }
+  json tips = json::array();
+  for (std::size_t t = 0; t < truth.tips.size(); ++t) {
+    const Eigen::Vector3d& p = truth.tips[t].position;
+    const Eigen::Vector3d& q = seed.tips.at(t).position;
+    tips.push_back({{"name", truth.tips[t].name},
+                    {"true_position", {p.x(), p.y(), p.z()}},
+                    {"case_heuristic_position", {q.x(), q.y(), q.z()}}});
+  }
+  const ProlapseResult& prolapse = s.truth_metrics.mesh_prolapse;
+  json document = {
+      {"format", "chordfit-synthetic-truth"},
+      {"version", 1},
+      {"case", s.valve_case.name},
+      {"preset", s.preset->name},
+      {"summary", s.preset->summary},
+      {"seed", o.seed},
+      {"generation",
+       {{"case_edge_mm", o.edge_mm},
+        {"truth_edge_mm", o.edge_mm * o.truth_edge_ratio},
+        {"planes", o.tracing.planes},
+        {"spacing_mm", o.tracing.spacing_mm},
+        {"noise_mm", o.tracing.noise_mm},
+        {"dropout_fraction", o.tracing.dropout_fraction},
+        {"dropout_pieces", o.tracing.dropout_pieces},
+        {"tip_offset_sd_mm", o.tip_offset_sd_mm},
+        {"normal_cord_scale", kNormalCordScale},
+        {"ruptured_cord_scale", kRupturedCordScale},
+        {"seconds", s.seconds}}},
+      {"anatomy",
+       {{"ap_diameter_mm", a.ap_diameter_mm},
+        {"cc_diameter_mm", a.cc_diameter_mm},
+        {"saddle_height_mm", a.saddle_height_mm},
+        {"closed_saddle_height_mm", a.closed_saddle_height_mm},
+        {"closed_contraction", a.closed_contraction},
+        {"anterior_fraction", a.anterior_fraction},
+        {"anterior_height_mm", a.anterior_height_mm},
+        {"posterior_height_mm", a.posterior_height_mm},
+        {"posterior_side_height_mm", a.posterior_side_height_mm},
+        {"commissural_height_mm", a.commissural_height_mm},
+        {"indentation_depth", a.indentation_depth}}},
+      {"pathology",
+       {{"segment_factor", segment_factor},
+        {"factor_spread", s.preset->factor_spread},
+        {"ruptured_segment", s.preset->ruptured_segment},
+        {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
+      {"intended_prolapse", s.preset->intended_prolapse},
+      {"truth_prolapse", prolapse.segments},
+      {"truth_prolapse_max_height_mm", prolapse.max_height_mm},
+      {"prolapse_as_intended", prolapse.segments == s.preset->intended_prolapse},
+      {"simulation",
+       {{"settings", settingsJson(s.truth_settings)},
+        {"converged", s.truth_result.converged},
+        {"steps", s.truth_result.steps},
+        {"seconds", s.truth_result.seconds},
+        {"vertices", s.truth_case.mesh.V.rows()}}},
+      {"tips", tips},
+      {"cords", cords},
+      {"files",
+       {{"case", "truth/case (fine mesh, true cords, tight solver settings)"},
+        {"cords", "truth/cords.json"},
+        {"closed", "truth/closed.ply, truth/closed.vtk"},
+        {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
+        {"figure", "truth/cross_sections.svg"}}}};
+  return document.dump(2) + "\n";
+}
+
+void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
+  const fs::path truth = directory / "truth";
+  writeCase(truth / "case", s.truth_case);
+  writeCordSet(truth / "cords.json", *s.truth_case.cords, &s.truth_case.mesh);
+
+  const Eigen::MatrixXd& V = s.truth_result.V;
+  const ClosedAnnulus closed = closedAnnulus(s.truth_case);
+  Eigen::VectorXd plane_height(V.rows());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    plane_height(v) = closed.frame.plane.signedDistance(V.row(v).transpose());
+  }
+  const std::vector<VertexScalarField> scalars = {
+      {"height_above_annulus_plane_mm", plane_height},
+      {"prolapse_height_mm", heightAboveAnnulus(closed.frame, closed.ring, V)}};
+  writePly(truth / "closed.ply", V, s.truth_case.mesh.F, scalars);
+  writeVtk(truth / "closed.vtk", V, s.truth_case.mesh.F, scalars);
+
+  json metrics = metricsJson(s.truth_metrics);
+  metrics["converged"] = s.truth_result.converged;
+  metrics["steps"] = s.truth_result.steps;
+  metrics["sim_seconds"] = s.truth_result.seconds;
+  metrics["cords"] = s.truth_case.cords->cords.size();
+  metrics["intended_prolapse_segments"] = s.preset->intended_prolapse;
+  writeFileAtomically(truth / "metrics.json", metrics.dump(2) + "\n");
+  writeFileAtomically(truth / "truth.json", syntheticTruthJson(s));
+  writeFileAtomically(truth / "cross_sections.svg", s.cross_sections_svg);
+
+  writeCase(directory, s.valve_case);
+}
+
+}  // namespace chordfit

@@ -1,0 +1,94 @@
+// A synthetic case with known ground truth (DESIGN §8, issue "Synthetic cohort"):
+//   1. patient:   a preset's anatomy varied by the seed (cohort_presets.h);
+//   2. meshes:    the same parametric anatomy at the case resolution (edge) and at a finer one
+//                 (edge * truth_edge_ratio) for the truth, so the fitter never sees the mesh
+//                 the tracings came from (no "inverse crime");
+//   3. cords:     one anatomical layout (cord_attachments.h) mapped to both meshes, so truth
+//                 and case cords correspond one to one, in the same order; PM tips and seed
+//                 rest lengths by the paper's heuristic on each mesh; the truth's rest lengths
+//                 are the heuristic's times the true scales (cohort_presets.h), its tips are
+//                 moved by a small seeded offset;
+//   4. truth:     the fine valve closed with the true cords under tighter solver settings;
+//   5. tracings:  sampled from the true closed mesh (tracing_sampler.h);
+//   6. noise floor: computeMetrics of the true closed mesh against the tracings.
+// The case (what a fitter sees) holds the coarse open mesh, annulus, tracings and the
+// heuristic cord set (provenance heuristic, scale 1: the fitter's seed). Everything true goes
+// to truth/ (writeSyntheticCase); nothing in the case refers to it.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/case_data.h"
+#include "core/cohort_presets.h"
+#include "core/cord_attachments.h"
+#include "core/metrics.h"
+#include "core/parametric_valve.h"
+#include "core/simulator.h"
+#include "core/tracing_sampler.h"
+
+namespace chordfit {
+
+struct SyntheticCaseOptions {
+  std::string preset;
+  std::uint64_t seed = 1;
+  double edge_mm = 1.5;           // case mesh resolution
+  double truth_edge_ratio = 0.5;  // truth mesh edge = edge_mm * ratio
+  double tip_offset_sd_mm = 0.5;  // per-axis SD of the true PM tips' offset from the heuristic
+  TracingSamplerOptions tracing;
+  AttachmentLayoutOptions layout;
+  // Stage messages ("building meshes", ...) and simulator progress; both optional.
+  std::function<void(const std::string&)> message;
+  std::function<void(const SimulationProgress&)> simulation_progress;
+};
+
+struct SyntheticCase {
+  SyntheticCaseOptions options;
+  const CohortPreset* preset = nullptr;
+  ValveParameters anatomy;  // the patient's (target_edge_mm = the case edge)
+  ValveCase valve_case;     // what a fitter sees; cords = heuristic seed
+  // The fine valve as a case: same tracings, cords = the true cords, simulation block = the
+  // tight solver settings (so `chordfit simulate truth/case` reproduces the truth).
+  ValveCase truth_case;
+  std::vector<AnatomicalAttachment> attachments;
+  std::vector<int> case_vertices, truth_vertices;  // per attachment
+  std::vector<double> true_scales;                 // per cord: true rest / heuristic seed
+  std::vector<bool> ruptured;                      // per cord
+  SimulationSettings truth_settings;
+  SimulationResult truth_result;  // V: the true closed state of truth_case.mesh
+  ValveMetrics truth_metrics;     // true closed mesh vs tracings: the noise floor
+  std::string cross_sections_svg;
+  double seconds = 0.0;  // generation wall time
+};
+
+// The tight solver settings of the truth: the simulator defaults with a 4x smaller
+// equilibrium tolerance, a 2x longer window and a 4x larger step cap.
+SimulationSettings truthSimulationSettings();
+
+// Builds a synthetic case. Throws std::invalid_argument naming the option for bad options
+// (unknown preset, edge, planes, noise, dropout) and std::runtime_error when the truth
+// simulation fails (divergence). A truth that does not reach equilibrium is kept and flagged
+// (truth_result.converged).
+SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options);
+
+// Writes the case to `directory` and the truth to `directory`/truth:
+//   case.json, open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
+//   tracings.json, cords.json                         (writeCase; case.json last)
+//   truth/case/...        the fine valve as a case (true cords, tight settings)
+//   truth/cords.json      the true cord set (on truth/case's mesh)
+//   truth/closed.ply/.vtk the true closed state with height scalars
+//   truth/metrics.json    noise floor (metricsJson) + truth prolapse and simulation summary
+//   truth/truth.json      the description: preset, seed, anatomy, pathology, per-cord
+//                         attachment, vertices at both resolutions, scales, ruptures
+//   truth/cross_sections.svg  one panel per tracing plane
+// The truth is written first and case.json last, so an interrupted run leaves no loadable
+// case. Every file is written atomically.
+void writeSyntheticCase(const std::filesystem::path& directory, const SyntheticCase& synthetic);
+
+// The JSON text of truth/truth.json.
+std::string syntheticTruthJson(const SyntheticCase& synthetic);
+
+}  // namespace chordfit

@@ -1,0 +1,148 @@
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <limits>
+#include <memory>
+
+#include "core/atomic_file.h"
+#include "core/mesh_io.h"
+#include "core/metrics.h"
+#include "core/metrics_json.h"
+#include "core/simulator.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Tracing information only means something near a tracing plane: farther than this from
+// every plane a vertex gets no "distance to the nearest tracing point" (NaN).
+constexpr double kTracingPlaneReachMm = 3.0;
+
+Eigen::VectorXd distanceToNearestTracingPoint(const ValveCase& c, const Eigen::MatrixXd& V) {
+  Eigen::VectorXd d = Eigen::VectorXd::Constant(V.rows(), std::numeric_limits<double>::quiet_NaN());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    const Eigen::Vector3d p = V.row(v).transpose();
+    double best = std::numeric_limits<double>::infinity();
+    bool near_plane = false;
+    for (const Tracing& t : c.tracings) {
+      near_plane |= std::abs(t.plane_normal.dot(p - t.plane_origin)) <= kTracingPlaneReachMm;
+      best = std::min(best, (t.points.rowwise() - p.transpose()).rowwise().norm().minCoeff());
+    }
+    if (near_plane) d(v) = best;
+  }
+  return d;
+}
+
+// Per-vertex scalars for ParaView / Slicer: heights above the closed annulus (plain plane and
+// the prolapse reference of metrics.h) and the distance to the tracings.
+std::vector<VertexScalarField> closedStateScalars(const ValveCase& c, const Eigen::MatrixXd& V) {
+  const ClosedAnnulus annulus = closedAnnulus(c);
+  Eigen::VectorXd plane_height(V.rows());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) {
+    plane_height(v) = annulus.frame.plane.signedDistance(V.row(v).transpose());
+  }
+  return {{"height_above_annulus_plane_mm", plane_height},
+          {"prolapse_height_mm", heightAboveAnnulus(annulus.frame, annulus.ring, V)},
+          {"distance_to_tracing_mm", distanceToNearestTracingPoint(c, V)}};
+}
+
+// Progress lines on stderr, at most one per half second, once the run has taken a second.
+SimulationSettings withProgress(SimulationSettings settings, const std::string& label, bool quiet) {
+  if (quiet) return settings;
+  const auto start = Clock::now();
+  auto last = std::make_shared<Clock::time_point>(start);
+  settings.progress_every = 50;
+  settings.progress = [start, last, label](const SimulationProgress& p) {
+    const auto now = Clock::now();
+    if (now - start < std::chrono::seconds(1) || now - *last < std::chrono::milliseconds(500)) {
+      return;
+    }
+    *last = now;
+    std::fprintf(stderr, "  %s: step %6d  t = %8.2f ms  max step %.2e mm  contacts %d  (%.1f s)\n",
+                 label.c_str(), p.step, p.time_ms, p.max_displacement_mm, p.contacts,
+                 std::chrono::duration<double>(now - start).count());
+  };
+  return settings;
+}
+
+bool reportFailure(const SimulationResult& result, const std::string& what) {
+  if (result.ok()) return false;
+  std::cerr << "error: " << what << ": simulation failed: " << result.error << "\n";
+  return true;
+}
+
+void writeState(const std::filesystem::path& dir, const std::string& stem, const ValveCase& c,
+                const Eigen::MatrixXd& V) {
+  const auto scalars = closedStateScalars(c, V);
+  writePly(dir / (stem + ".ply"), V, c.mesh.F, scalars);
+  writeVtk(dir / (stem + ".vtk"), V, c.mesh.F, scalars);
+}
+
+}  // namespace
+
+int runSimulate(const SimulateOptions& options) {
+  if (options.phase != "close" && options.phase != "open") {
+    std::cerr << "error: --phase: expected close or open, got \"" << options.phase << "\"\n";
+    return kExitBadInput;
+  }
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  const auto cords = resolveCords(*valve_case, options.cords_file);
+  if (!cords) return kExitBadInput;
+  Diagnostics diagnostics;
+  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  if (!diagnostics.ok()) return reportProblems(diagnostics);
+  settings.phase = ClosurePhase::kClose;
+
+  const SimulationResult closed =
+      simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));
+  if (reportFailure(closed, options.case_dir)) return kExitSimulationFailed;
+  SimulationResult opened;
+  if (options.phase == "open") {
+    settings.phase = ClosurePhase::kOpen;
+    opened = simulateClosure(*valve_case, *cords, withProgress(settings, "open", options.quiet),
+                             &closed.V);
+    if (reportFailure(opened, options.case_dir)) return kExitSimulationFailed;
+  }
+
+  const ValveMetrics metrics = computeMetrics(*valve_case, closed.V);
+  nlohmann::json j = metricsJson(metrics);
+  j["converged"] = closed.converged;
+  j["steps"] = closed.steps;
+  j["sim_seconds"] = closed.seconds;
+  j["cords"] = cords->cords.size();
+  if (options.phase == "open") {
+    j["open_phase"] = {{"converged", opened.converged},
+                       {"steps", opened.steps},
+                       {"sim_seconds", opened.seconds},
+                       {"mean_distance_to_open_state_mm",
+                        (opened.V - valve_case->mesh.V).rowwise().norm().mean()}};
+  }
+  const std::filesystem::path out(options.out_dir);
+  writeState(out, "closed", *valve_case, closed.V);
+  if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
+  writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
+
+  std::printf("closure: %s after %d steps, %.2f s\n",
+              closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
+              closed.seconds);
+  if (options.phase == "open") {
+    std::printf("opening: %s after %d steps, %.2f s\n",
+                opened.converged ? "converged" : "NOT converged", opened.steps, opened.seconds);
+  }
+  std::cout << table1Header() << table1Row(valve_case->name, metrics);
+  std::cout << "prolapse (simulated): " << joinSegments(metrics.mesh_prolapse.segments) << "\n";
+  if (metrics.has_tracings) {
+    std::cout << "prolapse (tracings):  " << joinSegments(metrics.tracing_prolapse.segments)
+              << "\n";
+  }
+  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json\n";
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli
