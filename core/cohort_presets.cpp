@@ -160,9 +160,7 @@ double SeededRandom::gaussian() {
   return r * std::cos(kTwoPi * u2);
 }
 
-double SeededRandom::clampedGaussian(double limit) {
-  return std::clamp(gaussian(), -limit, limit);
-}
+double SeededRandom::clampedGaussian(double limit) { return std::clamp(gaussian(), -limit, limit); }
 
 const std::vector<CohortPreset>& cohortPresets() {
   static const std::vector<CohortPreset> presets = buildPresets();
@@ -243,7 +241,7 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
       v += (a[k - 1] * std::cos(kTwoPi * k * t) + b[k - 1] * std::sin(kTwoPi * k * t)) / k;
     }
     v = std::clamp(v, -3.0 * variation, 3.0 * variation);
-    scales.push_back(kNormalCordScale * (1.0 + v) * factor[att.segment()]);
+    scales.push_back(preset.normal_cord_scale * (1.0 + v) * factor[att.segment()]);
   }
 
   std::vector<bool> flags(attachments.size(), false);
@@ -257,7 +255,8 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
       }
     }
     std::stable_sort(candidates.begin(), candidates.end(), [&](std::size_t x, std::size_t y) {
-      return std::abs(attachments[x].fraction - centre) < std::abs(attachments[y].fraction - centre);
+      return std::abs(attachments[x].fraction - centre) <
+             std::abs(attachments[y].fraction - centre);
     });
     for (int r = 0; r < rupture_count && r < static_cast<int>(candidates.size()); ++r) {
       flags[candidates[r]] = true;

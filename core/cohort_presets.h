@@ -55,8 +55,10 @@ constexpr double kRupturedCordScale = 10.0;
 
 struct CohortPreset {
   std::string name;
-  std::string summary;     // one line: what the preset models
+  std::string summary;      // one line: what the preset models
   ValveParameters anatomy;  // mean anatomy; target_edge_mm is ignored
+  // Rest-length scale of a normal true cord (experiments may override the calibrated value).
+  double normal_cord_scale = kNormalCordScale;
   // Relative SD of each anatomical dimension across seeds (clamped at 2.5 SD).
   double anatomy_sd = 0.04;
   // Pathology: rest-length factor per Carpentier segment (A1, A2, A3, P1, P2, P3), applied to
@@ -89,7 +91,7 @@ int mitralSegmentId(const std::string& name);
 ValveParameters samplePatientAnatomy(const CohortPreset& preset, SeededRandom& random);
 
 // The patient's true cord scales, one per attachment (see the file comment):
-//   scale_i = kNormalCordScale * (1 + v(t_i)) * factor(segment_i)   or kRupturedCordScale.
+//   scale_i = normal_cord_scale * (1 + v(t_i)) * factor(segment_i)   or kRupturedCordScale.
 // v is a smooth random periodic function of the position t in [0, 1) around the whole
 // annulus (anterior arc then posterior arc, from the anterolateral commissure):
 //   v(t) = sum_{k=1..3} (a_k cos 2 pi k t + b_k sin 2 pi k t) / k,  a_k, b_k ~ N(0, s^2),

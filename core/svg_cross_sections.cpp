@@ -14,19 +14,28 @@ constexpr double kMarginLeft = 48.0;    // px, room for y tick labels
 constexpr double kMarginBottom = 36.0;  // px, x tick labels and axis label
 constexpr double kMarginTop = 24.0;     // px, panel title
 constexpr double kMarginRight = 12.0;
-constexpr double kFigureTitle = 30.0;  // px
-constexpr double kLegendRow = 20.0;    // px per legend row
+constexpr double kFigureTitle = 30.0;   // px
+constexpr double kLegendRow = 20.0;     // px per legend row
 constexpr double kLegendEntry = 210.0;  // px per legend entry
 
 std::string escapeXml(const std::string& text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -93,9 +102,8 @@ void drawAxes(std::ostringstream& svg, const Transform& t, const SvgFigureOption
     svg << "<text x=\"" << number(t.left - 4) << "\" y=\"" << number(t.y(w) + 3)
         << "\" text-anchor=\"end\">" << std::lround(w) << "</text>\n";
   }
-  svg << "<text x=\"" << number(t.left + 0.5 * width) << "\" y=\""
-      << number(t.top + height + 25) << "\" text-anchor=\"middle\">"
-      << escapeXml(options.x_label) << "</text>\n";
+  svg << "<text x=\"" << number(t.left + 0.5 * width) << "\" y=\"" << number(t.top + height + 25)
+      << "\" text-anchor=\"middle\">" << escapeXml(options.x_label) << "</text>\n";
   svg << "<text transform=\"translate(" << number(t.left - 34) << ","
       << number(t.top + 0.5 * height) << ") rotate(-90)\" text-anchor=\"middle\">"
       << escapeXml(options.y_label) << "</text>\n";
@@ -147,8 +155,8 @@ void drawLegendEntry(std::ostringstream& svg, double x, double y, const SvgSerie
         << "\"/>\n";
   }
   svg << "<text x=\"" << number(x + 30) << "\" y=\"" << number(y + 4)
-      << "\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">"
-      << escapeXml(series.label) << "</text>\n";
+      << "\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">" << escapeXml(series.label)
+      << "</text>\n";
 }
 
 }  // namespace
@@ -162,9 +170,8 @@ std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigur
         for (Eigen::Index i = 0; i < part.rows(); ++i) bounds.add(part(i, 0), part(i, 1));
       }
       if (series.label.empty()) continue;
-      const bool seen = std::any_of(legend.begin(), legend.end(), [&](const SvgSeries* s) {
-        return s->label == series.label;
-      });
+      const bool seen = std::any_of(legend.begin(), legend.end(),
+                                    [&](const SvgSeries* s) { return s->label == series.label; });
       if (!seen) legend.push_back(&series);
     }
   }
@@ -179,10 +186,9 @@ std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigur
   const double plot_width = options.panel_width_px - kMarginLeft - kMarginRight;
   const double scale = plot_width / (bounds.x1 - bounds.x0);
   const double panel_height = kMarginTop + (bounds.y1 - bounds.y0) * scale + kMarginBottom;
-  const int legend_per_row = std::max(1, static_cast<int>(columns * options.panel_width_px /
-                                                          kLegendEntry));
-  const int legend_rows =
-      (static_cast<int>(legend.size()) + legend_per_row - 1) / legend_per_row;
+  const int legend_per_row =
+      std::max(1, static_cast<int>(columns * options.panel_width_px / kLegendEntry));
+  const int legend_rows = (static_cast<int>(legend.size()) + legend_per_row - 1) / legend_per_row;
   const double header = kFigureTitle + legend_rows * kLegendRow + 6.0;
   const double width = columns * options.panel_width_px;
   const double height = header + rows * panel_height;
@@ -190,8 +196,7 @@ std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigur
   std::ostringstream svg;
   svg << "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
       << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << number(width) << "\" height=\""
-      << number(height) << "\" viewBox=\"0 0 " << number(width) << " " << number(height)
-      << "\">\n"
+      << number(height) << "\" viewBox=\"0 0 " << number(width) << " " << number(height) << "\">\n"
       << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
       << "<text x=\"" << number(0.5 * width)
       << "\" y=\"20\" font-family=\"sans-serif\" font-size=\"15\" text-anchor=\"middle\" "

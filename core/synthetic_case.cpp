@@ -25,7 +25,12 @@ using nlohmann::json;
 constexpr double kPi = 3.14159265358979323846;
 
 // Independent random streams of one patient (SeededRandom::stream).
-enum Stream : std::uint64_t { kAnatomyStream = 1, kCordStream = 2, kTipStream = 3, kTracingStream = 4 };
+enum Stream : std::uint64_t {
+  kAnatomyStream = 1,
+  kCordStream = 2,
+  kTipStream = 3,
+  kTracingStream = 4
+};
 
 // Colours of the cross-section figure.
 constexpr const char* kAnteriorColour = "#c0392b";
@@ -40,7 +45,7 @@ void say(const SyntheticCaseOptions& options, const std::string& text) {
 }
 
 void validateOptions(const SyntheticCaseOptions& o) {
-  if (findCohortPreset(o.preset) == nullptr) {
+  if (!o.custom_preset && findCohortPreset(o.preset) == nullptr) {
     throw std::invalid_argument("--preset: unknown preset \"" + o.preset +
                                 "\" (known: " + cohortPresetNames() + ")");
   }
@@ -52,9 +57,9 @@ void validateOptions(const SyntheticCaseOptions& o) {
   require(o.truth_edge_ratio > 0.0 && o.truth_edge_ratio <= 1.0,
           "truth_edge_ratio: must be in (0, 1]");
   require(o.tracing.planes >= 1 && o.tracing.planes <= 36, "--planes: must be in [1, 36]");
-  require(std::isfinite(o.tracing.noise_mm) && o.tracing.noise_mm >= 0.0 &&
-              o.tracing.noise_mm <= 5.0,
-          "--noise: must be in [0, 5] mm");
+  require(
+      std::isfinite(o.tracing.noise_mm) && o.tracing.noise_mm >= 0.0 && o.tracing.noise_mm <= 5.0,
+      "--noise: must be in [0, 5] mm");
   require(std::isfinite(o.tracing.dropout_fraction) && o.tracing.dropout_fraction >= 0.0 &&
               o.tracing.dropout_fraction <= 0.9,
           "--dropout: must be in [0, 0.9]");
@@ -124,26 +129,39 @@ std::string crossSectionFigure(const SyntheticCase& s) {
     }
     SvgSeries anterior{SvgSeries::Kind::kLine, {}, kAnteriorColour, 2.0, false,
                        "true closed, anterior"};
-    SvgSeries posterior{SvgSeries::Kind::kLine, {}, kPosteriorColour, 2.0, false,
+    SvgSeries posterior{SvgSeries::Kind::kLine,  {}, kPosteriorColour, 2.0, false,
                         "true closed, posterior"};
-    for (const SectionPolyline& p : planeSection(s.truth_result.V, truth.mesh.F, face_leaflet,
-                                                 plane.origin, plane.normal)) {
+    for (const SectionPolyline& p :
+         planeSection(s.truth_result.V, truth.mesh.F, face_leaflet, plane.origin, plane.normal)) {
       (p.leaflet == 0 ? anterior : posterior).parts.push_back(project(plane, p.points));
     }
-    SvgSeries tracing{SvgSeries::Kind::kDots, {}, kTracingColour, 1.1, false,
+    SvgSeries tracing{SvgSeries::Kind::kDots,
+                      {},
+                      kTracingColour,
+                      1.1,
+                      false,
                       "tracing points (noisy, with dropout)"};
     for (const Tracing& t : s.valve_case.tracings) {
-      if ((t.plane_normal - plane.normal).norm() < 1e-9) tracing.parts.push_back(project(plane, t.points));
+      if ((t.plane_normal - plane.normal).norm() < 1e-9)
+        tracing.parts.push_back(project(plane, t.points));
     }
-    SvgSeries closed_ring{SvgSeries::Kind::kSquares, {ringCrossings(plane, truth.annulus_closed)},
-                          kClosedAnnulusColour, 3.0, false, "closed annulus"};
-    SvgSeries open_ring_points{SvgSeries::Kind::kSquares, {ringCrossings(plane, open_ring)},
-                               kOpenAnnulusColour, 3.0, false, "open annulus"};
+    SvgSeries closed_ring{SvgSeries::Kind::kSquares,
+                          {ringCrossings(plane, truth.annulus_closed)},
+                          kClosedAnnulusColour,
+                          3.0,
+                          false,
+                          "closed annulus"};
+    SvgSeries open_ring_points{SvgSeries::Kind::kSquares,
+                               {ringCrossings(plane, open_ring)},
+                               kOpenAnnulusColour,
+                               3.0,
+                               false,
+                               "open annulus"};
     panel.series = {open, open_ring_points, anterior, posterior, closed_ring, tracing};
     panels.push_back(std::move(panel));
   }
   SvgFigureOptions options;
-  options.title = "Synthetic case " + s.valve_case.name + " (" + s.preset->name +
+  options.title = "Synthetic case " + s.valve_case.name + " (" + s.preset.name +
                   "): true closed valve and tracings on " + std::to_string(planes.size()) +
                   " long-axis planes";
   options.x_label = "in-plane axis u (mm)";
@@ -167,11 +185,11 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   const auto start = std::chrono::steady_clock::now();
   SyntheticCase s;
   s.options = options;
-  s.preset = findCohortPreset(options.preset);
+  s.preset = options.custom_preset ? *options.custom_preset : *findCohortPreset(options.preset);
 
   // 1-2. Patient and meshes.
   SeededRandom anatomy_random = SeededRandom::stream(options.seed, kAnatomyStream);
-  s.anatomy = samplePatientAnatomy(*s.preset, anatomy_random);
+  s.anatomy = samplePatientAnatomy(s.preset, anatomy_random);
   s.anatomy.target_edge_mm = options.edge_mm;
   ValveParameters fine = s.anatomy;
   fine.target_edge_mm = options.edge_mm * options.truth_edge_ratio;
@@ -197,7 +215,7 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   s.truth_case.cords = attachmentCordSet(s.attachments, s.truth_vertices);
   CordSet truth_cords = heuristicCordSet(s.truth_case);
   SeededRandom cord_random = SeededRandom::stream(options.seed, kCordStream);
-  s.true_scales = trueCordScales(*s.preset, s.attachments, cord_random, &s.ruptured);
+  s.true_scales = trueCordScales(s.preset, s.attachments, cord_random, &s.ruptured);
   for (std::size_t i = 0; i < truth_cords.cords.size(); ++i) {
     Cord& cord = truth_cords.cords[i];
     cord.rest_length = cord.seed_rest_length * s.true_scales[i];
@@ -226,16 +244,16 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
     throw std::runtime_error("truth simulation failed: " + s.truth_result.error);
   }
   std::snprintf(text, sizeof text, "truth closure %s after %d steps, %.1f s",
-                s.truth_result.converged ? "converged" : "did NOT converge",
-                s.truth_result.steps, s.truth_result.seconds);
+                s.truth_result.converged ? "converged" : "did NOT converge", s.truth_result.steps,
+                s.truth_result.seconds);
   say(options, text);
 
   // 5-6. Tracings and noise floor.
   SeededRandom tracing_random = SeededRandom::stream(options.seed, kTracingStream);
   const ClosedAnnulus closed = closedAnnulus(s.truth_case);
   const std::vector<Tracing> tracings =
-      sampleTracings(s.truth_result.V, s.truth_case.mesh.F, s.truth_case.mesh.leaflet,
-                     closed.frame, options.tracing, tracing_random);
+      sampleTracings(s.truth_result.V, s.truth_case.mesh.F, s.truth_case.mesh.leaflet, closed.frame,
+                     options.tracing, tracing_random);
   s.valve_case.tracings = tracings;
   s.truth_case.tracings = tracings;
   s.truth_metrics = computeMetrics(s.truth_case, s.truth_result.V);
@@ -249,31 +267,31 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
   const SyntheticCaseOptions& o = s.options;
   json segment_factor = json::object();
   static const char* kSegments[] = {"A1", "A2", "A3", "P1", "P2", "P3"};
-  for (int i = 0; i < 6; ++i) segment_factor[kSegments[i]] = s.preset->segment_factor[i];
+  for (int i = 0; i < 6; ++i) segment_factor[kSegments[i]] = s.preset.segment_factor[i];
 
   json cords = json::array();
   const CordSet& truth = *s.truth_case.cords;
   const CordSet& seed = *s.valve_case.cords;
   for (std::size_t i = 0; i < s.attachments.size(); ++i) {
     const AnatomicalAttachment& att = s.attachments[i];
-    cords.push_back({{"index", i},
-                     {"leaflet", s.truth_case.mesh.leaflet_names.at(att.leaflet)},
-                     {"fraction", att.fraction},
-                     {"depth_mm", att.depth_mm},
-                     {"segment", kSegments[att.segment()]},
-                     {"kind", toString(att.kind)},
-                     {"tip", truth.tips.at(att.tip).name},
-                     {"case_vertex", s.case_vertices[i]},
-                     {"truth_vertex", s.truth_vertices[i]},
-                     {"true_scale", s.true_scales[i]},
-                     {"ruptured", static_cast<bool>(s.ruptured[i])},
-                     {"true_rest_length_mm", truth.cords[i].rest_length},
-                     {"truth_mesh_heuristic_rest_length_mm", truth.cords[i].seed_rest_length},
-                     {"case_heuristic_rest_length_mm", seed.cords[i].seed_rest_length},
-                     // What a fitter should recover on the case mesh: the true rest length
-                     // as a scale of the case's own heuristic seed.
-                     {"true_scale_of_case_seed",
-                      truth.cords[i].rest_length / seed.cords[i].seed_rest_length}});
+    cords.push_back(
+        {{"index", i},
+         {"leaflet", s.truth_case.mesh.leaflet_names.at(att.leaflet)},
+         {"fraction", att.fraction},
+         {"depth_mm", att.depth_mm},
+         {"segment", kSegments[att.segment()]},
+         {"kind", toString(att.kind)},
+         {"tip", truth.tips.at(att.tip).name},
+         {"case_vertex", s.case_vertices[i]},
+         {"truth_vertex", s.truth_vertices[i]},
+         {"true_scale", s.true_scales[i]},
+         {"ruptured", static_cast<bool>(s.ruptured[i])},
+         {"true_rest_length_mm", truth.cords[i].rest_length},
+         {"truth_mesh_heuristic_rest_length_mm", truth.cords[i].seed_rest_length},
+         {"case_heuristic_rest_length_mm", seed.cords[i].seed_rest_length},
+         // What a fitter should recover on the case mesh: the true rest length
+         // as a scale of the case's own heuristic seed.
+         {"true_scale_of_case_seed", truth.cords[i].rest_length / seed.cords[i].seed_rest_length}});
   }
   json tips = json::array();
   for (std::size_t t = 0; t < truth.tips.size(); ++t) {
@@ -284,60 +302,59 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                     {"case_heuristic_position", {q.x(), q.y(), q.z()}}});
   }
   const ProlapseResult& prolapse = s.truth_metrics.mesh_prolapse;
-  json document = {
-      {"format", "chordfit-synthetic-truth"},
-      {"version", 1},
-      {"case", s.valve_case.name},
-      {"preset", s.preset->name},
-      {"summary", s.preset->summary},
-      {"seed", o.seed},
-      {"generation",
-       {{"case_edge_mm", o.edge_mm},
-        {"truth_edge_mm", o.edge_mm * o.truth_edge_ratio},
-        {"planes", o.tracing.planes},
-        {"spacing_mm", o.tracing.spacing_mm},
-        {"noise_mm", o.tracing.noise_mm},
-        {"dropout_fraction", o.tracing.dropout_fraction},
-        {"dropout_pieces", o.tracing.dropout_pieces},
-        {"tip_offset_sd_mm", o.tip_offset_sd_mm},
-        {"normal_cord_scale", kNormalCordScale},
-        {"ruptured_cord_scale", kRupturedCordScale},
-        {"seconds", s.seconds}}},
-      {"anatomy",
-       {{"ap_diameter_mm", a.ap_diameter_mm},
-        {"cc_diameter_mm", a.cc_diameter_mm},
-        {"saddle_height_mm", a.saddle_height_mm},
-        {"closed_saddle_height_mm", a.closed_saddle_height_mm},
-        {"closed_contraction", a.closed_contraction},
-        {"anterior_fraction", a.anterior_fraction},
-        {"anterior_height_mm", a.anterior_height_mm},
-        {"posterior_height_mm", a.posterior_height_mm},
-        {"posterior_side_height_mm", a.posterior_side_height_mm},
-        {"commissural_height_mm", a.commissural_height_mm},
-        {"indentation_depth", a.indentation_depth}}},
-      {"pathology",
-       {{"segment_factor", segment_factor},
-        {"factor_spread", s.preset->factor_spread},
-        {"ruptured_segment", s.preset->ruptured_segment},
-        {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
-      {"intended_prolapse", s.preset->intended_prolapse},
-      {"truth_prolapse", prolapse.segments},
-      {"truth_prolapse_max_height_mm", prolapse.max_height_mm},
-      {"prolapse_as_intended", prolapse.segments == s.preset->intended_prolapse},
-      {"simulation",
-       {{"settings", settingsJson(s.truth_settings)},
-        {"converged", s.truth_result.converged},
-        {"steps", s.truth_result.steps},
-        {"seconds", s.truth_result.seconds},
-        {"vertices", s.truth_case.mesh.V.rows()}}},
-      {"tips", tips},
-      {"cords", cords},
-      {"files",
-       {{"case", "truth/case (fine mesh, true cords, tight solver settings)"},
-        {"cords", "truth/cords.json"},
-        {"closed", "truth/closed.ply, truth/closed.vtk"},
-        {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
-        {"figure", "truth/cross_sections.svg"}}}};
+  json document = {{"format", "chordfit-synthetic-truth"},
+                   {"version", 1},
+                   {"case", s.valve_case.name},
+                   {"preset", s.preset.name},
+                   {"summary", s.preset.summary},
+                   {"seed", o.seed},
+                   {"generation",
+                    {{"case_edge_mm", o.edge_mm},
+                     {"truth_edge_mm", o.edge_mm * o.truth_edge_ratio},
+                     {"planes", o.tracing.planes},
+                     {"spacing_mm", o.tracing.spacing_mm},
+                     {"noise_mm", o.tracing.noise_mm},
+                     {"dropout_fraction", o.tracing.dropout_fraction},
+                     {"dropout_pieces", o.tracing.dropout_pieces},
+                     {"tip_offset_sd_mm", o.tip_offset_sd_mm},
+                     {"normal_cord_scale", s.preset.normal_cord_scale},
+                     {"ruptured_cord_scale", kRupturedCordScale},
+                     {"seconds", s.seconds}}},
+                   {"anatomy",
+                    {{"ap_diameter_mm", a.ap_diameter_mm},
+                     {"cc_diameter_mm", a.cc_diameter_mm},
+                     {"saddle_height_mm", a.saddle_height_mm},
+                     {"closed_saddle_height_mm", a.closed_saddle_height_mm},
+                     {"closed_contraction", a.closed_contraction},
+                     {"anterior_fraction", a.anterior_fraction},
+                     {"anterior_height_mm", a.anterior_height_mm},
+                     {"posterior_height_mm", a.posterior_height_mm},
+                     {"posterior_side_height_mm", a.posterior_side_height_mm},
+                     {"commissural_height_mm", a.commissural_height_mm},
+                     {"indentation_depth", a.indentation_depth}}},
+                   {"pathology",
+                    {{"segment_factor", segment_factor},
+                     {"factor_spread", s.preset.factor_spread},
+                     {"ruptured_segment", s.preset.ruptured_segment},
+                     {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
+                   {"intended_prolapse", s.preset.intended_prolapse},
+                   {"truth_prolapse", prolapse.segments},
+                   {"truth_prolapse_max_height_mm", prolapse.max_height_mm},
+                   {"prolapse_as_intended", prolapse.segments == s.preset.intended_prolapse},
+                   {"simulation",
+                    {{"settings", settingsJson(s.truth_settings)},
+                     {"converged", s.truth_result.converged},
+                     {"steps", s.truth_result.steps},
+                     {"seconds", s.truth_result.seconds},
+                     {"vertices", s.truth_case.mesh.V.rows()}}},
+                   {"tips", tips},
+                   {"cords", cords},
+                   {"files",
+                    {{"case", "truth/case (fine mesh, true cords, tight solver settings)"},
+                     {"cords", "truth/cords.json"},
+                     {"closed", "truth/closed.ply, truth/closed.vtk"},
+                     {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
+                     {"figure", "truth/cross_sections.svg"}}}};
   return document.dump(2) + "\n";
 }
 
@@ -363,7 +380,7 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   metrics["steps"] = s.truth_result.steps;
   metrics["sim_seconds"] = s.truth_result.seconds;
   metrics["cords"] = s.truth_case.cords->cords.size();
-  metrics["intended_prolapse_segments"] = s.preset->intended_prolapse;
+  metrics["intended_prolapse_segments"] = s.preset.intended_prolapse;
   writeFileAtomically(truth / "metrics.json", metrics.dump(2) + "\n");
   writeFileAtomically(truth / "truth.json", syntheticTruthJson(s));
   writeFileAtomically(truth / "cross_sections.svg", s.cross_sections_svg);

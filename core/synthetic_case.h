@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -34,6 +35,9 @@ namespace chordfit {
 
 struct SyntheticCaseOptions {
   std::string preset;
+  // Used instead of the named preset when set (experiments, calibration); `preset` then only
+  // names the case.
+  std::optional<CohortPreset> custom_preset;
   std::uint64_t seed = 1;
   double edge_mm = 1.5;           // case mesh resolution
   double truth_edge_ratio = 0.5;  // truth mesh edge = edge_mm * ratio
@@ -47,7 +51,7 @@ struct SyntheticCaseOptions {
 
 struct SyntheticCase {
   SyntheticCaseOptions options;
-  const CohortPreset* preset = nullptr;
+  CohortPreset preset;
   ValveParameters anatomy;  // the patient's (target_edge_mm = the case edge)
   ValveCase valve_case;     // what a fitter sees; cords = heuristic seed
   // The fine valve as a case: same tracings, cords = the true cords, simulation block = the

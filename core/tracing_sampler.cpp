@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <utility>
 
+#include <Eigen/Geometry>
+
 namespace chordfit {
 
 namespace {
@@ -161,7 +163,8 @@ Eigen::MatrixXd resamplePolyline(const Eigen::MatrixXd& P, double spacing) {
   if (!(spacing > 0.0)) throw std::invalid_argument("resamplePolyline: spacing must be > 0");
   if (P.rows() < 2) return P;
   std::vector<double> arc(P.rows(), 0.0);
-  for (Eigen::Index i = 1; i < P.rows(); ++i) arc[i] = arc[i - 1] + (P.row(i) - P.row(i - 1)).norm();
+  for (Eigen::Index i = 1; i < P.rows(); ++i)
+    arc[i] = arc[i - 1] + (P.row(i) - P.row(i - 1)).norm();
   const double length = arc.back();
   std::vector<Eigen::Vector3d> out;
   std::size_t j = 0;
@@ -245,8 +248,8 @@ std::vector<Tracing> sampleTracings(const Eigen::MatrixXd& V, const Eigen::Matri
         Tracing t;
         t.points.resize(static_cast<Eigen::Index>(run.size()), 3);
         for (std::size_t r = 0; r < run.size(); ++r) {
-          const Eigen::Vector3d p =
-              run[r] + options.noise_mm * (random.gaussian() * plane.u + random.gaussian() * plane.w);
+          const Eigen::Vector3d p = run[r] + options.noise_mm * (random.gaussian() * plane.u +
+                                                                 random.gaussian() * plane.w);
           t.points.row(static_cast<Eigen::Index>(r)) = p.transpose();
         }
         t.plane_origin = plane.origin;

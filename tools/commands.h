@@ -76,3 +76,19 @@ struct MakeCaseOptions {
 int runMakeCase(const MakeCaseOptions& options);
 
 }  // namespace chordfit::cli
+
+namespace chordfit::cli {
+
+struct SweepCordOptions {
+  std::string case_dir;
+  std::string cords_file;    // optional; as for simulate
+  int cord = -1;             // cord index; -1: the P2 primary cord nearest the P2 centre
+  double range = 0.05;       // sweep scale over [1 - range, 1 + range]
+  double step = 0.001;       // scale step
+  int window = 5;            // half-width (points) of the local quadratic fit for the noise
+  int threads = 2;
+  std::string out_dir;
+};
+int runSweepCord(const SweepCordOptions& options);
+
+}  // namespace chordfit::cli

@@ -65,6 +65,21 @@ void addSimulate(CLI::App& app, SimulateOptions& o) {
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
 
+void addSweepCord(CLI::App& app, SweepCordOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "sweep-cord", "Scan one cord's rest-length scale; measure the forward map's smoothness");
+  cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
+  cmd->add_option("--cords", o.cords_file, "CordSet JSON (default: case cords, else heuristic)");
+  cmd->add_option("--cord", o.cord, "Cord index (default: the P2 primary cord nearest P2's centre)");
+  cmd->add_option("--range", o.range, "Scan scales over [1 - range, 1 + range]")
+      ->capture_default_str();
+  cmd->add_option("--step", o.step, "Scale step")->capture_default_str();
+  cmd->add_option("--window", o.window, "Half-width of the local quadratic fit, points")
+      ->capture_default_str();
+  cmd->add_option("--threads", o.threads, "Closures run in parallel")->capture_default_str();
+  cmd->add_option("--out", o.out_dir, "Output directory")->required();
+}
+
 void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "make-case", "Write a synthetic case with known truth (cohort preset; truth in DIR/truth)");
@@ -99,6 +114,8 @@ int main(int argc, char** argv) {
   addHeuristic(app, heuristic);
   addMetrics(app, metrics);
   addSimulate(app, simulate);
+  SweepCordOptions sweep_cord;
+  addSweepCord(app, sweep_cord);
   addMakeCase(app, make_case);
   try {
     app.parse(argc, argv);
@@ -112,6 +129,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("heuristic")) return runHeuristic(heuristic);
     if (app.got_subcommand("metrics")) return runMetrics(metrics);
     if (app.got_subcommand("simulate")) return runSimulate(simulate);
+    if (app.got_subcommand("sweep-cord")) return runSweepCord(sweep_cord);
     if (app.got_subcommand("make-case")) return runMakeCase(make_case);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";

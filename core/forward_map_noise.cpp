@@ -1,0 +1,52 @@
+#include "core/forward_map_noise.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Dense>
+
+namespace chordfit {
+
+namespace {
+
+// Least-squares quadratic through (s_k - s0, q_k) for k in `indices`; returns coefficients
+// (c0, c1, c2) of c0 + c1 t + c2 t^2 with t = s - s0.
+Eigen::Vector3d quadraticFit(const std::vector<double>& s, const std::vector<double>& q,
+                             const std::vector<int>& indices, double s0) {
+  Eigen::MatrixXd A(indices.size(), 3);
+  Eigen::VectorXd b(indices.size());
+  for (std::size_t r = 0; r < indices.size(); ++r) {
+    const double t = s[indices[r]] - s0;
+    A.row(r) << 1.0, t, t * t;
+    b(r) = q[indices[r]];
+  }
+  return A.colPivHouseholderQr().solve(b);
+}
+
+}  // namespace
+
+MapNoise mapNoise(const std::vector<double>& s, const std::vector<double>& q, int half_window) {
+  MapNoise noise;
+  const int n = static_cast<int>(std::min(s.size(), q.size()));
+  if (n < 3) return noise;
+  half_window = std::max(2, half_window);
+  double sum_squares = 0.0;
+  int count = 0;
+  for (int i = half_window; i + half_window < n; ++i) {
+    std::vector<int> neighbours;
+    for (int k = i - half_window; k <= i + half_window; ++k) {
+      if (k != i) neighbours.push_back(k);
+    }
+    const double residual = q[i] - quadraticFit(s, q, neighbours, s[i])(0);
+    sum_squares += residual * residual;
+    noise.max = std::max(noise.max, std::abs(residual));
+    ++count;
+  }
+  noise.rms = count > 0 ? std::sqrt(sum_squares / count) : 0.0;
+  std::vector<int> all(n);
+  for (int k = 0; k < n; ++k) all[k] = k;
+  noise.slope = quadraticFit(s, q, all, s[n / 2])(1);
+  return noise;
+}
+
+}  // namespace chordfit

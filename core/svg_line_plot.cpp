@@ -1,0 +1,179 @@
+#include "core/svg_line_plot.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <sstream>
+
+namespace chordfit {
+
+namespace {
+
+// Colour-blind-safe palette (Okabe & Ito, "Color Universal Design", 2008).
+const char* const kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
+                                "#E69F00", "#56B4E9", "#000000", "#F0E442"};
+
+std::string escapeXml(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    switch (c) {
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '&': out += "&amp;"; break;
+      case '"': out += "&quot;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string formatTick(double value, double step) {
+  char buffer[32];
+  const int decimals = std::max(0, static_cast<int>(std::ceil(-std::log10(step) - 1e-9)));
+  std::snprintf(buffer, sizeof buffer, "%.*f", std::min(decimals, 6), value);
+  return buffer;
+}
+
+struct Range {
+  double lo = std::numeric_limits<double>::infinity();
+  double hi = -std::numeric_limits<double>::infinity();
+  void add(double v) {
+    if (!std::isfinite(v)) return;
+    lo = std::min(lo, v);
+    hi = std::max(hi, v);
+  }
+  void finish() {
+    if (!std::isfinite(lo)) lo = 0.0, hi = 1.0;
+    if (hi - lo < 1e-12 * std::max(1.0, std::abs(hi))) {
+      const double pad = std::max(1e-9, 0.05 * std::abs(hi));
+      lo -= pad;
+      hi += pad;
+    }
+  }
+};
+
+void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, double top,
+               double width, double height) {
+  const double margin_left = 70, margin_right = 15, margin_top = 30, margin_bottom = 45;
+  const double plot_w = width - margin_left - margin_right;
+  const double plot_h = height - margin_top - margin_bottom;
+  auto ty = [&](double y) { return panel.log_y ? (y > 0 ? std::log10(y) : NAN) : y; };
+  Range xr, yr;
+  for (const PlotSeries& s : panel.series) {
+    for (double x : s.x) xr.add(x);
+    for (double y : s.y) yr.add(ty(y));
+  }
+  xr.finish();
+  yr.finish();
+  const std::vector<double> xt = niceTicks(xr.lo, xr.hi);
+  const std::vector<double> yt = niceTicks(yr.lo, yr.hi);
+  xr.lo = std::min(xr.lo, xt.front()), xr.hi = std::max(xr.hi, xt.back());
+  yr.lo = std::min(yr.lo, yt.front()), yr.hi = std::max(yr.hi, yt.back());
+  auto px = [&](double x) { return left + margin_left + (x - xr.lo) / (xr.hi - xr.lo) * plot_w; };
+  auto py = [&](double y) {
+    return top + margin_top + plot_h - (y - yr.lo) / (yr.hi - yr.lo) * plot_h;
+  };
+
+  svg << "<text x='" << left + width / 2 << "' y='" << top + 18
+      << "' text-anchor='middle' font-weight='bold'>" << escapeXml(panel.title) << "</text>\n";
+  svg << "<rect x='" << left + margin_left << "' y='" << top + margin_top << "' width='"
+      << plot_w << "' height='" << plot_h << "' fill='none' stroke='#444'/>\n";
+  const double x_step = xt.size() > 1 ? xt[1] - xt[0] : 1.0;
+  const double y_step = yt.size() > 1 ? yt[1] - yt[0] : 1.0;
+  for (double x : xt) {
+    svg << "<line x1='" << px(x) << "' y1='" << top + margin_top << "' x2='" << px(x)
+        << "' y2='" << top + margin_top + plot_h << "' stroke='#ddd'/>\n";
+    svg << "<text x='" << px(x) << "' y='" << top + margin_top + plot_h + 16
+        << "' text-anchor='middle' font-size='11'>" << formatTick(x, x_step) << "</text>\n";
+  }
+  for (double y : yt) {
+    svg << "<line x1='" << left + margin_left << "' y1='" << py(y) << "' x2='"
+        << left + margin_left + plot_w << "' y2='" << py(y) << "' stroke='#ddd'/>\n";
+    const std::string label = panel.log_y ? formatTick(std::pow(10.0, y), std::pow(10.0, y))
+                                          : formatTick(y, y_step);
+    svg << "<text x='" << left + margin_left - 6 << "' y='" << py(y) + 4
+        << "' text-anchor='end' font-size='11'>" << label << "</text>\n";
+  }
+  svg << "<text x='" << left + margin_left + plot_w / 2 << "' y='" << top + height - 8
+      << "' text-anchor='middle' font-size='12'>" << escapeXml(panel.x_label) << "</text>\n";
+  svg << "<text transform='translate(" << left + 16 << "," << top + margin_top + plot_h / 2
+      << ") rotate(-90)' text-anchor='middle' font-size='12'>" << escapeXml(panel.y_label)
+      << "</text>\n";
+
+  for (std::size_t k = 0; k < panel.series.size(); ++k) {
+    const PlotSeries& s = panel.series[k];
+    const char* colour = kPalette[k % (sizeof kPalette / sizeof *kPalette)];
+    const std::size_t n = std::min(s.x.size(), s.y.size());
+    if (s.line) {
+      std::string path;
+      bool pen_down = false;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double y = ty(s.y[i]);
+        if (!std::isfinite(y) || !std::isfinite(s.x[i])) {
+          pen_down = false;
+          continue;
+        }
+        char buffer[64];
+        std::snprintf(buffer, sizeof buffer, "%s%.2f,%.2f ", pen_down ? "L" : "M", px(s.x[i]),
+                      py(y));
+        path += buffer;
+        pen_down = true;
+      }
+      svg << "<path d='" << path << "' fill='none' stroke='" << colour
+          << "' stroke-width='1.5'/>\n";
+    }
+    if (s.markers) {
+      for (std::size_t i = 0; i < n; ++i) {
+        const double y = ty(s.y[i]);
+        if (!std::isfinite(y) || !std::isfinite(s.x[i])) continue;
+        svg << "<circle cx='" << px(s.x[i]) << "' cy='" << py(y) << "' r='2' fill='" << colour
+            << "'/>\n";
+      }
+    }
+    const double ly = top + margin_top + 14 + 16 * static_cast<double>(k);
+    const double lx = left + margin_left + plot_w - 150;
+    svg << "<line x1='" << lx << "' y1='" << ly - 4 << "' x2='" << lx + 18 << "' y2='" << ly - 4
+        << "' stroke='" << colour << "' stroke-width='2'/>\n";
+    svg << "<text x='" << lx + 22 << "' y='" << ly << "' font-size='11'>" << escapeXml(s.label)
+        << "</text>\n";
+  }
+}
+
+}  // namespace
+
+std::vector<double> niceTicks(double lo, double hi, int target) {
+  if (!(hi > lo)) return {lo};
+  const double raw = (hi - lo) / std::max(1, target);
+  const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
+  double step = magnitude;
+  for (double factor : {1.0, 2.0, 5.0, 10.0}) {
+    step = factor * magnitude;
+    if (step >= raw * (1.0 - 1e-9)) break;  // round-off must not skip a step
+  }
+  std::vector<double> ticks;
+  for (double t = std::floor(lo / step) * step; t <= hi + 0.5 * step; t += step) {
+    ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
+    if (ticks.size() > 100) break;
+  }
+  return ticks;
+}
+
+std::string svgLinePlots(const std::vector<PlotPanel>& panels, int columns, int panel_width,
+                         int panel_height) {
+  columns = std::max(1, columns);
+  const int rows = static_cast<int>((panels.size() + columns - 1) / columns);
+  std::ostringstream svg;
+  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << columns * panel_width
+      << "' height='" << std::max(1, rows) * panel_height
+      << "' font-family='Helvetica, Arial, sans-serif'>\n"
+      << "<rect width='100%' height='100%' fill='white'/>\n";
+  for (std::size_t i = 0; i < panels.size(); ++i) {
+    drawPanel(svg, panels[i], static_cast<double>((i % columns) * panel_width),
+              static_cast<double>((i / columns) * panel_height), panel_width, panel_height);
+  }
+  svg << "</svg>\n";
+  return svg.str();
+}
+
+}  // namespace chordfit

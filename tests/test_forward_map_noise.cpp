@@ -1,0 +1,36 @@
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "core/forward_map_noise.h"
+
+namespace chordfit {
+namespace {
+
+TEST(MapNoise, IsZeroForAQuadraticAndRecoversItsSlope) {
+  std::vector<double> s, q;
+  for (int i = 0; i <= 100; ++i) {
+    s.push_back(0.95 + 0.001 * i);
+    q.push_back(3.0 - 2.0 * (s.back() - 1.0) + 40.0 * std::pow(s.back() - 1.0, 2));
+  }
+  const MapNoise noise = mapNoise(s, q, 5);
+  EXPECT_LT(noise.rms, 1e-12);
+  EXPECT_NEAR(noise.slope, -2.0, 1e-9);
+}
+
+TEST(MapNoise, MeasuresAlternatingNoiseOnASmoothMap) {
+  std::vector<double> s, q;
+  const double amplitude = 1e-3;
+  for (int i = 0; i <= 100; ++i) {
+    s.push_back(0.95 + 0.001 * i);
+    q.push_back(std::sin(s.back()) + (i % 2 ? amplitude : -amplitude));
+  }
+  const MapNoise noise = mapNoise(s, q, 5);
+  // Leave-one-out: the neighbours' fit sits near the smooth curve's mean offset (the window
+  // has 5 of one sign, 5 of the other), so the residual is about the amplitude.
+  EXPECT_NEAR(noise.rms, amplitude, 0.25 * amplitude);
+  EXPECT_NEAR(noise.slope, std::cos(1.0), 1e-3);
+}
+
+}  // namespace
+}  // namespace chordfit

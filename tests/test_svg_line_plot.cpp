@@ -1,0 +1,36 @@
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "core/svg_line_plot.h"
+
+namespace chordfit {
+namespace {
+
+TEST(NiceTicks, UseOneTwoFiveSteps) {
+  EXPECT_EQ(niceTicks(0.0, 10.0, 5), (std::vector<double>{0, 2, 4, 6, 8, 10}));
+  const auto ticks = niceTicks(0.95, 1.05, 5);
+  ASSERT_GE(ticks.size(), 5u);
+  EXPECT_NEAR(ticks[1] - ticks[0], 0.02, 1e-12);
+  EXPECT_LE(ticks.front(), 0.95);
+  EXPECT_GE(ticks.back(), 1.05 - 1e-12);
+}
+
+TEST(SvgLinePlots, WritesOnePathPerSeriesAndEscapesLabels) {
+  PlotPanel panel{"cost <history>", "iteration", "cost", {}, true};
+  panel.series.push_back({"ceres & co", {0, 1, 2}, {10, 1, 0.1}, true, true});
+  panel.series.push_back({"bobyqa", {0, 1, 2}, {10, NAN, 0.5}, false, true});
+  const std::string svg = svgLinePlots({panel, panel}, 2);
+  EXPECT_EQ(svg.rfind("<svg", 0), 0u);
+  EXPECT_NE(svg.find("cost &lt;history&gt;"), std::string::npos);
+  EXPECT_NE(svg.find("ceres &amp; co"), std::string::npos);
+  std::size_t paths = 0;
+  for (std::size_t at = svg.find("<path"); at != std::string::npos; at = svg.find("<path", at + 1)) {
+    ++paths;
+  }
+  EXPECT_EQ(paths, 4u);  // 2 series x 2 panels
+  EXPECT_NE(svg.find("width='1120'"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace chordfit

@@ -1,0 +1,200 @@
+// chordfit sweep-cord: scan one cord's rest-length scale and measure how smooth the forward
+// map (scale -> closed state) is. DESIGN §7: the map must be reproducible to far below the
+// finite-difference step, or the Jacobian is noise.
+#include <atomic>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+
+#include "core/annulus_plane.h"
+#include "core/atomic_file.h"
+#include "core/carpentier.h"
+#include "core/forward_map_noise.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "core/svg_line_plot.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+// The signal a finite-difference step of this relative size sees (issue: 0.5 %).
+constexpr double kReferenceStep = 0.005;
+constexpr int kP2 = 1 * 3 + 1;  // posterior leaflet (label 1), middle third
+
+// The P2 primary cord whose vertex lies nearest the posterior midline (angle pi).
+int defaultP2PrimaryCord(const ValveCase& c, const CordSet& cords) {
+  const AnnulusFrame frame = openAnnulusFrame(c.mesh);
+  Eigen::MatrixXd ring(c.mesh.annulus.size(), 3);
+  for (Eigen::Index i = 0; i < ring.rows(); ++i) ring.row(i) = c.mesh.V.row(c.mesh.annulus(i));
+  const SegmentMap segments = buildSegmentMap(ring, c.mesh, frame);
+  int best = -1;
+  double best_offset = 1e9;
+  for (std::size_t i = 0; i < cords.cords.size(); ++i) {
+    const Cord& cord = cords.cords[i];
+    const Eigen::Vector3d p = c.mesh.V.row(cord.vertex).transpose();
+    if (cord.kind != CordKind::kPrimary || segmentOf(segments, p, c.mesh.leaflet(cord.vertex)) != kP2) {
+      continue;
+    }
+    const double offset = std::abs(std::remainder(annulusAngle(frame, p) - M_PI, 2 * M_PI));
+    if (offset < best_offset) {
+      best_offset = offset;
+      best = static_cast<int>(i);
+    }
+  }
+  return best;
+}
+
+struct SweepPoint {
+  double scale = 1.0;
+  double mean_deviation = NAN;
+  Eigen::Vector3d vertex = Eigen::Vector3d::Constant(NAN);
+  double height = NAN;  // vertex height above the closed annulus plane
+  bool converged = false;
+  int steps = 0;
+  std::string error;
+};
+
+std::string sweepCsv(const std::vector<SweepPoint>& points) {
+  std::ostringstream csv;
+  csv.precision(12);
+  csv << "scale,mean_deviation_mm,vertex_x_mm,vertex_y_mm,vertex_z_mm,vertex_height_mm,"
+         "converged,steps\n";
+  for (const SweepPoint& p : points) {
+    csv << p.scale << "," << p.mean_deviation << "," << p.vertex.x() << "," << p.vertex.y()
+        << "," << p.vertex.z() << "," << p.height << "," << (p.converged ? 1 : 0) << ","
+        << p.steps << "\n";
+  }
+  return csv.str();
+}
+
+nlohmann::json noiseJson(const MapNoise& noise) {
+  const double signal = std::abs(noise.slope) * kReferenceStep;
+  return {{"noise_rms", noise.rms},
+          {"noise_max", noise.max},
+          {"slope_per_unit_scale", noise.slope},
+          {"change_over_0.5_percent", signal},
+          {"signal_to_noise", noise.max > 0 ? signal / noise.max : INFINITY}};
+}
+
+}  // namespace
+
+int runSweepCord(const SweepCordOptions& options) {
+  if (!(options.range > 0.0 && options.range < 0.5) || !(options.step > 0.0) ||
+      options.step > options.range) {
+    std::cerr << "error: sweep-cord: --range/--step: need 0 < step <= range < 0.5\n";
+    return kExitBadInput;
+  }
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  const auto cords = resolveCords(*valve_case, options.cords_file);
+  if (!cords) return kExitBadInput;
+  const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(*valve_case, *cords);
+  if (cord < 0 || cord >= static_cast<int>(cords->cords.size())) {
+    std::cerr << "error: sweep-cord: --cord: no such cord (the set has " << cords->cords.size()
+              << " cords" << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
+    return kExitBadInput;
+  }
+  Diagnostics diagnostics;
+  const SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  if (!diagnostics.ok()) return reportProblems(diagnostics);
+
+  const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
+  std::vector<SweepPoint> points(count);
+  const ClosedAnnulus annulus = closedAnnulus(*valve_case);
+  const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case->tracings);
+  const double base = cords->cords[cord].rest_length;
+  const int vertex = cords->cords[cord].vertex;
+  std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %d scales, %d threads\n",
+               cord, vertex, base, count, options.threads);
+
+  // Each point is an independent full closure from the open state; results go to their own
+  // slot, so the output does not depend on the thread count or the order of completion.
+  std::atomic<int> next{0}, done{0};
+  std::mutex print;
+  auto worker = [&] {
+    for (int i = next++; i < count; i = next++) {
+      SweepPoint& p = points[i];
+      p.scale = 1.0 - options.range + i * options.step;
+      CordSet scaled = *cords;
+      scaled.cords[cord].rest_length = base * p.scale;
+      const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
+      p.error = r.error;
+      p.converged = r.converged;
+      p.steps = r.steps;
+      if (r.ok()) {
+        p.vertex = r.V.row(vertex).transpose();
+        p.height = annulus.frame.plane.signedDistance(p.vertex);
+        if (tracing_points.rows() > 0) {
+          p.mean_deviation = pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
+        }
+      }
+      std::lock_guard<std::mutex> lock(print);
+      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n",
+                   ++done, count, p.scale, p.height, p.mean_deviation,
+                   r.ok() ? (r.converged ? "" : " (not converged)") : (" ERROR " + r.error).c_str());
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int t = 0; t < std::max(1, options.threads); ++t) pool.emplace_back(worker);
+  for (std::thread& t : pool) t.join();
+  for (const SweepPoint& p : points) {
+    if (!p.error.empty()) {
+      std::cerr << "error: " << options.case_dir << ": simulation failed at scale " << p.scale
+                << ": " << p.error << "\n";
+      return kExitSimulationFailed;
+    }
+  }
+
+  std::vector<double> s, deviation, height, x, y, z;
+  for (const SweepPoint& p : points) {
+    s.push_back(p.scale);
+    deviation.push_back(p.mean_deviation);
+    height.push_back(p.height);
+    x.push_back(p.vertex.x()), y.push_back(p.vertex.y()), z.push_back(p.vertex.z());
+  }
+  nlohmann::json summary = {{"cord", cord},
+                            {"vertex", vertex},
+                            {"base_rest_length_mm", base},
+                            {"range", options.range},
+                            {"step", options.step},
+                            {"all_converged", std::all_of(points.begin(), points.end(),
+                                                          [](const SweepPoint& p) { return p.converged; })},
+                            {"vertex_height", noiseJson(mapNoise(s, height, options.window))},
+                            {"vertex_x", noiseJson(mapNoise(s, x, options.window))},
+                            {"vertex_y", noiseJson(mapNoise(s, y, options.window))},
+                            {"vertex_z", noiseJson(mapNoise(s, z, options.window))}};
+  std::vector<PlotPanel> panels;
+  if (tracing_points.rows() > 0) {
+    summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window));
+    panels.push_back({"Mean deviation to the tracings", "scale of cord " + std::to_string(cord),
+                      "mean deviation (mm)", {{"mean deviation", s, deviation, true, true}}, false});
+  }
+  panels.push_back({"Height of the cord's leaflet vertex above the closed annulus plane",
+                    "scale of cord " + std::to_string(cord), "height (mm)",
+                    {{"vertex " + std::to_string(vertex), s, height, true, true}}, false});
+
+  const std::filesystem::path out(options.out_dir);
+  writeFileAtomically(out / "sweep.csv", sweepCsv(points));
+  writeFileAtomically(out / "sweep.svg", svgLinePlots(panels, 1, 720, 360));
+  writeFileAtomically(out / "sweep.json", summary.dump(2) + "\n");
+  for (const char* key : {"mean_deviation", "vertex_height"}) {
+    if (!summary.contains(key)) continue;
+    const auto& n = summary[key];
+    std::printf("%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
+                "signal/noise %.0f\n",
+                key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
+                n["change_over_0.5_percent"].get<double>(), n["signal_to_noise"].get<double>());
+  }
+  std::cout << "wrote " << (out / "sweep.csv").string() << ", sweep.svg, sweep.json\n";
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli
