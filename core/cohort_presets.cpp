@@ -15,6 +15,8 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kAnatomyClamp = 2.5;  // SDs
 constexpr int kVariationHarmonics = 3;
+// Peak true scale of elongated cords (relative to the heuristic upper bound; calibrated).
+constexpr double kElongated = 1.3;
 
 std::uint64_t splitmix64(std::uint64_t z) {
   z += 0x9E3779B97F4A7C15ull;
@@ -75,27 +77,27 @@ std::vector<CohortPreset> buildPresets() {
   {
     CohortPreset p;
     p.name = "prolapse-P2";
-    p.summary = "isolated P2 prolapse: P2 cords elongated (x1.35)";
+    p.summary = "isolated P2 prolapse: elongated P2 cords";
     p.anatomy = normalAnatomy();
-    p.segment_factor = {1, 1, 1, 1, 1.35, 1};
+    p.segment_scale = {0, 0, 0, 0, kElongated, 0};
     p.intended_prolapse = {"P2"};
     presets.push_back(p);
   }
   {
     CohortPreset p;
     p.name = "prolapse-A2";
-    p.summary = "isolated A2 prolapse: A2 cords elongated (x1.3)";
+    p.summary = "isolated A2 prolapse: elongated A2 cords";
     p.anatomy = normalAnatomy();
-    p.segment_factor = {1, 1.3, 1, 1, 1, 1};
+    p.segment_scale = {0, kElongated, 0, 0, 0, 0};
     p.intended_prolapse = {"A2"};
     presets.push_back(p);
   }
   {
     CohortPreset p;
     p.name = "prolapse-P3";
-    p.summary = "commissural (posteromedial) prolapse: P3 cords elongated (x1.4)";
+    p.summary = "commissural prolapse: elongated P3 cords (posteromedial side)";
     p.anatomy = normalAnatomy();
-    p.segment_factor = {1, 1, 1, 1, 1, 1.4};
+    p.segment_scale = {0, 0, 0, 0, 0, kElongated};
     p.intended_prolapse = {"P3"};
     presets.push_back(p);
   }
@@ -103,10 +105,10 @@ std::vector<CohortPreset> buildPresets() {
     CohortPreset p;
     p.name = "bileaflet";
     p.summary =
-        "Barlow-like bileaflet prolapse: dilated flat annulus, enlarged leaflets, A2 and P2 "
-        "cords elongated (x1.3)";
+        "Barlow-like bileaflet prolapse: dilated flat annulus, enlarged leaflets, elongated A2 "
+        "and P2 cords";
     p.anatomy = barlowAnatomy();
-    p.segment_factor = {1, 1.3, 1, 1, 1.3, 1};
+    p.segment_scale = {0, kElongated, 0, 0, kElongated, 0};
     p.intended_prolapse = {"A2", "P2"};
     presets.push_back(p);
   }
@@ -220,10 +222,10 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
     a[k] = s * random.gaussian();
     b[k] = s * random.gaussian();
   }
-  std::array<double, 6> factor = preset.segment_factor;
-  for (double& f : factor) {
-    const double jitter = random.uniform(-preset.factor_spread, preset.factor_spread);
-    if (f != 1.0) f += jitter;
+  std::array<double, 6> peak = preset.segment_scale;
+  for (double& f : peak) {
+    const double jitter = random.uniform(-preset.scale_spread, preset.scale_spread);
+    if (f > 0.0) f += jitter;
   }
   const double draw = random.uniform();
   const int rupture_count =
@@ -241,7 +243,16 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
       v += (a[k - 1] * std::cos(kTwoPi * k * t) + b[k - 1] * std::sin(kTwoPi * k * t)) / k;
     }
     v = std::clamp(v, -3.0 * variation, 3.0 * variation);
-    scales.push_back(preset.normal_cord_scale * (1.0 + v) * factor[att.segment()]);
+    double scale = preset.normal_cord_scale *
+                   (att.kind == CordKind::kSecondary ? preset.secondary_cord_factor : 1.0);
+    for (int segment = 0; segment < 6; ++segment) {
+      if (peak[segment] <= 0.0 || segment / 3 != att.leaflet) continue;
+      const double offset = att.fraction - ((segment % 3) + 0.5) / 3.0;
+      if (std::abs(offset) >= 0.5 * preset.pathology_width) continue;
+      const double bump = std::cos(kTwoPi * 0.5 * offset / preset.pathology_width);
+      scale += (peak[segment] - scale) * bump * bump;
+    }
+    scales.push_back(scale * (1.0 + v));
   }
 
   std::vector<bool> flags(attachments.size(), false);

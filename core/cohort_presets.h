@@ -2,14 +2,17 @@
 // parametric mitral anatomy plus a chordal pathology, and the seeded randomness that turns a
 // preset into one patient (a seed is a new patient).
 //
-// Truth cord scales. Every true cord's rest length is the paper's heuristic l0 (an upper
-// bound: dist(V, AP) + |V - tip|) times
-//   kNormalCordScale                      calibrated so that normal valves close without
-//                                         prolapse (see experiments/README.md),
-//   x (1 + smooth random variation)       a few percent, smooth along the annulus,
-//   x pathology factor                    > 1 on the elongated segments' cords,
-// and a ruptured cord (flail) gets kRupturedCordScale, long enough never to become taut, so
-// truth and case cords still correspond one to one.
+// Truth cord scales. A true cord's rest length is the paper's heuristic l0 (an upper bound:
+// dist(V, AP) + |V - tip|) times its true scale:
+//   normal cord        normal_cord_scale (< 1, calibrated so that normal valves close
+//                      without prolapse; see experiments/README.md), times
+//                      secondary_cord_factor for secondary cords;
+//   pathological cord  up to the segment's peak scale (> 1: elongated beyond the heuristic's
+//                      bound), with a raised-cosine profile over the segment (below);
+//   every cord         x (1 + v), v a smooth random variation of a few percent along the
+//                      annulus;
+//   ruptured cord      kRupturedCordScale: long enough never to become taut (inert), so truth
+//                      and case cords still correspond one to one.
 #pragma once
 
 #include <array>
@@ -49,7 +52,10 @@ class SeededRandom {
 };
 
 // Rest-length scale of every normal true cord (calibrated; see the file comment).
-constexpr double kNormalCordScale = 0.85;
+constexpr double kNormalCordScale = 0.65;
+// Extra factor of secondary (belly) cords relative to primaries (calibrated; see the file
+// comment).
+constexpr double kSecondaryCordFactor = 1.0;
 // Rest-length scale of a ruptured cord: the cord never becomes taut, so it is inert.
 constexpr double kRupturedCordScale = 10.0;
 
@@ -59,13 +65,19 @@ struct CohortPreset {
   ValveParameters anatomy;  // mean anatomy; target_edge_mm is ignored
   // Rest-length scale of a normal true cord (experiments may override the calibrated value).
   double normal_cord_scale = kNormalCordScale;
+  double secondary_cord_factor = kSecondaryCordFactor;
   // Relative SD of each anatomical dimension across seeds (clamped at 2.5 SD).
   double anatomy_sd = 0.04;
-  // Pathology: rest-length factor per Carpentier segment (A1, A2, A3, P1, P2, P3), applied to
-  // the primary and secondary cords attached there. 1 = normal.
-  std::array<double, 6> segment_factor{1, 1, 1, 1, 1, 1};
-  // Half-width of the seed-to-seed uniform variation of every factor != 1.
-  double factor_spread = 0.05;
+  // Pathology: peak true scale of the cords of each Carpentier segment (A1, A2, A3, P1, P2,
+  // P3); 0 = normal. It applies to the primary and secondary cords of the segment's leaflet
+  // with a raised-cosine profile centred on the segment: a cord at arc fraction f with normal
+  // scale s0 gets
+  //   s0 + (peak - s0) cos^2(pi (f - c) / w)   for |f - c| < w / 2,   c = (index + 1/2) / 3,
+  // so the lesion is densest in the middle of the segment and fades toward its borders.
+  std::array<double, 6> segment_scale{0, 0, 0, 0, 0, 0};
+  double pathology_width = 1.0 / 3.0;  // w, as a fraction of the leaflet's arc
+  // Half-width of the seed-to-seed uniform variation of every peak scale.
+  double scale_spread = 0.05;
   // Flail: this many of the primary cords nearest the middle of `ruptured_segment` rupture
   // (the seed picks a number in [min, max]).
   std::string ruptured_segment;
@@ -90,12 +102,11 @@ int mitralSegmentId(const std::string& name);
 // clamped standard normal; the closed saddle keeps the preset's closed/open ratio.
 ValveParameters samplePatientAnatomy(const CohortPreset& preset, SeededRandom& random);
 
-// The patient's true cord scales, one per attachment (see the file comment):
-//   scale_i = normal_cord_scale * (1 + v(t_i)) * factor(segment_i)   or kRupturedCordScale.
-// v is a smooth random periodic function of the position t in [0, 1) around the whole
-// annulus (anterior arc then posterior arc, from the anterolateral commissure):
+// The patient's true cord scales, one per attachment (see the file comment). v is a smooth
+// random periodic function of the position t in [0, 1) around the whole annulus (anterior arc
+// then posterior arc, from the anterolateral commissure):
 //   v(t) = sum_{k=1..3} (a_k cos 2 pi k t + b_k sin 2 pi k t) / k,  a_k, b_k ~ N(0, s^2),
-// with s chosen so that the SD of v is `variation` (default 3%).
+// with s chosen so that the SD of v is `variation` (default 3%), clamped to 3 variations.
 // `ruptured` (optional) receives one flag per attachment.
 std::vector<double> trueCordScales(const CohortPreset& preset,
                                    const std::vector<AnatomicalAttachment>& attachments,

@@ -16,13 +16,12 @@
 // Broad phase: a Verlet list of candidate pairs within thickness + margin + skin, rebuilt
 // only when some vertex has moved more than skin / 2 since the last build (then no pair
 // outside the list can have come within thickness + margin: a vertex-triangle distance
-// changes by at most twice the largest vertex displacement). The list is built with a
-// uniform grid hashed into 2 #V buckets (Teschner et al. 2003, "Optimized spatial hashing for
-// collision detection of deformable objects"; Mueller's Ten Minute Physics "self-collision"
-// lesson): vertices are counting-sorted into buckets, every triangle visits the cells
-// overlapped by its bounding box inflated by the list radius; hash collisions are filtered by
-// comparing integer cell coordinates. Candidates are ordered by triangle, then vertex index,
-// so the output is deterministic.
+// changes by at most twice the largest vertex displacement). The list is built on a dense
+// uniform grid over the bounding box of the vertices (Ten Minute Physics "self-collision"
+// lesson, with a dense table instead of a hash since the valve is compact): vertices are
+// counting-sorted by cell, x fastest, so the cells of one grid row of a triangle's inflated
+// bounding box are one contiguous run of vertices. Candidates are ordered by triangle, then
+// vertex index, so the output is deterministic.
 #pragma once
 
 #include <vector>
@@ -37,7 +36,7 @@ struct ContactOptions {
   double thickness_mm = 1.0;         // target separation of a vertex from a triangle
   double margin_mm = 0.5;            // pairs within thickness + margin become constraints
   double exclusion_radius_mm = 2.0;  // rest-state neighbourhood ignored (see above)
-  double skin_mm = 1.0;              // Verlet-list skin (see above)
+  double skin_mm = 0.5;              // Verlet-list skin (see above)
 };
 
 class ContactDetector {
@@ -54,7 +53,7 @@ class ContactDetector {
               std::vector<ContactConstraint>& out);
 
   const ContactOptions& options() const { return options_; }
-  int rebuilds() const { return rebuilds_; }    // candidate-list builds so far
+  int rebuilds() const { return rebuilds_; }  // candidate-list builds so far
   int candidates() const { return static_cast<int>(candidates_.size()); }
 
  private:
@@ -64,11 +63,11 @@ class ContactDetector {
   ContactOptions options_;
   Eigen::MatrixXi F_;
   std::vector<double> rest_;  // 3 #V rest positions
-  double cell_size_ = 1.0;
-  // Spatial hash of the vertices (rebuilt every detect): bucket_start_ (#buckets + 1) and
-  // bucket_entries_ (#V) as a counting sort; cell_ holds each vertex's integer cell.
-  std::vector<int> bucket_start_, bucket_entries_;
-  std::vector<int> cell_;  // 3 #V
+  double min_cell_size_ = 1.0;
+  // Dense grid of the last build: cell_start_ (#cells + 1) into sorted_ (#V vertex ids sorted
+  // by cell), sorted_x_ their positions (3 #V, same order), cell_ each vertex's cell id.
+  std::vector<int> cell_start_, sorted_, cell_;
+  std::vector<double> sorted_x_;
   // Verlet list: (triangle, vertex) pairs and the positions they were built from.
   std::vector<std::pair<int, int>> candidates_;
   std::vector<double> x_built_;

@@ -40,8 +40,8 @@
 
 namespace chordfit {
 
-constexpr double kMpaPerMmHg = 133.322387415e-6;       // 1 mmHg = 133.322 Pa
-constexpr double kGramPerMm3PerGramPerCm3 = 1e-3;      // 1 g/cm^3 = 1e-3 g/mm^3
+constexpr double kMpaPerMmHg = 133.322387415e-6;   // 1 mmHg = 133.322 Pa
+constexpr double kGramPerMm3PerGramPerCm3 = 1e-3;  // 1 g/cm^3 = 1e-3 g/mm^3
 
 // Leaflet tissue, isotropic linear elastic membrane + plate bending.
 // Defaults: E from the linear anisotropic moduli of Kunzelman et al. 1993 ("Finite element

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <ctime>
+#include <limits>
 #include <memory>
 
 #include <nlohmann/json.hpp>
@@ -20,6 +22,13 @@ using Vec3 = Eigen::Vector3d;
 using Map3 = Eigen::Map<Eigen::Vector3d>;
 using CMap3 = Eigen::Map<const Eigen::Vector3d>;
 
+// CPU time of the calling thread (less sensitive than wall time to other load on the machine).
+double threadCpuSeconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
 // Smooth ramp 0 -> 1 (smoothstep), so boundary velocities start and end at zero.
 double ramp(double t, double duration) {
   if (duration <= 0.0) return 1.0;
@@ -29,9 +38,9 @@ double ramp(double t, double duration) {
 
 bool finite(const SimulationSettings& s) {
   for (double v : {s.pressure_mmhg, s.flow_speed_mm_per_ms, s.drag_time_ms, s.ramp_ms, s.dt_ms,
-                   s.stiffness_ratio, s.max_step_mm, s.tolerance_mm, s.contact_thickness_mm,
-                   s.contact_margin_mm, s.contact_exclusion_mm, s.material.youngs_modulus_mpa,
-                   s.material.thickness_mm, s.material.poisson_ratio,
+                   s.stiffness_ratio, s.max_stiffness_ratio, s.max_step_mm, s.tolerance_mm,
+                   s.contact_thickness_mm, s.contact_margin_mm, s.contact_exclusion_mm,
+                   s.material.youngs_modulus_mpa, s.material.thickness_mm, s.material.poisson_ratio,
                    s.material.density_g_per_cm3, s.material.area_bulk_fraction})
     if (!std::isfinite(v)) return false;
   return true;
@@ -78,7 +87,10 @@ struct System {
   std::vector<AreaConstraint> areas;
   std::vector<BendingConstraint> bends;
   std::vector<CordConstraint> cords;
-  double typical_stiffness_over_mass = 0.0;  // median over free vertices of sum_e k_e / m_i
+  // Per-vertex stiffness k_i = sum over the material constraints of |grad_i C|^2 / alpha at
+  // rest (N/mm), and its median ratio to the mass over free vertices (1/ms^2).
+  std::vector<double> stiffness;
+  double median_stiffness_over_mass = 0.0;
 };
 
 System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
@@ -124,6 +136,11 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
       c.a = m.F(f, 0), c.b = m.F(f, 1), c.c = m.F(f, 2);
       c.rest_area = face_area(f);
       c.compliance = areaCompliance(mat, face_area(f));
+      Vec3 g[3];
+      triangleArea(pos(c.a), pos(c.b), pos(c.c), g);
+      vertex_stiffness[c.a] += g[0].squaredNorm() / c.compliance;
+      vertex_stiffness[c.b] += g[1].squaredNorm() / c.compliance;
+      vertex_stiffness[c.c] += g[2].squaredNorm() / c.compliance;
       sys.areas.push_back(c);
     }
   }
@@ -135,8 +152,11 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
     const double a1 = triangleArea(pos(c.i), pos(c.j), pos(c.k));
     const double a2 = triangleArea(pos(c.j), pos(c.i), pos(c.l));
     if (len <= 0.0 || a1 <= 0.0 || a2 <= 0.0) continue;
-    c.rest_angle = dihedralAngle(pos(c.i), pos(c.j), pos(c.k), pos(c.l));
+    Vec3 g[4];
+    c.rest_angle = dihedralAngle(pos(c.i), pos(c.j), pos(c.k), pos(c.l), g);
     c.compliance = bendingCompliance(mat, a1 + a2, len);
+    const int ids[4] = {c.i, c.j, c.k, c.l};
+    for (int q = 0; q < 4; ++q) vertex_stiffness[ids[q]] += g[q].squaredNorm() / c.compliance;
     sys.bends.push_back(c);
   }
   for (const auto& cord : m.cords) {
@@ -158,11 +178,13 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
   });
   std::vector<double> ratio;
   for (int i = 0; i < n; ++i)
-    if (sys.w[i] > 0.0 && vertex_stiffness[i] > 0.0) ratio.push_back(vertex_stiffness[i] * sys.w[i]);
+    if (sys.w[i] > 0.0 && vertex_stiffness[i] > 0.0)
+      ratio.push_back(vertex_stiffness[i] * sys.w[i]);
   if (!ratio.empty()) {
     std::nth_element(ratio.begin(), ratio.begin() + ratio.size() / 2, ratio.end());
-    sys.typical_stiffness_over_mass = ratio[ratio.size() / 2];
+    sys.median_stiffness_over_mass = ratio[ratio.size() / 2];
   }
+  sys.stiffness = std::move(vertex_stiffness);
   return sys;
 }
 
@@ -181,6 +203,169 @@ void pressureForces(const Eigen::MatrixXi& F, const double* x, double p, double*
   }
 }
 
+// The state of one run and the three phases of a time step (Ten Minute Physics style: the
+// loop in simulate() reads as predict / solve / update). Flat arrays x, x_prev, v: 3 #V.
+class Stepper {
+ public:
+  Stepper(const SimulationModel& model, const SimulationSettings& settings, System sys, double dt,
+          double max_step, double thickness, const Eigen::MatrixXd& start)
+      : model_(model),
+        settings_(settings),
+        sys_(std::move(sys)),
+        n_(sys_.n),
+        dt_(dt),
+        inv_dt2_(1.0 / (dt * dt)),
+        max_step_(max_step),
+        drag_decay_(std::exp(-dt / settings.drag_time_ms)),
+        warm_(settings.warm_start_lambda),
+        x_(3 * n_),
+        x_prev_(3 * n_),
+        v_(3 * n_, 0.0),
+        force_(3 * n_),
+        impulse_(warm_ ? 3 * n_ : 0, 0.0),
+        tips_(3 * model.tip_start.rows()),
+        lambda_edges_(sys_.edges.size()),
+        lambda_areas_(sys_.areas.size()),
+        lambda_bends_(sys_.bends.size()),
+        lambda_cords_(sys_.cords.size()) {
+    for (int i = 0; i < n_; ++i)
+      for (int d = 0; d < 3; ++d) x_[3 * i + d] = start(i, d);
+    if (settings.contact) {
+      ContactOptions options;
+      options.thickness_mm = thickness;
+      options.margin_mm =
+          settings.contact_margin_mm > 0.0 ? settings.contact_margin_mm : 0.5 * thickness;
+      options.skin_mm = thickness;
+      // Default exclusion = the candidate-list radius, so that the flat neighbourhood of a
+      // vertex on its own sheet never enters the list (see contact.h).
+      options.exclusion_radius_mm =
+          settings.contact_exclusion_mm > 0.0
+              ? settings.contact_exclusion_mm
+              : options.thickness_mm + options.margin_mm + options.skin_mm;
+      detector_ = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
+    }
+  }
+
+  // Dirichlet boundary at ramp fraction s: annulus ring and PM tips, start -> end.
+  void setBoundary(double s) {
+    for (Eigen::Index k = 0; k < model_.fixed.size(); ++k) {
+      const int i = model_.fixed(k);
+      for (int d = 0; d < 3; ++d)
+        x_[3 * i + d] = (1.0 - s) * model_.fixed_start(k, d) + s * model_.fixed_end(k, d);
+    }
+    for (Eigen::Index k = 0; k < model_.tip_start.rows(); ++k)
+      for (int d = 0; d < 3; ++d)
+        tips_[3 * k + d] = (1.0 - s) * model_.tip_start(k, d) + s * model_.tip_end(k, d);
+  }
+
+  // v += dt w f (pressure); drag toward the flow velocity u; x~ = x + dt v + w impulse (the
+  // last step's constraint impulses: warm start); displacement clamped to max_step.
+  void predict(double pressure, const Vec3& u) {
+    pressureForces(model_.F, x_.data(), pressure, force_.data(), n_);
+    x_prev_ = x_;
+    for (int i = 0; i < n_; ++i) {
+      if (sys_.w[i] == 0.0) continue;
+      Map3 vi(&v_[3 * i]);
+      vi += (dt_ * sys_.w[i]) * CMap3(&force_[3 * i]);
+      vi = u + drag_decay_ * (vi - u);
+      Vec3 disp = dt_ * vi;
+      if (warm_) disp += sys_.w[i] * CMap3(&impulse_[3 * i]);
+      const double len = disp.norm();
+      if (len > max_step_) disp *= max_step_ / len;
+      Map3(&x_[3 * i]) += disp;
+    }
+  }
+
+  // Gauss-Seidel sweeps in a fixed order, hard constraints last and cords at the very end (a
+  // cord pulling its vertex into the other leaflet then wins over the contact, by the
+  // contact's O(dt^2) softness, instead of stretching). The last sweep accumulates the
+  // constraint impulses for the next prediction. Contacts are detected anew each step and
+  // start from lambda = 0 (see simulator.h).
+  void solve() {
+    if (detector_) detector_->detect(x_prev_.data(), x_.data(), sys_.w.data(), contacts_);
+    lambda_contacts_.assign(contacts_.size(), 0.0);
+    if (!warm_) {
+      for (auto* l : {&lambda_edges_, &lambda_areas_, &lambda_bends_, &lambda_cords_})
+        std::fill(l->begin(), l->end(), 0.0);
+    }
+    double* x = x_.data();
+    const double* w = sys_.w.data();
+    for (int it = 0; it < settings_.iterations; ++it) {
+      double* acc = nullptr;
+      if (warm_ && it == settings_.iterations - 1) {
+        std::fill(impulse_.begin(), impulse_.end(), 0.0);
+        acc = impulse_.data();
+      }
+      projectDistances(sys_.edges, inv_dt2_, x, w, lambda_edges_.data(), acc);
+      projectAreas(sys_.areas, inv_dt2_, x, w, lambda_areas_.data(), acc);
+      projectBending(sys_.bends, inv_dt2_, x, w, lambda_bends_.data(), acc);
+      projectContacts(contacts_, x, w, lambda_contacts_.data(), acc);
+      projectCords(sys_.cords, inv_dt2_, tips_.data(), x, w, lambda_cords_.data(), acc);
+    }
+    projections_ +=
+        static_cast<long long>(settings_.iterations) *
+        static_cast<long long>(sys_.edges.size() + sys_.areas.size() + sys_.bends.size() +
+                               sys_.cords.size() + contacts_.size());
+  }
+
+  // v = (x - x_prev) / dt. Returns the largest vertex displacement of the step, or -1 when a
+  // position is non-finite or farther than `explode` from `centre`.
+  double update(const Vec3& centre, double explode) {
+    double max_disp2 = 0.0;
+    bool diverged = false;
+    for (int i = 0; i < n_; ++i) {
+      if (sys_.w[i] == 0.0) continue;
+      const Vec3 dx = CMap3(&x_[3 * i]) - CMap3(&x_prev_[3 * i]);
+      Map3 vi(&v_[3 * i]);
+      vi = dx / dt_;
+      max_disp2 = std::max(max_disp2, dx.squaredNorm());
+      const double r2 = (CMap3(&x_[3 * i]) - centre).squaredNorm();
+      if (!(r2 <= explode * explode)) diverged = true;  // also catches NaN
+    }
+    return diverged || !std::isfinite(max_disp2) ? -1.0 : std::sqrt(max_disp2);
+  }
+
+  int contactCount() const { return static_cast<int>(contacts_.size()); }
+
+  // Copies the final state into `result`.
+  void finish(SimulationResult& result) const {
+    result.projections = projections_;
+    if (detector_) {
+      result.contact_rebuilds = detector_->rebuilds();
+      result.contact_candidates = detector_->candidates();
+    }
+    result.V.resize(n_, 3);
+    for (int i = 0; i < n_; ++i)
+      for (int d = 0; d < 3; ++d) result.V(i, d) = x_[3 * i + d];
+    const Eigen::Index num_tips = model_.tip_start.rows();
+    result.tips.resize(num_tips, 3);
+    for (Eigen::Index k = 0; k < num_tips; ++k)
+      for (int d = 0; d < 3; ++d) result.tips(k, d) = tips_[3 * k + d];
+    result.cord_force.resize(static_cast<Eigen::Index>(sys_.cords.size()));
+    for (size_t c = 0; c < sys_.cords.size(); ++c)  // lambda / dt^2 is the force (N)
+      result.cord_force(static_cast<Eigen::Index>(c)) = -lambda_cords_[c] * inv_dt2_;
+    result.contacts = 0;
+    for (double l : lambda_contacts_) result.contacts += l > 0.0 ? 1 : 0;
+  }
+
+  long long projections() const { return projections_; }
+
+ private:
+  const SimulationModel& model_;
+  const SimulationSettings& settings_;
+  const System sys_;
+  const int n_;
+  const double dt_, inv_dt2_, max_step_, drag_decay_;
+  const bool warm_;
+  std::vector<double> x_, x_prev_, v_, force_;
+  std::vector<double> impulse_;  // sum_j grad C_j lambda_j per vertex (warm start)
+  std::vector<double> tips_;     // 3 #tips
+  std::vector<double> lambda_edges_, lambda_areas_, lambda_bends_, lambda_cords_, lambda_contacts_;
+  std::vector<ContactConstraint> contacts_;
+  std::unique_ptr<ContactDetector> detector_;
+  long long projections_ = 0;
+};
+
 }  // namespace
 
 SimulationResult simulate(const SimulationModel& model, const SimulationSettings& settings,
@@ -193,169 +378,86 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
   if (!result.error.empty()) return result;
 
   const auto clock_start = std::chrono::steady_clock::now();
-  const System sys = buildSystem(model, settings);
-  const int n = sys.n;
-  const double thickness = settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
-                                                               : settings.material.thickness_mm;
+  const double cpu_start = threadCpuSeconds();
+  System sys = buildSystem(model, settings);
   double dt = settings.dt_ms;
   if (dt == 0.0) {
-    dt = sys.typical_stiffness_over_mass > 0.0
-             ? std::sqrt(settings.stiffness_ratio / sys.typical_stiffness_over_mass)
+    dt = sys.median_stiffness_over_mass > 0.0
+             ? std::sqrt(settings.stiffness_ratio / sys.median_stiffness_over_mass)
              : 1e-2;
   }
   result.dt_ms = dt;
-  const double inv_dt2 = 1.0 / (dt * dt);
+  if (!(dt * dt < std::numeric_limits<double>::infinity())) {
+    result.error = "settings: dt_ms = " + std::to_string(dt) + " is out of range";
+    return result;
+  }
+  // Selective mass scaling (as explicit FE codes do to keep their time step; dynamic
+  // relaxation uses fictitious masses the same way, Underwood 1983): a vertex whose stiffness
+  // ratio k_i dt^2 / m_i exceeds max_stiffness_ratio gets the mass that brings it down to it.
+  // Only the path to equilibrium changes, not the equilibrium. Without it the few light,
+  // stiff vertices of a graded mesh keep the warm-started Gauss-Seidel from settling.
+  if (settings.max_stiffness_ratio > 0.0) {
+    for (int i = 0; i < sys.n; ++i) {
+      if (sys.w[i] == 0.0) continue;
+      const double r = sys.stiffness[i] * dt * dt * sys.w[i];
+      if (r > settings.max_stiffness_ratio) {
+        sys.w[i] *= settings.max_stiffness_ratio / r;
+        ++result.mass_scaled_vertices;
+      }
+    }
+  }
+  const double thickness = settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
+                                                               : settings.material.thickness_mm;
   const double max_step = settings.max_step_mm > 0.0 ? settings.max_step_mm : 0.25 * thickness;
   const double sign = settings.phase == ClosurePhase::kClose ? 1.0 : -1.0;
   const double pressure = sign * mmHgToMpa(settings.pressure_mmhg);
-  const Vec3 flow_dir = sign * model.flow_direction.normalized();
-  const double drag_decay = std::exp(-dt / settings.drag_time_ms);
-
-  std::unique_ptr<ContactDetector> detector;
-  if (settings.contact) {
-    ContactOptions options;
-    options.thickness_mm = thickness;
-    options.margin_mm = settings.contact_margin_mm > 0.0 ? settings.contact_margin_mm : 0.5 * thickness;
-    options.exclusion_radius_mm =
-        settings.contact_exclusion_mm > 0.0 ? settings.contact_exclusion_mm : 2.0 * thickness;
-    detector = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
-  }
-
-  // State: flat arrays x, x_prev, v (3n), tips (3 #tips).
-  std::vector<double> x(3 * n), x_prev(3 * n), v(3 * n, 0.0), force(3 * n);
-  const Eigen::MatrixXd& x0 = start ? *start : model.V_rest;
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) x[3 * i + d] = x0(i, d);
-  const int num_tips = static_cast<int>(model.tip_start.rows());
-  std::vector<double> tips(3 * num_tips);
-  std::vector<double> lambda_edges(sys.edges.size()), lambda_areas(sys.areas.size()),
-      lambda_bends(sys.bends.size()), lambda_cords(sys.cords.size()), lambda_contacts;
-  std::vector<ContactConstraint> contacts;
-  const bool warm = settings.warm_start_lambda;
-  std::vector<double> impulse(warm ? 3 * n : 0, 0.0);  // sum_j grad C_j lambda_j per vertex
-
-  // Reference scale for explosion detection.
+  const Vec3 flow = sign * settings.flow_speed_mm_per_ms * model.flow_direction.normalized();
+  const double ramp_ms = start ? 0.0 : settings.ramp_ms;
+  // Divergence: a vertex farther than 50 model radii from the centre, or moving more than half
+  // a model radius in one step (the prediction moves <= max_step; only a diverging solve
+  // jumps that far).
   const Vec3 centre = model.V_rest.colwise().mean().transpose();
   const double radius = (model.V_rest.rowwise() - centre.transpose()).rowwise().norm().maxCoeff();
-  const double explode2 = std::pow(50.0 * radius + 100.0, 2);
+  const double explode = 50.0 * radius + 100.0;
+  const double max_jump = std::max(0.5 * radius, 10.0 * max_step);
 
-  const double ramp_ms = start ? 0.0 : settings.ramp_ms;
+  Stepper stepper(model, settings, std::move(sys), dt, max_step, thickness,
+                  start ? *start : model.V_rest);
   int quiet_steps = 0;
-  long long projections = 0;
-  SimulationProgress progress;
   for (int step = 1; step <= settings.max_steps; ++step) {
     const double t = step * dt;
     const double s = ramp(t, ramp_ms);
-    // Dirichlet boundary: annulus ring and PM tips, start -> end.
-    for (int k = 0; k < model.fixed.size(); ++k) {
-      const int i = model.fixed(k);
-      for (int d = 0; d < 3; ++d)
-        x[3 * i + d] = (1.0 - s) * model.fixed_start(k, d) + s * model.fixed_end(k, d);
-    }
-    for (int k = 0; k < num_tips; ++k)
-      for (int d = 0; d < 3; ++d)
-        tips[3 * k + d] = (1.0 - s) * model.tip_start(k, d) + s * model.tip_end(k, d);
-
-    // Predict: v += dt w f; drag toward the flow field u; x~ = x + dt v + w acc (the last
-    // step's constraint impulses, warm start); clamp the displacement.
-    pressureForces(model.F, x.data(), pressure * s, force.data(), n);
-    const Vec3 u = (t < ramp_ms ? settings.flow_speed_mm_per_ms : 0.0) * flow_dir;
-    x_prev = x;
-    for (int i = 0; i < n; ++i) {
-      if (sys.w[i] == 0.0) continue;
-      Map3 vi(&v[3 * i]);
-      vi += (dt * sys.w[i]) * CMap3(&force[3 * i]);
-      vi = u + drag_decay * (vi - u);
-      Vec3 disp = dt * vi;
-      if (warm) disp += sys.w[i] * CMap3(&impulse[3 * i]);
-      const double len = disp.norm();
-      if (len > max_step) disp *= max_step / len;
-      Map3(&x[3 * i]) += disp;
-    }
-
-    // Solve: Gauss-Seidel sweeps in a fixed order; hard constraints (cords, contacts) last.
-    // The last sweep accumulates the constraint impulses for the next step's prediction.
-    // Contacts are re-detected every step and start from lambda = 0 (textbook XPBD): carrying
-    // their lambda made the closure oscillate (period 2) at stiffness ratios >= 10. The price
-    // is an O(dt^2) softness of the contact: at equilibrium a contact vertex sits
-    // dt^2 w f_contact (~0.005-0.02 mm at the default dt) deeper than `thickness` in the
-    // material's view.
-    if (detector) detector->detect(x_prev.data(), x.data(), sys.w.data(), contacts);
-    lambda_contacts.assign(contacts.size(), 0.0);
-    if (!warm) {
-      std::fill(lambda_edges.begin(), lambda_edges.end(), 0.0);
-      std::fill(lambda_areas.begin(), lambda_areas.end(), 0.0);
-      std::fill(lambda_bends.begin(), lambda_bends.end(), 0.0);
-      std::fill(lambda_cords.begin(), lambda_cords.end(), 0.0);
-    }
-    for (int it = 0; it < settings.iterations; ++it) {
-      double* acc = nullptr;
-      if (warm && it == settings.iterations - 1) {
-        std::fill(impulse.begin(), impulse.end(), 0.0);
-        acc = impulse.data();
-      }
-      double* xd = x.data();
-      const double* wd = sys.w.data();
-      projectDistances(sys.edges, inv_dt2, xd, wd, lambda_edges.data(), acc);
-      projectAreas(sys.areas, inv_dt2, xd, wd, lambda_areas.data(), acc);
-      projectBending(sys.bends, inv_dt2, xd, wd, lambda_bends.data(), acc);
-      projectCords(sys.cords, inv_dt2, tips.data(), xd, wd, lambda_cords.data(), acc);
-      projectContacts(contacts, xd, wd, lambda_contacts.data(), acc);
-    }
-    projections += static_cast<long long>(settings.iterations) *
-                   (sys.edges.size() + sys.areas.size() + sys.bends.size() + sys.cords.size() +
-                    contacts.size());
-
-    // Update velocities; watch for divergence and for equilibrium.
-    double max_disp2 = 0.0;
-    bool diverged = false;
-    for (int i = 0; i < n; ++i) {
-      if (sys.w[i] == 0.0) continue;
-      const Vec3 dx = CMap3(&x[3 * i]) - CMap3(&x_prev[3 * i]);
-      Map3 vi(&v[3 * i]);
-      vi = dx / dt;
-      max_disp2 = std::max(max_disp2, dx.squaredNorm());
-      const double r2 = (CMap3(&x[3 * i]) - centre).squaredNorm();
-      if (!std::isfinite(r2) || r2 > explode2) diverged = true;
-    }
+    stepper.setBoundary(s);
+    stepper.predict(pressure * s, t < ramp_ms ? flow : Vec3::Zero());
+    stepper.solve();
+    const double disp = stepper.update(centre, explode);
     result.steps = step;
-    result.max_displacement_mm = std::sqrt(max_disp2);
-    if (diverged || !std::isfinite(max_disp2)) {
+    result.max_displacement_mm = disp;
+    if (disp < 0.0 || disp > max_jump) {
       result.error = "simulation diverged (non-finite or exploding positions) at step " +
                      std::to_string(step) + "; reduce dt_ms or check the input";
       break;
     }
-    const bool ramp_done = t >= ramp_ms;
-    quiet_steps = (ramp_done && result.max_displacement_mm < settings.tolerance_mm) ? quiet_steps + 1 : 0;
-    if (settings.progress && settings.progress_every > 0 && step % settings.progress_every == 0) {
-      progress = {step, t, result.max_displacement_mm, static_cast<int>(contacts.size())};
-      settings.progress(progress);
-    }
+    // Quasi-static equilibrium: max displacement < tolerance for `window` steps after the ramp.
+    quiet_steps = (t >= ramp_ms && disp < settings.tolerance_mm) ? quiet_steps + 1 : 0;
+    if (settings.progress && settings.progress_every > 0 && step % settings.progress_every == 0)
+      settings.progress({step, t, disp, stepper.contactCount()});
     if (quiet_steps >= settings.window) {
       result.converged = true;
       break;
     }
   }
-  result.projections = projections;
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
-  if (settings.progress) {
-    progress = {result.steps, result.steps * dt, result.max_displacement_mm,
-                static_cast<int>(contacts.size())};
-    settings.progress(progress);
+  result.cpu_seconds = threadCpuSeconds() - cpu_start;
+  if (settings.progress)
+    settings.progress(
+        {result.steps, result.steps * dt, result.max_displacement_mm, stepper.contactCount()});
+  if (!result.error.empty()) {
+    result.projections = stepper.projections();
+    return result;
   }
-  if (!result.error.empty()) return result;
-
-  result.V.resize(n, 3);
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d) result.V(i, d) = x[3 * i + d];
-  result.tips.resize(num_tips, 3);
-  for (int k = 0; k < num_tips; ++k)
-    for (int d = 0; d < 3; ++d) result.tips(k, d) = tips[3 * k + d];
-  result.cord_force.resize(sys.cords.size());
-  for (size_t c = 0; c < sys.cords.size(); ++c)
-    result.cord_force(c) = -lambda_cords[c] * inv_dt2;  // lambda / dt^2 is the force (N)
-  for (double l : lambda_contacts) result.contacts += l > 0.0 ? 1 : 0;
+  stepper.finish(result);
   return result;
 }
 
@@ -487,9 +589,12 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"ramp_ms", &s.ramp_ms},
       {"dt_ms", &s.dt_ms},
       {"stiffness_ratio", &s.stiffness_ratio},
+      {"max_stiffness_ratio", &s.max_stiffness_ratio},
       {"max_step_mm", &s.max_step_mm},
       {"tolerance_mm", &s.tolerance_mm},
       {"contact_thickness_mm", &s.contact_thickness_mm},
+      {"contact_margin_mm", &s.contact_margin_mm},
+      {"contact_exclusion_mm", &s.contact_exclusion_mm},
   };
   struct IntKey {
     const char* key;
@@ -512,10 +617,11 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
         int out;
         if (fields.integer(value, where, out)) *ik.target = out;
       }
-    if (key == "contact") {
+    if (key == "contact" || key == "warm_start_lambda") {
       known = true;
       bool out;
-      if (fields.boolean(value, where, out)) s.contact = out;
+      if (fields.boolean(value, where, out))
+        (key == "contact" ? s.contact : s.warm_start_lambda) = out;
     } else if (key == "phase") {
       known = true;
       std::string out;

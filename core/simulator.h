@@ -9,13 +9,30 @@
 // normal n_AP with viscous drag toward it, and vertex-triangle contact (contact.h).
 // Units: mm, g, ms, N, MPa (material.h).
 //
+// Time step (simulator.cpp, Stepper): predict (v += dt f/m, drag, x~ = x + dt v + w impulse),
+// solve (Gauss-Seidel: edges, areas, bending, contacts, cords), update (v = (x - x_prev)/dt).
+// Only the quasi-static equilibrium is used, which shapes three choices:
+//   - lambda is warm-started across steps for the material and the cords (xpbd_constraints.h),
+//     so the equilibrium is the elastic one with 2 iterations (textbook XPBD would be
+//     iteration-dependent and too soft: tests/test_xpbd_hencky.cpp). Contacts are detected
+//     anew every step with lambda = 0 (carrying it made the closure oscillate); the price is
+//     an O(dt^2) softness: at equilibrium a contact vertex sits dt^2 w f_contact (~0.01 mm)
+//     inside the thickness as the material sees it.
+//   - dt is chosen from the stiffness (stretching + area + bending) to mass ratio, and
+//     vertices stiffer than max_stiffness_ratio get a fictitious larger mass (selective mass
+//     scaling): the warm-started solve is stable up to ratios of ~20.
+//   - a displacement clamp of max_step per step keeps contact detection from missing a
+//     crossing.
+//
 // Equilibrium criterion (quasi-static): after the ramp, the largest displacement of any
 // vertex within one time step stays below `tolerance_mm` for `window` consecutive steps.
-// With the default dt this is a velocity bound of tolerance_mm / dt.
+// NaN or an exploding position (or a jump of more than half the model radius in one step)
+// ends the run with `error` set and no positions.
 //
-// Determinism: single-threaded Gauss-Seidel over constraint arrays in a fixed order; contact
-// detection is order-deterministic. Same input => bit-identical output, independent of the
-// number of threads of the caller (the inverse layer parallelises over forward runs instead).
+// Determinism: single-threaded Gauss-Seidel over constraint arrays in a fixed order (sorted
+// by a greedy colouring for instruction-level parallelism); contact detection is
+// order-deterministic; no static mutable state. Same input => bit-identical output, whatever
+// the thread count of the caller (the inverse layer parallelises over forward runs instead).
 #pragma once
 
 #include <functional>
@@ -56,11 +73,15 @@ struct SimulationSettings {
   // Duration of the boundary interpolation (annulus, PM tips) and of the pressure ramp
   // (smoothstep 0 -> 1).
   double ramp_ms = 1.0;
-  // Time step; 0 selects dt from the mesh so that a typical vertex's stretching stiffness
-  // ratio k dt^2 / m equals `stiffness_ratio` (XPBD converges in few iterations for ratios
-  // of order 1).
+  // Time step; 0 selects dt from the mesh so that the median vertex has the stiffness ratio
+  // k_i dt^2 / m_i = `stiffness_ratio`, k_i summing stretching, area and bending stiffness
+  // (measured: the warm-started solve with 2 iterations is stable up to ratios of ~20 and
+  // oscillates beyond, so the default keeps a margin).
   double dt_ms = 0.0;
   double stiffness_ratio = 10.0;
+  // Vertices stiffer than this (ratio k_i dt^2 / m_i) get a larger, fictitious mass (selective
+  // mass scaling; the equilibrium does not depend on masses). <= 0 disables it.
+  double max_stiffness_ratio = 15.0;
   int iterations = 2;  // Gauss-Seidel sweeps per time step
   // Carry lambda across steps and apply the last step's constraint impulses in the
   // prediction (xpbd_constraints.h): the equilibrium is then the elastic one for any number
@@ -75,7 +96,7 @@ struct SimulationSettings {
   bool contact = true;
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
   double contact_margin_mm = 0.0;     // <= 0: 0.5 * contact thickness
-  double contact_exclusion_mm = 0.0;  // <= 0: 2 * contact thickness
+  double contact_exclusion_mm = 0.0;  // <= 0: 2.5 * contact thickness (the list radius)
   ClosurePhase phase = ClosurePhase::kClose;
   // Called every `progress_every` steps (0: never) and once at the end.
   int progress_every = 0;
@@ -85,8 +106,9 @@ struct SimulationSettings {
 // Overrides from a JSON object (a case's "simulation" block). Known keys, all optional:
 //   pressure_mmhg, youngs_modulus_mpa, thickness_mm, poisson_ratio, density_g_per_cm3,
 //   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, dt_ms,
-//   stiffness_ratio, iterations, max_step_mm, tolerance_mm, window, max_steps, contact,
-//   contact_thickness_mm, phase ("close" | "open").
+//   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, max_step_mm, tolerance_mm,
+//   window, max_steps, contact, contact_thickness_mm, contact_margin_mm, contact_exclusion_mm,
+//   phase ("close" | "open").
 // Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
 // "simulation.<key>"); the remaining keys still apply.
 SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,
@@ -99,11 +121,11 @@ struct SimulationModel {
   // #F by 3, consistently wound; the pressure force acts along the winding normal
   // (right-hand rule), i.e. the winding normal points to the side the pressure pushes to.
   Eigen::MatrixXi F;
-  Eigen::VectorXi fixed;          // Dirichlet vertex indices
-  Eigen::MatrixXd fixed_start;    // #fixed by 3 positions at t = 0
-  Eigen::MatrixXd fixed_end;      // #fixed by 3 positions from the end of the ramp on
-  Eigen::MatrixXd tip_start;      // #tips by 3 PM tip positions at t = 0
-  Eigen::MatrixXd tip_end;        // #tips by 3 PM tip positions from the end of the ramp on
+  Eigen::VectorXi fixed;        // Dirichlet vertex indices
+  Eigen::MatrixXd fixed_start;  // #fixed by 3 positions at t = 0
+  Eigen::MatrixXd fixed_end;    // #fixed by 3 positions from the end of the ramp on
+  Eigen::MatrixXd tip_start;    // #tips by 3 PM tip positions at t = 0
+  Eigen::MatrixXd tip_end;      // #tips by 3 PM tip positions from the end of the ramp on
   struct Cord {
     int tip = 0, vertex = 0;
     double rest_length = 0.0;  // mm
@@ -119,9 +141,13 @@ struct SimulationResult {
   Eigen::VectorXd cord_force;  // #cords cord tension at the end, N (0 when slack)
   bool converged = false;      // equilibrium criterion met before max_steps
   int steps = 0;
-  double seconds = 0.0;              // wall time of the time loop
+  double seconds = 0.0;              // wall time of the time loop (model setup included)
+  double cpu_seconds = 0.0;          // CPU time of the calling thread, same span
   double dt_ms = 0.0;                // time step used
   double max_displacement_mm = 0.0;  // of the last step
+  int mass_scaled_vertices = 0;      // vertices that got a fictitious mass
+  int contact_rebuilds = 0;          // contact candidate-list builds (contact.h)
+  int contact_candidates = 0;        // candidate pairs in the last list
   int contacts = 0;                  // active contact constraints (lambda > 0) at the end
   long long projections = 0;         // constraint projections performed (for ns/projection)
   std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)

@@ -176,7 +176,6 @@ SimulationSettings truthSimulationSettings() {
   SimulationSettings s;
   s.tolerance_mm *= 0.25;
   s.window *= 2;
-  s.max_steps *= 4;
   return s;
 }
 
@@ -228,7 +227,7 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   s.truth_case.cords = truth_cords;
 
   // 4. Truth closure.
-  s.truth_settings = truthSimulationSettings();
+  s.truth_settings = options.truth_settings ? *options.truth_settings : truthSimulationSettings();
   s.truth_case.simulation_json = settingsJson(s.truth_settings).dump();
   if (options.simulation_progress) {
     s.truth_settings.progress_every = 50;
@@ -265,9 +264,9 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
 std::string syntheticTruthJson(const SyntheticCase& s) {
   const ValveParameters& a = s.anatomy;
   const SyntheticCaseOptions& o = s.options;
-  json segment_factor = json::object();
+  json segment_scale = json::object();
   static const char* kSegments[] = {"A1", "A2", "A3", "P1", "P2", "P3"};
-  for (int i = 0; i < 6; ++i) segment_factor[kSegments[i]] = s.preset.segment_factor[i];
+  for (int i = 0; i < 6; ++i) segment_scale[kSegments[i]] = s.preset.segment_scale[i];
 
   json cords = json::array();
   const CordSet& truth = *s.truth_case.cords;
@@ -318,6 +317,7 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                      {"dropout_pieces", o.tracing.dropout_pieces},
                      {"tip_offset_sd_mm", o.tip_offset_sd_mm},
                      {"normal_cord_scale", s.preset.normal_cord_scale},
+                     {"secondary_cord_factor", s.preset.secondary_cord_factor},
                      {"ruptured_cord_scale", kRupturedCordScale},
                      {"seconds", s.seconds}}},
                    {"anatomy",
@@ -333,8 +333,9 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                      {"commissural_height_mm", a.commissural_height_mm},
                      {"indentation_depth", a.indentation_depth}}},
                    {"pathology",
-                    {{"segment_factor", segment_factor},
-                     {"factor_spread", s.preset.factor_spread},
+                    {{"segment_peak_scale", segment_scale},
+                     {"pathology_width", s.preset.pathology_width},
+                     {"scale_spread", s.preset.scale_spread},
                      {"ruptured_segment", s.preset.ruptured_segment},
                      {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
                    {"intended_prolapse", s.preset.intended_prolapse},

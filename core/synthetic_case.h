@@ -44,6 +44,8 @@ struct SyntheticCaseOptions {
   double tip_offset_sd_mm = 0.5;  // per-axis SD of the true PM tips' offset from the heuristic
   TracingSamplerOptions tracing;
   AttachmentLayoutOptions layout;
+  // Solver settings of the truth closure; default truthSimulationSettings().
+  std::optional<SimulationSettings> truth_settings;
   // Stage messages ("building meshes", ...) and simulator progress; both optional.
   std::function<void(const std::string&)> message;
   std::function<void(const SimulationProgress&)> simulation_progress;
@@ -69,7 +71,7 @@ struct SyntheticCase {
 };
 
 // The tight solver settings of the truth: the simulator defaults with a 4x smaller
-// equilibrium tolerance, a 2x longer window and a 4x larger step cap.
+// equilibrium tolerance and a 2x longer window (same step cap).
 SimulationSettings truthSimulationSettings();
 
 // Builds a synthetic case. Throws std::invalid_argument naming the option for bad options

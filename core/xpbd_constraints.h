@@ -85,8 +85,8 @@ struct ContactConstraint {
 
 // Batch projections. inv_dt2 = 1 / dt^2; lambda has one entry per constraint; acc optional
 // (see above).
-void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2,
-                      double* x, const double* w, double* lambda, double* acc = nullptr);
+void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+                      const double* w, double* lambda, double* acc = nullptr);
 void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
                     const double* w, double* lambda, double* acc = nullptr);
 void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
@@ -95,8 +95,8 @@ void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
                   const double* tips, double* x, const double* w, double* lambda,
                   double* acc = nullptr);
-void projectContacts(const std::vector<ContactConstraint>& constraints, double* x,
-                     const double* w, double* lambda, double* acc = nullptr);
+void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
+                     double* lambda, double* acc = nullptr);
 
 // Reorders constraints by a greedy vertex colouring (stable within a colour): constraints of
 // one colour share no vertex, so consecutive projections do not wait on each other's writes
@@ -138,8 +138,8 @@ double dihedralAngle(const Eigen::Vector3d& xi, const Eigen::Vector3d& xj,
                      const Eigen::Vector3d& xk, const Eigen::Vector3d& xl,
                      Eigen::Vector3d* grad = nullptr);
 // Triangle area; grad (optional) receives dA/dx for a, b, c.
-double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb,
-                    const Eigen::Vector3d& xc, Eigen::Vector3d* grad = nullptr);
+double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb, const Eigen::Vector3d& xc,
+                    Eigen::Vector3d* grad = nullptr);
 // Closest point of triangle (a, b, c) to p, as barycentrics (ba, bb, bc) (Ericson 2005,
 // "Real-Time Collision Detection", sec. 5.1.5). Returns the region: 0 interior, 1 on an
 // edge, 2 at a vertex.

@@ -1,0 +1,78 @@
+// `chordfit simulate` and `chordfit sweep-cord` end to end on a coarse parametric valve.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+using testing::runChordfit;
+using testing::TempDir;
+
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+class SimulateCommand : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_EQ(runChordfit("make-valve --out " + quoted(case_dir_) + " --edge 3.0").exit_code, 0);
+  }
+  TempDir dir_;
+  std::filesystem::path case_dir_ = dir_ / "case";
+};
+
+TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " +
+                             quoted(dir_ / "sim"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| Case | Area"), std::string::npos) << r.out;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "sim" / "metrics.json"));
+  for (const char* key : {"min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm", "area_mm2",
+                          "prolapse_segments", "prolapse_max_height_mm", "converged", "steps",
+                          "sim_seconds"}) {
+    EXPECT_TRUE(metrics.contains(key)) << key;
+  }
+  EXPECT_GT(metrics["steps"].get<int>(), 0);
+  const std::string vtk = testing::readText(dir_ / "sim" / "closed.vtk");
+  EXPECT_NE(vtk.find("SCALARS height_above_annulus_plane_mm"), std::string::npos);
+  EXPECT_NE(vtk.find("SCALARS distance_to_tracing_mm"), std::string::npos);
+  EXPECT_NE(testing::readText(dir_ / "sim" / "closed.ply").find("property float prolapse_height_mm"),
+            std::string::npos);
+}
+
+TEST_F(SimulateCommand, IsDeterministicByteForByte) {
+  ASSERT_EQ(runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "a"))
+                .exit_code,
+            0);
+  ASSERT_EQ(runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "b"))
+                .exit_code,
+            0);
+  EXPECT_EQ(testing::readText(dir_ / "a" / "closed.ply"), testing::readText(dir_ / "b" / "closed.ply"));
+}
+
+TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --phase sideways --out " +
+                             quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--phase"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
+}
+
+TEST_F(SimulateCommand, RejectsAMissingCordsFile) {
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --cords " +
+                             quoted(dir_ / "none.json") + " --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("file not found"), std::string::npos) << r.err;
+}
+
+TEST_F(SimulateCommand, RejectsAnUnknownSimulationOverride) {
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
+  c["simulation"] = {{"presure_mmhg", 100}};
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("simulation.presure_mmhg"), std::string::npos) << r.err;
+}
+
+}  // namespace
+}  // namespace chordfit

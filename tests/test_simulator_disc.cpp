@@ -1,0 +1,151 @@
+// Simulator behaviour on a small clamped disc under pressure: cords (paper eq. 1),
+// determinism, divergence detection and input validation.
+#include <cmath>
+#include <cstring>
+#include <thread>
+
+#include <gtest/gtest.h>
+
+#include "core/simulator.h"
+#include "tests/test_xpbd_disc.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kDiscRadius = 10.0;  // mm
+constexpr int kDiscRings = 10;
+constexpr double kCordLengthTolerance = 0.05;  // mm, design requirement for inextensible cords
+
+SimulationSettings discSettings() {
+  SimulationSettings settings;  // default leaflet material and 100 mmHg
+  settings.contact = false;     // a flat disc cannot touch itself
+  return settings;
+}
+
+bool bitIdentical(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
+  return a.rows() == b.rows() && a.cols() == b.cols() &&
+         std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
+}
+
+TEST(SimulatorCords, StretchedInextensibleCordHoldsItsVertexAtRestLengthUnderFullPressure) {
+  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  // Without the cord the centre bulges ~1.6 mm toward +z; the cord from the tip 10 mm below
+  // allows 0.5 mm.
+  model.cords.push_back({0, 0, 10.5, 0.0});
+  const SimulationResult result = simulate(model, discSettings());
+  ASSERT_TRUE(result.ok()) << result.error;
+  EXPECT_TRUE(result.converged);
+  const double length = (result.V.row(0) - model.tip_end.row(0)).norm();
+  EXPECT_NEAR(length, 10.5, kCordLengthTolerance);
+  EXPECT_GT(result.cord_force(0), 0.0);  // taut
+}
+
+TEST(SimulatorCords, ElasticCordStretchesByForceTimesCompliance) {
+  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  constexpr double kCompliance = 0.5;  // mm/N
+  model.cords.push_back({0, 0, 10.5, kCompliance});
+  SimulationSettings settings = discSettings();
+  settings.tolerance_mm = 1e-6;
+  const SimulationResult result = simulate(model, settings);
+  ASSERT_TRUE(result.ok()) << result.error;
+  const double stretch = (result.V.row(0) - model.tip_end.row(0)).norm() - 10.5;
+  EXPECT_GT(stretch, 0.0);
+  EXPECT_NEAR(stretch, kCompliance * result.cord_force(0), 1e-3);
+}
+
+TEST(SimulatorCords, SlackCordExertsNoForceAndChangesNothing) {
+  const SimulationModel without = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  SimulationModel with = without;
+  with.cords.push_back({0, 0, 20.0, 0.0});  // longer than the centre ever gets from the tip
+  const SimulationResult a = simulate(without, discSettings());
+  const SimulationResult b = simulate(with, discSettings());
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(b.cord_force(0), 0.0);
+  EXPECT_EQ(a.steps, b.steps);
+  EXPECT_TRUE(bitIdentical(a.V, b.V));
+}
+
+TEST(SimulatorDeterminism, TwoRunsAreBitIdenticalAlsoWhenRunConcurrently) {
+  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  model.cords.push_back({0, 0, 10.5, 0.0});
+  const SimulationResult first = simulate(model, discSettings());
+  SimulationResult second, third;
+  std::thread t1([&] { second = simulate(model, discSettings()); });
+  std::thread t2([&] { third = simulate(model, discSettings()); });
+  t1.join();
+  t2.join();
+  ASSERT_TRUE(first.ok() && second.ok() && third.ok());
+  EXPECT_TRUE(bitIdentical(first.V, second.V));
+  EXPECT_TRUE(bitIdentical(first.V, third.V));
+  EXPECT_EQ(first.steps, second.steps);
+}
+
+TEST(SimulatorDivergence, NonFiniteStateFromAnAbsurdTimeStepIsReportedAsAnError) {
+  // dt = 1e-200 ms: 1/dt^2 overflows, alpha~ = alpha/dt^2 is infinite and the first
+  // projection produces NaN; the step loop must notice and return an error, no positions.
+  SimulationSettings settings = discSettings();
+  settings.dt_ms = 1e-200;
+  const SimulationResult result =
+      simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
+  EXPECT_FALSE(result.ok());
+  EXPECT_NE(result.error.find("diverged"), std::string::npos) << result.error;
+  EXPECT_EQ(result.V.size(), 0);
+}
+
+TEST(SimulatorDivergence, HugeTimeStepIsRejected) {
+  SimulationSettings settings = discSettings();
+  settings.dt_ms = 1e160;  // dt^2 overflows
+  const SimulationResult result =
+      simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
+  EXPECT_FALSE(result.ok());
+  EXPECT_EQ(result.V.size(), 0);
+}
+
+TEST(SimulatorValidation, RejectsNonFiniteStartAndBadSettings) {
+  const SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  Eigen::MatrixXd start = model.V_rest;
+  start(3, 1) = std::nan("");
+  EXPECT_FALSE(simulate(model, discSettings(), &start).ok());
+  SimulationSettings settings = discSettings();
+  settings.iterations = 0;
+  EXPECT_FALSE(simulate(model, settings).ok());
+  settings = discSettings();
+  settings.dt_ms = -1.0;
+  EXPECT_FALSE(simulate(model, settings).ok());
+  SimulationModel bad = model;
+  bad.cords.push_back({3, 0, 10.0, 0.0});  // no tip 3
+  EXPECT_FALSE(simulate(bad, discSettings()).ok());
+}
+
+TEST(SimulatorSettings, JsonOverridesKnownKeysAndReportsUnknownOnes) {
+  Diagnostics diagnostics;
+  const SimulationSettings s = settingsFromJson(
+      R"({"pressure_mmhg": 80, "youngs_modulus_mpa": 2.5, "iterations": 3, "phase": "open",
+          "contact": false, "bogus": 1})",
+      diagnostics);
+  EXPECT_EQ(s.pressure_mmhg, 80.0);
+  EXPECT_EQ(s.material.youngs_modulus_mpa, 2.5);
+  EXPECT_EQ(s.iterations, 3);
+  EXPECT_EQ(s.phase, ClosurePhase::kOpen);
+  EXPECT_FALSE(s.contact);
+  ASSERT_EQ(diagnostics.problems().size(), 1u);
+  EXPECT_EQ(diagnostics.problems()[0].where, "simulation.bogus");
+}
+
+TEST(SimulatorProgress, CallbackIsCalledEveryNStepsAndAtTheEnd) {
+  SimulationSettings settings = discSettings();
+  settings.progress_every = 50;
+  int calls = 0, last_step = 0;
+  settings.progress = [&](const SimulationProgress& p) {
+    ++calls;
+    last_step = p.step;
+  };
+  const SimulationResult result =
+      simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
+  ASSERT_TRUE(result.ok());
+  EXPECT_EQ(calls, result.steps / 50 + 1);
+  EXPECT_EQ(last_step, result.steps);
+}
+
+}  // namespace
+}  // namespace chordfit

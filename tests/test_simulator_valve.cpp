@@ -1,0 +1,165 @@
+// Closure of the parametric normal mitral valve with the paper's heuristic cords: the
+// end-to-end check of the simulator (DESIGN §4).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/cgal_backend.h"
+#include "core/heuristic.h"
+#include "core/parametric_valve.h"
+#include "core/simulator.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kCordLengthTolerance = 0.05;    // mm (design: inextensible cords)
+constexpr double kCoaptationDistance = 2.0;      // mm: 2 x leaflet thickness
+constexpr int kA2 = 0 * 3 + 1, kP2 = 1 * 3 + 1;  // Carpentier segment ids (parametric_valve.h)
+
+// One closure shared by the tests of this file (a second one checks determinism).
+struct Closure {
+  ParametricValve valve;
+  CordSet cords;
+  SimulationResult result;
+};
+
+const Closure& closure() {
+  static const Closure c = [] {
+    Closure out;
+    out.valve = makeParametricValve(ValveParameters{});
+    out.cords = heuristicCordSet(out.valve.valve_case);
+    out.result = simulateClosure(out.valve.valve_case, out.cords, SimulationSettings{});
+    std::printf("[ closure  ] %ld vertices, %zu cords: converged %d, %d steps, %.3f s\n",
+                static_cast<long>(out.valve.valve_case.mesh.V.rows()), out.cords.cords.size(),
+                out.result.converged, out.result.steps, out.result.seconds);
+    return out;
+  }();
+  return c;
+}
+
+// Faces whose three vertices carry `label`.
+Eigen::MatrixXi leafletFaces(const ValveMesh& mesh, int label) {
+  std::vector<int> rows;
+  for (int f = 0; f < mesh.F.rows(); ++f)
+    if (mesh.leaflet(mesh.F(f, 0)) == label && mesh.leaflet(mesh.F(f, 1)) == label &&
+        mesh.leaflet(mesh.F(f, 2)) == label)
+      rows.push_back(f);
+  Eigen::MatrixXi F(static_cast<Eigen::Index>(rows.size()), 3);
+  for (size_t r = 0; r < rows.size(); ++r) F.row(r) = mesh.F.row(rows[r]);
+  return F;
+}
+
+// Median distance of the free-edge vertices of `segment` to the other leaflet's surface.
+double freeEdgeGap(const Closure& c, int segment) {
+  const ValveMesh& mesh = c.valve.valve_case.mesh;
+  const int leaflet = segment / 3;
+  const SurfaceDistance other(c.result.V, leafletFaces(mesh, 1 - leaflet));
+  std::vector<double> gaps;
+  for (Eigen::Index k = 0; k < c.valve.free_edge.size(); ++k) {
+    const int v = c.valve.free_edge(k);
+    if (c.valve.segment(v) == segment)
+      gaps.push_back(other.distance(c.result.V.row(v).transpose()));
+  }
+  if (gaps.empty()) return INFINITY;
+  std::nth_element(gaps.begin(), gaps.begin() + gaps.size() / 2, gaps.end());
+  return gaps[gaps.size() / 2];
+}
+
+TEST(ValveClosure, ParametricNormalValveWithHeuristicCordsConverges) {
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok()) << c.result.error;
+  EXPECT_TRUE(c.result.converged);
+  EXPECT_EQ(c.result.V.rows(), c.valve.valve_case.mesh.V.rows());
+}
+
+TEST(ValveClosure, ClosedValveHasNoSelfIntersection) {
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok()) << c.result.error;
+  EXPECT_EQ(countSelfIntersections(c.result.V, c.valve.valve_case.mesh.F), 0);
+}
+
+TEST(ValveClosure, FreeEdgesOfTheTwoLeafletsMeetInTheMiddle) {
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok()) << c.result.error;
+  const double a2 = freeEdgeGap(c, kA2), p2 = freeEdgeGap(c, kP2);
+  std::printf("[ closure  ] median free-edge gap A2 -> posterior %.2f mm, P2 -> anterior %.2f mm\n",
+              a2, p2);
+  EXPECT_LT(a2, kCoaptationDistance);
+  EXPECT_LT(p2, kCoaptationDistance);
+}
+
+TEST(ValveClosure, AnnulusEndsAtItsClosedPositionAndCordsAreNotStretched) {
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok()) << c.result.error;
+  const ValveCase& vc = c.valve.valve_case;
+  for (Eigen::Index k = 0; k < vc.mesh.annulus.size(); ++k)
+    EXPECT_EQ(c.result.V.row(vc.mesh.annulus(k)), vc.annulus_closed.row(k)) << k;
+  int taut = 0;
+  for (size_t k = 0; k < c.cords.cords.size(); ++k) {
+    const Cord& cord = c.cords.cords[k];
+    const double length = (c.result.V.row(cord.vertex) - c.result.tips.row(cord.tip)).norm();
+    EXPECT_LT(length, cord.rest_length + kCordLengthTolerance) << "cord " << k;
+    taut += c.result.cord_force(k) > 0.0;
+  }
+  EXPECT_GT(taut, 0);
+}
+
+TEST(ValveClosure, SameInputGivesBitIdenticalClosedValve) {
+  const Closure& c = closure();
+  const SimulationResult again = simulateClosure(c.valve.valve_case, c.cords, SimulationSettings{});
+  ASSERT_TRUE(again.ok());
+  ASSERT_EQ(again.V.size(), c.result.V.size());
+  EXPECT_EQ(std::memcmp(again.V.data(), c.result.V.data(), sizeof(double) * again.V.size()), 0);
+  EXPECT_EQ(again.steps, c.result.steps);
+}
+
+TEST(ValveClosure, ForwardMapIsSmoothUnderAHalfPercentChangeOfOneCord) {
+  // Central-difference consistency: scaling the most loaded cord by 1 +- 0.5 % (warm-started
+  // from the base closure, as the fitter does) moves its vertex by d+ and d-; for a smooth,
+  // converged map d+ ~ -d-.
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok());
+  int most = 0;
+  for (Eigen::Index k = 0; k < c.result.cord_force.size(); ++k)
+    if (c.result.cord_force(k) > c.result.cord_force(most)) most = static_cast<int>(k);
+  const int v = c.cords.cords[most].vertex;
+  Eigen::Vector3d d[2];
+  const double scales[2] = {1.005, 0.995};
+  for (int s = 0; s < 2; ++s) {
+    CordSet perturbed = c.cords;
+    scaleCord(perturbed, most, scales[s]);
+    const SimulationResult r =
+        simulateClosure(c.valve.valve_case, perturbed, SimulationSettings{}, &c.result.V);
+    ASSERT_TRUE(r.ok() && r.converged);
+    d[s] = (r.V.row(v) - c.result.V.row(v)).transpose();
+  }
+  std::printf("[ smooth   ] cord %d: |d+| %.4f mm, |d-| %.4f mm, |d+ + d-| %.5f mm\n", most,
+              d[0].norm(), d[1].norm(), (d[0] + d[1]).norm());
+  EXPECT_GT(d[0].norm(), 0.02);  // the cord matters
+  EXPECT_LT((d[0] + d[1]).norm(), 0.2 * d[0].norm());
+}
+
+TEST(ValveClosure, ReversedFieldsOpenTheClosedValve) {
+  const Closure& c = closure();
+  ASSERT_TRUE(c.result.ok());
+  SimulationSettings settings;
+  settings.phase = ClosurePhase::kOpen;
+  const SimulationResult opened =
+      simulateClosure(c.valve.valve_case, c.cords, settings, &c.result.V);
+  ASSERT_TRUE(opened.ok()) << opened.error;
+  // The free edge drops back toward the ventricle (-z in the parametric frame).
+  double closed_z = 0.0, open_z = 0.0;
+  for (Eigen::Index k = 0; k < c.valve.free_edge.size(); ++k) {
+    closed_z += c.result.V(c.valve.free_edge(k), 2);
+    open_z += opened.V(c.valve.free_edge(k), 2);
+  }
+  EXPECT_LT(open_z, closed_z - 5.0 * c.valve.free_edge.size());
+  EXPECT_FALSE(simulateClosure(c.valve.valve_case, c.cords, settings).ok());  // needs a start
+}
+
+}  // namespace
+}  // namespace chordfit

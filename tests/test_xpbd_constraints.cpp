@@ -1,0 +1,241 @@
+// Unit tests of the constraint kernels (xpbd_constraints.h), the material mapping
+// (material.h) and the mesh topology helpers (mesh_topology.h).
+#include <algorithm>
+#include <cmath>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "core/material.h"
+#include "core/mesh_topology.h"
+#include "core/xpbd_constraints.h"
+
+namespace chordfit {
+namespace {
+
+using Vec3 = Eigen::Vector3d;
+
+constexpr double kFiniteDifferenceStep = 1e-6;
+constexpr double kGradientTolerance = 1e-6;
+
+// Central finite difference of f with respect to vertex m of `points`.
+template <class F>
+Vec3 numericGradient(F f, std::vector<Vec3> points, int m) {
+  Vec3 g;
+  for (int d = 0; d < 3; ++d) {
+    std::vector<Vec3> plus = points, minus = points;
+    plus[m](d) += kFiniteDifferenceStep;
+    minus[m](d) -= kFiniteDifferenceStep;
+    g(d) = (f(plus) - f(minus)) / (2.0 * kFiniteDifferenceStep);
+  }
+  return g;
+}
+
+TEST(DihedralAngle, IsZeroWhenFlatAndPositiveWhenFoldedTowardTheNormal) {
+  // Faces (i, j, k) and (j, i, l) in z = 0, both wound with normal +z.
+  const Vec3 xi(0, 0, 0), xj(1, 0, 0), xk(0.5, 1, 0), xl(0.5, -1, 0);
+  EXPECT_NEAR(dihedralAngle(xi, xj, xk, xl), 0.0, 1e-12);
+  EXPECT_GT(dihedralAngle(xi, xj, xk, Vec3(0.5, -1, 0.3)), 0.0);
+  EXPECT_LT(dihedralAngle(xi, xj, xk, Vec3(0.5, -1, -0.3)), 0.0);
+  // Folded by 90 degrees.
+  EXPECT_NEAR(dihedralAngle(xi, xj, xk, Vec3(0.5, 0, 1)), M_PI / 2, 1e-12);
+}
+
+TEST(DihedralAngle, GradientMatchesFiniteDifferences) {
+  const std::vector<Vec3> p{Vec3(0.1, -0.2, 0.05), Vec3(1.2, 0.1, -0.1), Vec3(0.6, 1.1, 0.4),
+                            Vec3(0.4, -0.9, 0.3)};
+  Vec3 g[4];
+  dihedralAngle(p[0], p[1], p[2], p[3], g);
+  auto theta = [](const std::vector<Vec3>& q) { return dihedralAngle(q[0], q[1], q[2], q[3]); };
+  for (int m = 0; m < 4; ++m)
+    EXPECT_LT((g[m] - numericGradient(theta, p, m)).norm(), kGradientTolerance) << "vertex " << m;
+}
+
+TEST(TriangleArea, GradientMatchesFiniteDifferences) {
+  const std::vector<Vec3> p{Vec3(0.1, -0.2, 0.05), Vec3(1.2, 0.1, -0.1), Vec3(0.6, 1.1, 0.4)};
+  Vec3 g[3];
+  EXPECT_NEAR(triangleArea(p[0], p[1], p[2], g), 0.5 * (p[1] - p[0]).cross(p[2] - p[0]).norm(),
+              1e-14);
+  auto area = [](const std::vector<Vec3>& q) { return triangleArea(q[0], q[1], q[2]); };
+  for (int m = 0; m < 3; ++m)
+    EXPECT_LT((g[m] - numericGradient(area, p, m)).norm(), kGradientTolerance) << "vertex " << m;
+}
+
+TEST(ClosestPointOnTriangle, ReportsInteriorEdgeAndVertexRegions) {
+  const Vec3 a(0, 0, 0), b(1, 0, 0), c(0, 1, 0);
+  double ba, bb, bc;
+  EXPECT_EQ(closestPointOnTriangle(Vec3(0.2, 0.2, 1), a, b, c, ba, bb, bc), 0);
+  EXPECT_NEAR(bb, 0.2, 1e-12);
+  EXPECT_NEAR(bc, 0.2, 1e-12);
+  EXPECT_EQ(closestPointOnTriangle(Vec3(0.5, -1, 0), a, b, c, ba, bb, bc), 1);
+  EXPECT_NEAR(bb, 0.5, 1e-12);
+  EXPECT_EQ(closestPointOnTriangle(Vec3(-1, -1, 0), a, b, c, ba, bb, bc), 2);
+  EXPECT_NEAR(ba, 1.0, 1e-12);
+}
+
+TEST(ProjectDistances, InextensibleEdgeReachesRestLengthInOneProjection) {
+  std::vector<double> x{0, 0, 0, 2, 0, 0};
+  const std::vector<double> w{1.0, 3.0};
+  std::vector<double> lambda{0.0};
+  projectDistances({{0, 1, 1.0, 0.0}}, 1e4, x.data(), w.data(), lambda.data());
+  EXPECT_NEAR(x[3] - x[0], 1.0, 1e-12);
+  // Moves are inversely proportional to mass: vertex 1 moves 3 times as far.
+  EXPECT_NEAR(-(x[3] - 2.0) / x[0], 3.0, 1e-12);
+}
+
+TEST(ProjectCords, SlackCordDoesNothingAndStretchedCordPullsToRestLength) {
+  const std::vector<double> tips{0, 0, -10};
+  const std::vector<double> w{1.0};
+  std::vector<double> x{0, 0, 0}, lambda{0.0};
+  projectCords({{0, 0, 12.0, 0.0}}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
+  EXPECT_EQ(x[2], 0.0);
+  EXPECT_EQ(lambda[0], 0.0);
+  projectCords({{0, 0, 8.0, 0.0}}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
+  EXPECT_NEAR(x[2], -2.0, 1e-12);
+  EXPECT_LT(lambda[0], 0.0);  // pulling
+}
+
+TEST(ProjectContacts, PushesAVertexOutToTheThicknessOnItsOwnSide) {
+  // Triangle in z = 0 (normal +z), vertex below it at z = -0.2 that must stay below (side -1).
+  std::vector<double> x{0.2, 0.2, -0.2, 0, 0, 0, 1, 0, 0, 0, 1, 0};
+  const std::vector<double> w{1.0, 0.0, 0.0, 0.0};
+  std::vector<double> lambda{0.0};
+  ContactConstraint k;
+  k.p = 0, k.a = 1, k.b = 2, k.c = 3, k.side = -1.0, k.thickness = 1.0;
+  projectContacts({k}, x.data(), w.data(), lambda.data());
+  EXPECT_NEAR(x[2], -1.0, 1e-12);
+  EXPECT_GT(lambda[0], 0.0);
+  // A vertex beyond the thickness is left alone.
+  x[2] = -1.5;
+  lambda[0] = 0.0;
+  projectContacts({k}, x.data(), w.data(), lambda.data());
+  EXPECT_EQ(x[2], -1.5);
+}
+
+TEST(ProjectDistances, AccumulatesTheConstraintImpulse) {
+  std::vector<double> x{0, 0, 0, 2, 0, 0}, acc(6, 0.0);
+  const std::vector<double> w{1.0, 1.0};
+  std::vector<double> lambda{0.0};
+  projectDistances({{0, 1, 1.0, 0.0}}, 1e4, x.data(), w.data(), lambda.data(), acc.data());
+  // C was +1, shared equally by the two unit masses: lambda = -1/2. acc = grad C * lambda,
+  // grad_0 C = (x0 - x1)/|x0 - x1| = (-1, 0, 0), grad_1 C = (1, 0, 0).
+  EXPECT_NEAR(lambda[0], -0.5, 1e-12);
+  EXPECT_NEAR(acc[0], 0.5, 1e-12);
+  EXPECT_NEAR(acc[3], -0.5, 1e-12);
+}
+
+TEST(OrderByColour, ConsecutiveConstraintsOfAColourShareNoVertex) {
+  // Edges of a fan around vertex 0 plus the rim: a natural order where neighbours touch.
+  std::vector<DistanceConstraint> edges;
+  for (int k = 1; k <= 8; ++k) edges.push_back({0, k, 1.0, 0.0});
+  for (int k = 1; k <= 8; ++k) edges.push_back({k, k % 8 + 1, 1.0, 0.0});
+  std::vector<DistanceConstraint> ordered = edges;
+  auto vertices = [](const DistanceConstraint& c) { return std::array<int, 2>{c.i, c.j}; };
+  orderByColour(ordered, vertices);
+  ASSERT_EQ(ordered.size(), edges.size());
+  // Same multiset of constraints.
+  std::multiset<std::pair<int, int>> before, after;
+  for (const auto& c : edges) before.insert({c.i, c.j});
+  for (const auto& c : ordered) after.insert({c.i, c.j});
+  EXPECT_EQ(before, after);
+  // Deterministic.
+  std::vector<DistanceConstraint> again = edges;
+  orderByColour(again, vertices);
+  for (size_t k = 0; k < again.size(); ++k) EXPECT_EQ(again[k].j, ordered[k].j);
+}
+
+TEST(Material, SpringScaleKeepsTheMembraneModulusAndGivesPoissonOneThirdWithoutAreaTerm) {
+  EXPECT_NEAR(springScale(0.0), 1.0, 1e-12);
+  EXPECT_NEAR(effectivePoissonRatio(0.0), 1.0 / 3.0, 1e-12);
+  for (double f : {0.05, 0.1, 0.5}) {
+    const double c = springScale(f) * 3.0 / 8.0;
+    EXPECT_NEAR(4.0 * c * (2.0 * c + f) / (3.0 * c + f), 1.0, 1e-12) << f;
+    EXPECT_GT(effectivePoissonRatio(f), 1.0 / 3.0);
+  }
+}
+
+TEST(Material, UnitConversionsAreTheDocumentedOnes) {
+  EXPECT_NEAR(mmHgToMpa(100.0), 0.0133322, 1e-6);
+  LeafletMaterial m;
+  m.density_g_per_cm3 = 1.0;
+  m.thickness_mm = 2.0;
+  EXPECT_NEAR(lumpedMass(m, 3.0), 6e-3, 1e-15);  // 1 g/cm^3 * 2 mm * 3 mm^2 = 6 mm^3 = 6 mg
+}
+
+// Two triangles sharing edge (1, 2): a unit square split along its diagonal.
+Eigen::MatrixXi squareFaces() {
+  Eigen::MatrixXi F(2, 3);
+  F << 0, 1, 2, 2, 1, 3;
+  return F;
+}
+
+TEST(MeshTopology, UniqueEdgesAreSortedAndCountedOnce) {
+  const Eigen::MatrixXi E = uniqueEdges(squareFaces());
+  Eigen::MatrixXi expected(5, 2);
+  expected << 0, 1, 0, 2, 1, 2, 1, 3, 2, 3;
+  EXPECT_EQ(E, expected);
+}
+
+TEST(MeshTopology, EdgeFlapsAndBendingQuadsOfTheSharedEdge) {
+  Eigen::MatrixXi E, EF, EI;
+  edgeFlaps(squareFaces(), E, EF, EI);
+  ASSERT_EQ(E.rows(), 5);
+  // Edge (1, 2) is row 2: faces 0 and 1, opposite corners 0 (vertex 0) and 2 (vertex 3).
+  EXPECT_EQ(EF(2, 0), 0);
+  EXPECT_EQ(EF(2, 1), 1);
+  EXPECT_EQ(EI(2, 0), 0);
+  EXPECT_EQ(EI(2, 1), 2);
+  EXPECT_EQ(EF(0, 1), -1);  // boundary edge
+  const Eigen::MatrixXi Q = bendingQuads(squareFaces());
+  ASSERT_EQ(Q.rows(), 1);
+  // Edge runs 1 -> 2 in face 0's winding; k = 0 (face 0), l = 3 (face 1).
+  EXPECT_EQ(Q(0, 0), 1);
+  EXPECT_EQ(Q(0, 1), 2);
+  EXPECT_EQ(Q(0, 2), 0);
+  EXPECT_EQ(Q(0, 3), 3);
+  EXPECT_EQ(nonManifoldEdgeCount(squareFaces()), 0);
+}
+
+TEST(MeshTopology, BoundaryLoopOfASquareFollowsTheWinding) {
+  const auto loops = boundaryLoops(squareFaces());
+  ASSERT_EQ(loops.size(), 1u);
+  EXPECT_EQ(loops[0], (std::vector<int>{0, 1, 3, 2}));
+}
+
+TEST(MeshTopology, TubeHasTwoBoundaryLoopsEvenWithFlippedFaces) {
+  // A 6-sided open tube: rings 0..5 (bottom) and 6..11 (top); flip every other face.
+  std::vector<Eigen::Vector3i> faces;
+  for (int k = 0; k < 6; ++k) {
+    const int a = k, b = (k + 1) % 6, c = 6 + k, d = 6 + (k + 1) % 6;
+    faces.emplace_back(a, b, d);
+    faces.emplace_back(a, c, d);  // flipped relative to (a, d, c)
+  }
+  Eigen::MatrixXi F(12, 3);
+  for (int f = 0; f < 12; ++f) F.row(f) = faces[f].transpose();
+  const auto loops = boundaryLoops(F);
+  ASSERT_EQ(loops.size(), 2u);
+  EXPECT_EQ(loops[0].size(), 6u);
+  EXPECT_EQ(loops[1].size(), 6u);
+  EXPECT_EQ(loops[0][0], 0);
+  EXPECT_EQ(loops[1][0], 6);
+  Eigen::MatrixXi oriented;
+  EXPECT_TRUE(orientFacesConsistently(F, oriented));
+  // After orientation every interior edge is used once in each direction.
+  std::set<std::pair<int, int>> directed;
+  for (int f = 0; f < 12; ++f)
+    for (int c = 0; c < 3; ++c)
+      EXPECT_TRUE(directed.insert({oriented(f, c), oriented(f, (c + 1) % 3)}).second);
+  EXPECT_EQ(faceComponents(F).maxCoeff(), 0);
+}
+
+TEST(MeshTopology, VertexAdjacencyListsNeighboursInOrder) {
+  const auto adjacency = vertexAdjacency(squareFaces(), 4);
+  EXPECT_EQ(adjacency[1], (std::vector<int>{0, 2, 3}));
+  EXPECT_EQ(adjacency[0], (std::vector<int>{1, 2}));
+  const auto faces = vertexFaces(squareFaces(), 4);
+  EXPECT_EQ(faces[2], (std::vector<int>{0, 1}));
+}
+
+}  // namespace
+}  // namespace chordfit
