@@ -51,10 +51,12 @@ class SeededRandom {
   double spare_ = 0.0;
 };
 
-// Rest-length scale of every normal true cord (calibrated; see the file comment).
+// Scale of a normal true cord. Calibrated against the simulator of 2026-11-21 (edge 3 mm,
+// seeds 1-6 of normal-1 and normal-2; experiments/README.md "Calibration"): 1.0 prolapses
+// almost everywhere, 0.75-0.85 lets the anterior commissural belly billow above 2 mm, 0.65
+// keeps every segment below 2 mm.
 constexpr double kNormalCordScale = 0.65;
-// Extra factor of secondary (belly) cords relative to primaries (calibrated; see the file
-// comment).
+// Extra factor of secondary (belly) cords relative to primaries (same calibration).
 constexpr double kSecondaryCordFactor = 1.0;
 // Rest-length scale of a ruptured cord: the cord never becomes taut, so it is inert.
 constexpr double kRupturedCordScale = 10.0;

@@ -35,8 +35,8 @@ namespace chordfit {
 struct ContactOptions {
   double thickness_mm = 1.0;         // target separation of a vertex from a triangle
   double margin_mm = 0.5;            // pairs within thickness + margin become constraints
-  double exclusion_radius_mm = 2.0;  // rest-state neighbourhood ignored (see above)
-  double skin_mm = 0.5;              // Verlet-list skin (see above)
+  double exclusion_radius_mm = 2.5;  // rest-state neighbourhood ignored (see above)
+  double skin_mm = 1.0;              // Verlet-list skin (see above)
 };
 
 class ContactDetector {

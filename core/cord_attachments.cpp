@@ -74,11 +74,11 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
 
 // Point of a column at `depth` from its free edge (clamped to the annulus).
 Eigen::Vector3d columnPoint(const Eigen::MatrixXd& V, const Column& column, double depth) {
+  if (column.arc.size() < 2) return V.row(column.first).transpose();
   const double s = std::max(0.0, column.height() - std::max(0.0, depth));
   const auto it = std::upper_bound(column.arc.begin(), column.arc.end(), s);
   const int i = std::clamp(static_cast<int>(it - column.arc.begin()) - 1, 0,
                            static_cast<int>(column.arc.size()) - 2);
-  if (column.arc.size() < 2) return V.row(column.first).transpose();
   const double span = column.arc[i + 1] - column.arc[i];
   const double t = span > 0.0 ? std::clamp((s - column.arc[i]) / span, 0.0, 1.0) : 0.0;
   return (1.0 - t) * V.row(column.first + i).transpose() +

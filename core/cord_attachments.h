@@ -12,6 +12,9 @@
 //             on the free edge; ~7 mm = secondary cord on the belly, as the heuristic).
 // It is realised on a parametric valve (core/parametric_valve.h) by interpolating between the
 // meridian columns that bracket the fraction, and then snapped to the nearest mesh vertex.
+// The commissures are the mesh ring's (midpoints of the ring edges where the leaflet label
+// changes, as core/carpentier.h), so one fraction lands within about half a ring edge of the
+// same anatomical place on meshes of different resolution, well inside the snapping error.
 #pragma once
 
 #include <vector>

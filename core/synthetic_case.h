@@ -91,7 +91,8 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options);
 //                         attachment, vertices at both resolutions, scales, ruptures
 //   truth/cross_sections.svg  one panel per tracing plane
 // The truth is written first and case.json last, so an interrupted run leaves no loadable
-// case. Every file is written atomically.
+// case. Every file is written atomically. No file records wall times, so the same options
+// give byte-identical files.
 void writeSyntheticCase(const std::filesystem::path& directory, const SyntheticCase& synthetic);
 
 // The JSON text of truth/truth.json.
