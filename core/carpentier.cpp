@@ -1,5 +1,6 @@
 #include "core/carpentier.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <limits>
@@ -90,26 +91,46 @@ SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMes
   return map;
 }
 
-int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
-  const double theta = annulusAngle(map.frame, p);
-  const LeafletArc* best = nullptr;
-  double best_fraction = 0.0;
-  double best_outside = std::numeric_limits<double>::infinity();
+namespace {
+
+// The arc of `leaflet` (or, when leaflet < 0, of any leaflet) nearest to angle theta, with the
+// point's fraction along it and how far outside [0, 1] it lies, in radians (0 when inside).
+struct ArcHit {
+  const LeafletArc* arc = nullptr;
+  double fraction = 0.0;
+  double outside = std::numeric_limits<double>::infinity();
+};
+
+ArcHit nearestArc(const SegmentMap& map, double theta, int leaflet) {
+  ArcHit hit;
   for (const LeafletArc& arc : map.arcs) {
     if (leaflet >= 0 && arc.leaflet != leaflet) continue;
     const double fraction = arcFraction(arc, theta);
-    // How far outside [0, 1] (in radians), 0 when inside: picks the containing/nearest arc.
     const double outside = std::max({0.0, -fraction, fraction - 1.0}) * std::abs(arc.sweep);
-    if (outside < best_outside) {
-      best_outside = outside;
-      best = &arc;
-      best_fraction = fraction;
-    }
+    if (outside < hit.outside) hit = {&arc, fraction, outside};
   }
-  if (best == nullptr) return -1;
-  const double clamped = std::min(std::max(best_fraction, 0.0), 1.0);
+  return hit;
+}
+
+// A labelled point lying more than this far outside its own leaflet's arc, but inside it when
+// seen from the opposite side of the centre, has crossed the valve centre (closed leaflets
+// overlap past the centre at the coaptation line) and is localised on its leaflet's side.
+// Smaller excursions are commissural tissue just beyond a commissure and are clamped.
+constexpr double kCrossedCentreRad = M_PI / 4.0;
+
+}  // namespace
+
+int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
+  const double theta = annulusAngle(map.frame, p);
+  ArcHit hit = nearestArc(map, theta, leaflet);
+  if (hit.arc == nullptr) return -1;
+  if (leaflet >= 0 && hit.outside > kCrossedCentreRad) {
+    const ArcHit opposite = nearestArc(map, theta + M_PI, leaflet);
+    if (opposite.outside == 0.0) hit = opposite;
+  }
+  const double clamped = std::min(std::max(hit.fraction, 0.0), 1.0);
   const int index = std::min(2, static_cast<int>(clamped * 3.0));
-  return best->leaflet * 3 + index;
+  return hit.arc->leaflet * 3 + index;
 }
 
 std::string segmentName(const SegmentMap& map, int segment_id) {

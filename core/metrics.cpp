@@ -140,14 +140,14 @@ ClosedAnnulus closedAnnulus(const ValveCase& valve_case) {
 }
 
 ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
-                                const Eigen::VectorXi& leaflets, const ProlapseOptions& options) {
+                                const Eigen::VectorXi& segment_ids,
+                                const ProlapseOptions& options) {
   ProlapseResult result;
   result.heights = heightAboveAnnulus(annulus.frame, annulus.ring, points);
   result.max_height_mm = points.rows() > 0 ? result.heights.maxCoeff() : kNaN;
   std::map<int, int> above;  // segment id -> points above threshold
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    if (result.heights(i) <= options.threshold_mm) continue;
-    ++above[segmentOf(annulus.segments, points.row(i).transpose(), leaflets(i))];
+    if (result.heights(i) > options.threshold_mm) ++above[segment_ids(i)];
   }
   std::set<std::string> names;
   for (const auto& [segment, count] : above) {
@@ -159,28 +159,66 @@ ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::Matri
   return result;
 }
 
-ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
-                              const ProlapseOptions& options) {
+ProlapseResult prolapseOfLabelledPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
+                                        const Eigen::VectorXi& leaflets,
+                                        const ProlapseOptions& options) {
+  Eigen::VectorXi segment_ids(points.rows());
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    segment_ids(i) = segmentOf(annulus.segments, points.row(i).transpose(), leaflets(i));
+  }
+  return prolapseOfPoints(annulus, points, segment_ids, options);
+}
+
+Eigen::VectorXi openStateSegments(const ValveMesh& mesh) {
+  const AnnulusFrame open_frame = openAnnulusFrame(mesh);
+  Eigen::MatrixXd open_ring(mesh.annulus.size(), 3);
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i)
+    open_ring.row(i) = mesh.V.row(mesh.annulus(i));
+  const SegmentMap open_map = buildSegmentMap(open_ring, mesh, open_frame);
+  Eigen::VectorXi ids(mesh.V.rows());
+  for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
+    ids(v) = segmentOf(open_map, mesh.V.row(v).transpose(), mesh.leaflet(v));
+  }
+  return ids;
+}
+
+namespace {
+
+ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const ClosedAnnulus& annulus,
+                              const Eigen::MatrixXd& closed_V, const ProlapseOptions& options) {
   const ValveMesh& mesh = valve_case.mesh;
   std::vector<bool> on_ring(mesh.V.rows(), false);
   for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) on_ring[mesh.annulus(i)] = true;
+  const Eigen::VectorXi open_segments = openStateSegments(mesh);
   std::vector<int> rows;
   for (Eigen::Index v = 0; v < closed_V.rows(); ++v) {
     if (!on_ring[v]) rows.push_back(static_cast<int>(v));
   }
   Eigen::MatrixXd points(rows.size(), 3);
-  Eigen::VectorXi leaflets(rows.size());
+  Eigen::VectorXi segment_ids(rows.size());
   for (std::size_t i = 0; i < rows.size(); ++i) {
     points.row(i) = closed_V.row(rows[i]);
-    leaflets(i) = mesh.leaflet(rows[i]);
+    segment_ids(i) = open_segments(rows[i]);
   }
-  return prolapseOfPoints(closedAnnulus(valve_case), points, leaflets, options);
+  return prolapseOfPoints(annulus, points, segment_ids, options);
+}
+
+ProlapseResult prolapseOfTracings(const ValveCase& valve_case, const ClosedAnnulus& annulus,
+                                  const ProlapseOptions& options) {
+  Eigen::VectorXi leaflets;
+  const Eigen::MatrixXd points = stackTracingPoints(valve_case.tracings, &leaflets);
+  return prolapseOfLabelledPoints(annulus, points, leaflets, options);
+}
+
+}  // namespace
+
+ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                              const ProlapseOptions& options) {
+  return prolapseOfMesh(valve_case, closedAnnulus(valve_case), closed_V, options);
 }
 
 ProlapseResult prolapseOfTracings(const ValveCase& valve_case, const ProlapseOptions& options) {
-  Eigen::VectorXi leaflets;
-  const Eigen::MatrixXd points = stackTracingPoints(valve_case.tracings, &leaflets);
-  return prolapseOfPoints(closedAnnulus(valve_case), points, leaflets, options);
+  return prolapseOfTracings(valve_case, closedAnnulus(valve_case), options);
 }
 
 ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V) {
@@ -190,9 +228,10 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   m.tracing_distances = pointToSurfaceDistances(closed_V, valve_case.mesh.F, points);
   m.deviation = summarizeDeviation(m.tracing_distances);
   m.area_mm2 = surfaceArea(closed_V, valve_case.mesh.F);
-  m.mesh_prolapse = prolapseOfMesh(valve_case, closed_V);
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  m.mesh_prolapse = prolapseOfMesh(valve_case, annulus, closed_V, ProlapseOptions{});
   if (m.has_tracings) {
-    m.tracing_prolapse = prolapseOfTracings(valve_case);
+    m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});
     m.prolapse_reconstructed = m.mesh_prolapse.segments == m.tracing_prolapse.segments;
   }
   return m;

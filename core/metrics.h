@@ -62,11 +62,24 @@ struct ClosedAnnulus {
 };
 ClosedAnnulus closedAnnulus(const ValveCase& valve_case);
 
-// Prolapse of `points` with leaflet labels (-1 = decide by angle).
+// Prolapse of `points` (closed state), each counted in its Carpentier segment
+// `segment_ids(i)` (segmentOf ids; -1 = none).
 ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
-                                const Eigen::VectorXi& leaflets, const ProlapseOptions& options);
+                                const Eigen::VectorXi& segment_ids, const ProlapseOptions& options);
+// Same, localising each point by its closed position and leaflet label (-1 = decide by
+// angle): what is known of a tracing point.
+ProlapseResult prolapseOfLabelledPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
+                                        const Eigen::VectorXi& leaflets,
+                                        const ProlapseOptions& options);
 
-// Mesh: every non-annulus vertex of the closed mesh (same topology as the case mesh).
+// Segment id of every mesh vertex from its OPEN-state position (open annulus frame and ring).
+// A closed leaflet folds and its free edge crosses toward the other side of the centre, so
+// the closed position's angle would assign coaptation tissue to the wrong scallop; the
+// open position is where the vertex anatomically belongs.
+Eigen::VectorXi openStateSegments(const ValveMesh& mesh);
+
+// Mesh: every non-annulus vertex of the closed mesh (same topology as the case mesh), each
+// in the segment of its open-state position (openStateSegments).
 ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                               const ProlapseOptions& options = {});
 // Tracings: every tracing point; two points above threshold per segment so that a lone noisy

@@ -115,11 +115,48 @@ TEST(Prolapse, FindsTheSegmentOfPointsMoreThanTwoMillimetresAboveTheAnnulus) {
   points.row(3) << 0.0, 8.0, -s.h + 1.0;  // commissural zone, below threshold
   Eigen::VectorXi leaflets(4);
   leaflets << 1, 1, 0, -1;
-  const ProlapseResult result = prolapseOfPoints(annulus, points, leaflets, ProlapseOptions{});
+  const ProlapseResult result =
+      prolapseOfLabelledPoints(annulus, points, leaflets, ProlapseOptions{});
   EXPECT_EQ(result.segments, std::vector<std::string>{"P2"});
   EXPECT_NEAR(result.max_height_mm, 3.0, 1e-6);
   // Requiring three points per segment removes it.
-  EXPECT_TRUE(prolapseOfPoints(annulus, points, leaflets, {2.0, 3}).segments.empty());
+  EXPECT_TRUE(prolapseOfLabelledPoints(annulus, points, leaflets, {2.0, 3}).segments.empty());
+}
+
+TEST(Prolapse, LocalisesALabelledPointThatCrossedTheCentreOnItsOwnLeaflet) {
+  // Closed leaflets overlap past the centre at the coaptation line: an anterior tracing point
+  // on the posterior side of the centre (angle ~176 deg) still belongs to A2.
+  const SaddleCase s = saddle();
+  const ClosedAnnulus annulus = closedAnnulus(s.c);
+  Eigen::MatrixXd points(2, 3);
+  points.row(0) << -3.0, 0.2, s.h + 3.0;
+  points.row(1) << -3.0, -0.2, s.h + 3.0;
+  Eigen::VectorXi leaflets(2);
+  leaflets << 0, 0;
+  EXPECT_EQ(prolapseOfLabelledPoints(annulus, points, leaflets, ProlapseOptions{}).segments,
+            std::vector<std::string>{"A2"});
+}
+
+TEST(Prolapse, ClampsCommissuralTissueJustBeyondACommissureToItsEndSegment) {
+  // Posterior point 5 deg into the anterior range, next to the anterolateral (+y)
+  // commissure at 60 deg: P1, not flipped to the far side of the valve.
+  const SaddleCase s = saddle();
+  const ClosedAnnulus annulus = closedAnnulus(s.c);
+  const double phi = 55.0 * M_PI / 180.0;
+  const Eigen::Vector3d p(10.0 * std::cos(phi), 10.0 * std::sin(phi), 0.0);
+  EXPECT_EQ(segmentName(annulus.segments, segmentOf(annulus.segments, p, 1)), "P1");
+  EXPECT_EQ(segmentName(annulus.segments, segmentOf(annulus.segments, p, 0)), "A1");
+}
+
+TEST(Prolapse, LocalisesMeshVerticesByTheirOpenStatePosition) {
+  SaddleCase s = saddle();
+  ValveMesh& mesh = s.c.mesh;
+  const Eigen::Index moving = mesh.V.rows() - 1;
+  mesh.V.row(moving) << -8.0, 0.0, -5.0;  // open state: middle of the posterior leaflet (P2)
+  Eigen::MatrixXd closed = mesh.V;
+  closed.row(moving) << 3.0, 0.0, s.h + 3.0;  // closed: folded past the centre, 3 mm up
+  EXPECT_EQ(openStateSegments(mesh)(moving), 1 * 3 + 1);
+  EXPECT_EQ(prolapseOfMesh(s.c, closed).segments, std::vector<std::string>{"P2"});
 }
 
 TEST(ComputeMetrics, ReportsNoTracingsHonestly) {
