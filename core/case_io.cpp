@@ -34,18 +34,22 @@ std::optional<SideFile> sideFile(const json& object, const std::string& where,
   return SideFile{dir / name, name};
 }
 
-// Files holding one array either bare or under `key`: [..] or {"key": [..]}.
-const json* arrayOf(const json& document, const std::string& key, JsonFields& fields) {
-  if (document.is_array()) return &document;
-  return fields.member(document, "", key, true);
-}
-
-bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+// Side files hold one array, either bare or under `key`: [..] or {"key": [..]}. Loads the
+// file and hands the array and the file's field reporter to `read`; false when the file
+// cannot be read, parsed or has no such array.
+template <typename ReadArray>
+bool readSideArray(const SideFile& file, const std::string& key, Diagnostics& diagnostics,
+                   ReadArray read) {
   const auto document = loadJsonFile(file.path, file.name, diagnostics);
   if (!document) return false;
   JsonFields fields(file.name, diagnostics);
-  const json* labels = arrayOf(*document, "labels", fields);
-  if (labels == nullptr || !fields.integers(*labels, "labels", c.mesh.leaflet)) return false;
+  const json* array = document->is_array() ? &*document : fields.member(*document, "", key, true);
+  return array != nullptr && read(*array, fields);
+}
+
+// One leaflet label per mesh vertex, each naming one of the case's leaflets.
+bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
+  if (!fields.integers(labels, "labels", c.mesh.leaflet)) return false;
   if (c.mesh.leaflet.size() != c.mesh.V.rows()) {
     fields.error("labels", std::to_string(c.mesh.leaflet.size()) +
                                " leaflet labels for a mesh of " + std::to_string(c.mesh.V.rows()) +
@@ -64,12 +68,16 @@ bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
   return true;
 }
 
+bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+  return readSideArray(file, "labels", diagnostics, [&](const json& labels, JsonFields& fields) {
+    return readLabelArray(labels, fields, c);
+  });
+}
+
 bool readRing(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
-  const auto document = loadJsonFile(file.path, file.name, diagnostics);
-  if (!document) return false;
-  JsonFields fields(file.name, diagnostics);
-  const json* ring = arrayOf(*document, "vertices", fields);
-  return ring != nullptr && fields.integers(*ring, "vertices", c.mesh.annulus);
+  return readSideArray(file, "vertices", diagnostics, [&](const json& ring, JsonFields& fields) {
+    return fields.integers(ring, "vertices", c.mesh.annulus);
+  });
 }
 
 // Leaflet of a tracing: a leaflet name, a label number, or null / absent (unknown).
@@ -153,37 +161,32 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
 
 bool readTracings(const SideFile& file, const fs::path& dir, ValveCase& c,
                   Diagnostics& diagnostics) {
-  const auto document = loadJsonFile(file.path, file.name, diagnostics);
-  if (!document) return false;
-  JsonFields fields(file.name, diagnostics);
-  const json* list = arrayOf(*document, "tracings", fields);
-  if (list == nullptr) return false;
-  if (!list->is_array()) {
-    fields.typeError("tracings", "an array of tracings", *list);
-    return false;
-  }
-  bool ok = true;
-  for (std::size_t i = 0; i < list->size(); ++i) {
-    Tracing tracing;
-    if (readTracing((*list)[i], indexPath("tracings", i), dir, c.mesh.leaflet_names, fields,
-                    tracing)) {
-      c.tracings.push_back(std::move(tracing));
-    } else {
-      ok = false;
+  return readSideArray(file, "tracings", diagnostics, [&](const json& list, JsonFields& fields) {
+    if (!list.is_array()) {
+      fields.typeError("tracings", "an array of tracings", list);
+      return false;
     }
-  }
-  return ok;
+    bool ok = true;
+    for (std::size_t i = 0; i < list.size(); ++i) {
+      Tracing tracing;
+      if (readTracing(list[i], indexPath("tracings", i), dir, c.mesh.leaflet_names, fields,
+                      tracing)) {
+        c.tracings.push_back(std::move(tracing));
+      } else {
+        ok = false;
+      }
+    }
+    return ok;
+  });
 }
 
 bool readTipsFile(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
-  const auto document = loadJsonFile(file.path, file.name, diagnostics);
-  if (!document) return false;
-  JsonFields fields(file.name, diagnostics);
-  const json* list = arrayOf(*document, "tips", fields);
-  std::vector<PmTip> tips;
-  if (list == nullptr || !readTips(*list, "tips", fields, tips)) return false;
-  c.tips = tips;
-  return true;
+  return readSideArray(file, "tips", diagnostics, [&](const json& list, JsonFields& fields) {
+    std::vector<PmTip> tips;
+    if (!readTips(list, "tips", fields, tips)) return false;
+    c.tips = tips;
+    return true;
+  });
 }
 
 bool readVersion(const json& document, JsonFields& fields) {

@@ -6,6 +6,7 @@
 // count is passed straight to std::vector::resize. The pre-checks below reject such files
 // with a located message before CGAL sees them.
 #include "core/cgal_backend.h"
+#include "core/text_case.h"
 
 #include <algorithm>
 #include <array>
@@ -52,12 +53,6 @@ using Polygon = std::vector<std::size_t>;
 
 // ---------------------------------------------------------------------------------------
 // Small text helpers shared by the pre-checks.
-
-std::string lowercase(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 // A word from the file as it may appear in a message (a corrupt file can hold any bytes).
 std::string printable(const std::string& word) {
@@ -440,7 +435,7 @@ void dropObjLines(std::string& bytes) {
 bool containsNonFiniteWord(const std::string& bytes) {
   std::size_t pos = 0;
   for (std::string word = nextToken(bytes, pos); !word.empty(); word = nextToken(bytes, pos)) {
-    word = lowercase(word);
+    word = asciiLowercase(word);
     if (word[0] == '-' || word[0] == '+') word.erase(0, 1);
     if (word.rfind("nan", 0) == 0 || word.rfind("inf", 0) == 0) return true;
   }
@@ -517,7 +512,7 @@ bool readSoup(const std::string& extension, const std::string& bytes,
 
 bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
                           std::string& error) {
-  const std::string extension = lowercase(path.extension().string());
+  const std::string extension = asciiLowercase(path.extension().string());
   if (extension != ".ply" && extension != ".obj" && extension != ".off" && extension != ".stl") {
     error = "unsupported extension " + quotedWord(path.extension().string());
     return false;

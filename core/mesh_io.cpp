@@ -1,4 +1,5 @@
 #include "core/mesh_io.h"
+#include "core/text_case.h"
 
 #include <algorithm>
 #include <array>
@@ -22,12 +23,6 @@ namespace chordfit {
 namespace {
 
 namespace fs = std::filesystem;
-
-std::string lowercase(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 bool isSpace(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
 
@@ -86,7 +81,7 @@ class VtkParser {
     while (true) {
       const std::size_t keyword_pos = skipSpace();
       const std::string word = token();
-      const std::string keyword = lowercase(word);
+      const std::string keyword = asciiLowercase(word);
       if (keyword.empty() || keyword == "point_data" || keyword == "cell_data") break;
       if (keyword == "dataset") {
         parseDataset(keyword_pos);
@@ -183,7 +178,7 @@ class VtkParser {
     const std::size_t format_pos = pos_;
     std::string format = line();
     format.erase(std::remove_if(format.begin(), format.end(), isSpace), format.end());
-    format = lowercase(format);
+    format = asciiLowercase(format);
     if (format == "binary") {
       binary_ = true;
     } else if (format != "ascii") {
@@ -193,7 +188,7 @@ class VtkParser {
 
   void parseDataset(std::size_t keyword_pos) {
     const std::string type = token();
-    if (lowercase(type) != "polydata")
+    if (asciiLowercase(type) != "polydata")
       fail(keyword_pos,
            "unsupported dataset type " + quotedWord(type) + " (only POLYDATA can be read)");
     have_dataset_ = true;
@@ -205,7 +200,7 @@ class VtkParser {
 
   std::string dataType(const std::string& section) {
     const std::size_t at = skipSpace();
-    const std::string type = lowercase(token());
+    const std::string type = asciiLowercase(token());
     if (vtkTypeSize(type) == 0) fail(at, section + ": unsupported data type " + quotedWord(type));
     return type;
   }
@@ -328,7 +323,7 @@ class VtkParser {
     const unsigned long long n = count("a cell count");
     const unsigned long long size = count("a connectivity size");
     std::vector<std::vector<long long>> cells;
-    if (lowercase(peekToken()) == "offsets") {
+    if (asciiLowercase(peekToken()) == "offsets") {
       cells = offsetCells(keyword_pos, section, n, size);
     } else {
       cells = classicCells(keyword_pos, section, n, size);
@@ -368,7 +363,7 @@ class VtkParser {
   std::vector<long long> namedArray(const std::string& name, unsigned long long n,
                                     const std::string& section) {
     const std::size_t at = skipSpace();
-    if (lowercase(token()) != name) fail(at, section + ": expected " + lowercase(name));
+    if (asciiLowercase(token()) != name) fail(at, section + ": expected " + asciiLowercase(name));
     const std::string type = dataType(section);
     return integers(n, type, section);
   }
@@ -424,7 +419,7 @@ class VtkParser {
     token();  // field name
     const unsigned long long arrays = count("an array count");
     for (unsigned long long a = 0; a < arrays; ++a) {
-      if (lowercase(peekToken()) == "metadata") {
+      if (asciiLowercase(peekToken()) == "metadata") {
         token();
         skipMetadata();
       }
@@ -434,7 +429,7 @@ class VtkParser {
       const unsigned long long components = count("a component count");
       const unsigned long long tuples = count("a tuple count");
       const std::size_t type_pos = skipSpace();
-      const std::string type = lowercase(token());
+      const std::string type = asciiLowercase(token());
       if (vtkTypeSize(type) == 0)
         fail(type_pos,
              "FIELD array " + quotedWord(name) + ": cannot skip data of type " + quotedWord(type));
@@ -499,7 +494,7 @@ void reportSoupError(const std::string& file, const std::string& error, Diagnost
 // Writers.
 
 void requireExtension(const fs::path& path, const std::string& extension) {
-  if (lowercase(path.extension().string()) != extension)
+  if (asciiLowercase(path.extension().string()) != extension)
     throw std::runtime_error(path.string() + ": expected a " + extension + " file name");
 }
 
@@ -572,7 +567,7 @@ bool readMesh(const fs::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
     diagnostics.error(file, "", "is a directory, not a mesh file");
     return false;
   }
-  const std::string extension = lowercase(path.extension().string());
+  const std::string extension = asciiLowercase(path.extension().string());
   bool ok = false;
   if (extension == ".vtk") {
     ok = readVtk(path, file, V, F, diagnostics);
