@@ -15,8 +15,19 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586;
 constexpr double kAnatomyClamp = 2.5;  // SDs
 constexpr int kVariationHarmonics = 3;
-// Peak true scale of elongated cords (relative to the heuristic upper bound; calibrated).
-constexpr double kElongated = 1.3;
+// Peak true scales of the pathological cords, relative to the heuristic upper bound l0
+// (calibrated, experiments/README.md "Calibration"). With the normal cords at 0.8 l0 a
+// segment rises above the annulus only once its cords are far longer than the heuristic's
+// bound: the elongated cords must let the scallop's free edge swing past the annulus plane.
+constexpr double kElongatedP2 = 1.5;
+constexpr double kElongatedFlail = 1.4;  // the flail scallop's remaining cords
+constexpr double kElongatedBarlow = 2.5;
+constexpr double kElongatedA2 = 2.5;
+constexpr double kElongatedP3 = 2.5;
+// Degenerative (myxomatous) anatomy: deep indentations between the posterior scallops
+// (fraction of the scallop height, normal 0.5) and an enlarged prolapsing scallop.
+constexpr double kMyxomatousIndentation = 0.8;
+constexpr double kEnlargedScallop = 1.2;  // x the normal scallop height
 
 std::uint64_t splitmix64(std::uint64_t z) {
   z += 0x9E3779B97F4A7C15ull;
@@ -27,18 +38,31 @@ std::uint64_t splitmix64(std::uint64_t z) {
 
 ValveParameters normalAnatomy() { return ValveParameters{}; }
 
-// A second normal patient type: a larger annulus with a deeper saddle and taller leaflets
-// (still within normal adult ranges: AP 25-33 mm, A2 20-27 mm, P2 11-17 mm).
+// A second normal patient type: a larger annulus with a flatter saddle and taller leaflets
+// (still within normal adult ranges: AP 25-33 mm, A2 20-27 mm, P2 11-17 mm; annular height
+// 4-7 mm). A deeper saddle (6 -> 8.5 mm) made the anterior belly of this larger valve rise
+// above the low commissural hinge line (the prolapse criterion of core/metrics.h) at any
+// cord scale the fit can reach (experiments/README.md "Calibration").
 ValveParameters normal2Anatomy() {
   ValveParameters p;
   p.ap_diameter_mm = 31.0;
   p.cc_diameter_mm = 37.0;
-  p.saddle_height_mm = 6.0;
-  p.closed_saddle_height_mm = 8.5;
+  p.saddle_height_mm = 4.5;
+  p.closed_saddle_height_mm = 6.5;
   p.anterior_height_mm = 25.0;
   p.posterior_height_mm = 15.5;
   p.posterior_side_height_mm = 12.0;
   p.commissural_height_mm = 9.0;
+  return p;
+}
+
+// The normal anatomy with the degenerative changes of an isolated scallop lesion: deep clefts
+// and, for P2, a taller scallop (14 -> 17 mm; P2 heights above 15 mm are typical of
+// fibroelastic deficiency with redundant P2, Carpentier's "Reconstructive valve surgery" 2010).
+ValveParameters myxomatousAnatomy(bool enlarged_p2) {
+  ValveParameters p = normalAnatomy();
+  p.indentation_depth = kMyxomatousIndentation;
+  if (enlarged_p2) p.posterior_height_mm *= kEnlargedScallop;
   return p;
 }
 
@@ -52,7 +76,7 @@ ValveParameters barlowAnatomy() {
   p.posterior_height_mm = 19.0;
   p.posterior_side_height_mm = 15.0;
   p.commissural_height_mm = 10.0;
-  p.indentation_depth = 0.4;
+  p.indentation_depth = kMyxomatousIndentation;
   return p;
 }
 
@@ -69,7 +93,7 @@ std::vector<CohortPreset> buildPresets() {
     CohortPreset p;
     p.name = "normal-2";
     p.summary =
-        "normal valve, larger annulus, deeper saddle, taller leaflets (AP 31, CC 37, A2 25, P2 "
+        "normal valve, larger annulus, flatter saddle, taller leaflets (AP 31, CC 37, A2 25, P2 "
         "15.5 mm)";
     p.anatomy = normal2Anatomy();
     presets.push_back(p);
@@ -77,9 +101,9 @@ std::vector<CohortPreset> buildPresets() {
   {
     CohortPreset p;
     p.name = "prolapse-P2";
-    p.summary = "isolated P2 prolapse: elongated P2 cords";
-    p.anatomy = normalAnatomy();
-    p.segment_scale = {0, 0, 0, 0, kElongated, 0};
+    p.summary = "isolated P2 prolapse: elongated P2 cords, enlarged P2 (17 mm), deep clefts";
+    p.anatomy = myxomatousAnatomy(true);
+    p.segment_scale = {0, 0, 0, 0, kElongatedP2, 0};
     p.intended_prolapse = {"P2"};
     presets.push_back(p);
   }
@@ -88,16 +112,16 @@ std::vector<CohortPreset> buildPresets() {
     p.name = "prolapse-A2";
     p.summary = "isolated A2 prolapse: elongated A2 cords";
     p.anatomy = normalAnatomy();
-    p.segment_scale = {0, kElongated, 0, 0, 0, 0};
+    p.segment_scale = {0, kElongatedA2, 0, 0, 0, 0};
     p.intended_prolapse = {"A2"};
     presets.push_back(p);
   }
   {
     CohortPreset p;
     p.name = "prolapse-P3";
-    p.summary = "commissural prolapse: elongated P3 cords (posteromedial side)";
-    p.anatomy = normalAnatomy();
-    p.segment_scale = {0, 0, 0, 0, 0, kElongated};
+    p.summary = "commissural prolapse: elongated P3 cords (posteromedial side), deep clefts";
+    p.anatomy = myxomatousAnatomy(false);
+    p.segment_scale = {0, 0, 0, 0, 0, kElongatedP3};
     p.intended_prolapse = {"P3"};
     presets.push_back(p);
   }
@@ -108,15 +132,18 @@ std::vector<CohortPreset> buildPresets() {
         "Barlow-like bileaflet prolapse: dilated flat annulus, enlarged leaflets, elongated A2 "
         "and P2 cords";
     p.anatomy = barlowAnatomy();
-    p.segment_scale = {0, kElongated, 0, 0, kElongated, 0};
+    p.segment_scale = {0, kElongatedBarlow, 0, 0, kElongatedBarlow, 0};
+    p.pathology_width = 0.5;
     p.intended_prolapse = {"A2", "P2"};
     presets.push_back(p);
   }
   {
     CohortPreset p;
     p.name = "flail-P2";
-    p.summary = "flail P2: one or two ruptured primary cords in the middle of P2";
-    p.anatomy = normalAnatomy();
+    p.summary =
+        "flail P2: one or two ruptured primary cords in the middle of an elongated, enlarged P2";
+    p.anatomy = myxomatousAnatomy(true);
+    p.segment_scale = {0, 0, 0, 0, kElongatedFlail, 0};
     p.ruptured_segment = "P2";
     p.min_ruptured = 1;
     p.max_ruptured = 2;
@@ -138,6 +165,10 @@ double loopPosition(const AnatomicalAttachment& a, double anterior_share) {
 }
 
 }  // namespace
+
+double normalCordScale(CordKind kind) {
+  return kNormalCordScale * (kind == CordKind::kSecondary ? kSecondaryCordFactor : 1.0);
+}
 
 SeededRandom SeededRandom::stream(std::uint64_t seed, std::uint64_t stream) {
   return SeededRandom(splitmix64(seed ^ splitmix64(stream + 0x5851F42D4C957F2Dull)));

@@ -51,13 +51,17 @@ class SeededRandom {
   double spare_ = 0.0;
 };
 
-// Scale of a normal true cord. Calibrated against the simulator of 2026-11-21 (edge 3 mm,
-// seeds 1-6 of normal-1 and normal-2; experiments/README.md "Calibration"): 1.0 prolapses
-// almost everywhere, 0.75-0.85 lets the anterior commissural belly billow above 2 mm, 0.65
-// keeps every segment below 2 mm.
-constexpr double kNormalCordScale = 0.65;
+// Scale of a normal true cord. Calibrated against the simulator of 2026-11-21 late evening
+// (truth edge 1.5 mm, seeds 1-3 of normal-1 and normal-2; experiments/README.md
+// "Calibration"): 1.0 prolapses almost everywhere; with secondaries at the same scale
+// 0.75-0.85 lets the anterior belly rise above 2 mm; shorter secondaries hold the belly, so
+// primaries at 0.8 and secondaries at 0.8 x 0.88 = 0.70 close without prolapse.
+constexpr double kNormalCordScale = 0.8;
 // Extra factor of secondary (belly) cords relative to primaries (same calibration).
-constexpr double kSecondaryCordFactor = 1.0;
+constexpr double kSecondaryCordFactor = 0.88;
+// The calibrated normal scale of a cord of this kind: kNormalCordScale, times
+// kSecondaryCordFactor for secondaries (the simulator's valve tests use it too).
+double normalCordScale(CordKind kind);
 // Rest-length scale of a ruptured cord: the cord never becomes taut, so it is inert.
 constexpr double kRupturedCordScale = 10.0;
 

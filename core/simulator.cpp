@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <ctime>
 #include <limits>
 #include <memory>
@@ -36,16 +37,6 @@ double ramp(double t, double duration) {
   return s * s * (3.0 - 2.0 * s);
 }
 
-bool finite(const SimulationSettings& s) {
-  for (double v : {s.pressure_mmhg, s.flow_speed_mm_per_ms, s.drag_time_ms, s.ramp_ms, s.dt_ms,
-                   s.stiffness_ratio, s.max_stiffness_ratio, s.max_step_mm, s.tolerance_mm,
-                   s.contact_thickness_mm, s.contact_margin_mm, s.contact_exclusion_mm,
-                   s.material.youngs_modulus_mpa, s.material.thickness_mm, s.material.poisson_ratio,
-                   s.material.density_g_per_cm3, s.material.area_bulk_fraction})
-    if (!std::isfinite(v)) return false;
-  return true;
-}
-
 std::string validate(const SimulationModel& m, const SimulationSettings& s) {
   const int n = static_cast<int>(m.V_rest.rows());
   if (n == 0 || m.V_rest.cols() != 3) return "model: V_rest must be #V by 3 and non-empty";
@@ -57,6 +48,9 @@ std::string validate(const SimulationModel& m, const SimulationSettings& s) {
   if (m.fixed_start.rows() != m.fixed.size() || m.fixed_end.rows() != m.fixed.size())
     return "model: fixed_start / fixed_end must have one row per fixed vertex";
   if (m.tip_start.rows() != m.tip_end.rows()) return "model: tip_start / tip_end sizes differ";
+  if (!m.fixed_start.allFinite() || !m.fixed_end.allFinite() || !m.tip_start.allFinite() ||
+      !m.tip_end.allFinite())
+    return "model: non-finite boundary or tip position";
   for (const auto& c : m.cords) {
     if (c.tip < 0 || c.tip >= m.tip_start.rows()) return "model: cord tip index out of range";
     if (c.vertex < 0 || c.vertex >= n) return "model: cord vertex index out of range";
@@ -64,18 +58,8 @@ std::string validate(const SimulationModel& m, const SimulationSettings& s) {
       return "model: cord rest length must be positive";
     if (!(c.compliance >= 0.0)) return "model: cord compliance must be >= 0";
   }
-  if (!finite(s)) return "settings: non-finite value";
-  if (s.dt_ms < 0.0) return "settings: dt_ms must be >= 0 (0 = automatic)";
-  if (!(s.stiffness_ratio > 0.0)) return "settings: stiffness_ratio must be > 0";
-  if (s.iterations < 1) return "settings: iterations must be >= 1";
-  if (s.max_steps < 1 || s.window < 1) return "settings: max_steps and window must be >= 1";
-  if (!(s.material.youngs_modulus_mpa > 0.0) || !(s.material.thickness_mm > 0.0) ||
-      !(s.material.density_g_per_cm3 > 0.0))
-    return "settings: Young's modulus, thickness and density must be > 0";
-  if (!(s.material.poisson_ratio > -1.0 && s.material.poisson_ratio < 0.5))
-    return "settings: poisson_ratio must be in (-1, 0.5)";
-  if (s.material.area_bulk_fraction < 0.0) return "settings: area_bulk_fraction must be >= 0";
-  if (!(s.drag_time_ms > 0.0)) return "settings: drag_time_ms must be > 0";
+  const auto problems = settingsProblems(s);
+  if (!problems.empty()) return "settings: " + problems[0].key + ": " + problems[0].what;
   return "";
 }
 
@@ -234,14 +218,16 @@ class Stepper {
       ContactOptions options;
       options.thickness_mm = thickness;
       options.margin_mm =
-          settings.contact_margin_mm > 0.0 ? settings.contact_margin_mm : 0.5 * thickness;
+          settings.contact_margin_mm > 0.0 ? settings.contact_margin_mm : 0.25 * thickness;
       options.skin_mm = thickness;
-      // Default exclusion = the candidate-list radius, so that the flat neighbourhood of a
-      // vertex on its own sheet never enters the list (see contact.h).
+      // Default exclusion 2.5 thickness >= the candidate-list radius (thickness + margin +
+      // skin), so that the flat neighbourhood of a vertex on its own sheet never enters the
+      // list (see contact.h).
       options.exclusion_radius_mm =
           settings.contact_exclusion_mm > 0.0
               ? settings.contact_exclusion_mm
-              : options.thickness_mm + options.margin_mm + options.skin_mm;
+              : std::max(2.5 * thickness,
+                         options.thickness_mm + options.margin_mm + options.skin_mm);
       detector_ = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
     }
   }
@@ -326,6 +312,17 @@ class Stepper {
   }
 
   int contactCount() const { return static_cast<int>(contacts_.size()); }
+
+  // Kinetic energy sum_i m_i |v_i|^2 / 2 of the free vertices (fictitious masses included).
+  double kineticEnergy() const {
+    double e = 0.0;
+    for (int i = 0; i < n_; ++i)
+      if (sys_.w[i] > 0.0) e += CMap3(&v_[3 * i]).squaredNorm() / sys_.w[i];
+    return 0.5 * e;
+  }
+
+  // Kinetic damping (dynamic relaxation): all velocities to zero.
+  void stop() { std::fill(v_.begin(), v_.end(), 0.0); }
 
   // Copies the final state into `result`.
   void finish(SimulationResult& result) const {
@@ -424,6 +421,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
   Stepper stepper(model, settings, std::move(sys), dt, max_step, thickness,
                   start ? *start : model.V_rest);
   int quiet_steps = 0;
+  double last_energy = 0.0;
   for (int step = 1; step <= settings.max_steps; ++step) {
     const double t = step * dt;
     const double s = ramp(t, ramp_ms);
@@ -437,6 +435,18 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
       result.error = "simulation diverged (non-finite or exploding positions) at step " +
                      std::to_string(step) + "; reduce dt_ms or check the input";
       break;
+    }
+    // Kinetic damping: past the ramp, a drop of the kinetic energy means the motion passed
+    // the energy minimum along its path; stopping there starts the next descent from rest.
+    if (settings.kinetic_damping && t >= ramp_ms) {
+      const double energy = stepper.kineticEnergy();
+      if (energy < last_energy) {
+        stepper.stop();
+        last_energy = 0.0;
+        ++result.kinetic_stops;
+      } else {
+        last_energy = energy;
+      }
     }
     // Quasi-static equilibrium: max displacement < tolerance for `window` steps after the ramp.
     quiet_steps = (t >= ramp_ms && disp < settings.tolerance_mm) ? quiet_steps + 1 : 0;
@@ -562,10 +572,61 @@ SimulationResult simulateClosure(const ValveCase& valve_case, const CordSet& cor
   return simulate(model, settings, warm_start);
 }
 
+std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
+  // Accepted interval per setting: (lo, hi] when lo_open, else [lo, hi]. The upper bounds are
+  // generous (several times any physiological or numerically useful value); they exist so
+  // that a typo is an input error rather than a run that "converges" to nonsense.
+  struct Range {
+    const char* key;
+    double value;
+    double lo;
+    bool lo_open;
+    double hi;
+  };
+  const LeafletMaterial& m = s.material;
+  const Range ranges[] = {
+      {"pressure_mmhg", s.pressure_mmhg, 0.0, true, 500.0},
+      {"youngs_modulus_mpa", m.youngs_modulus_mpa, 0.0, true, 1000.0},
+      {"thickness_mm", m.thickness_mm, 0.0, true, 10.0},
+      {"poisson_ratio", m.poisson_ratio, -1.0, true, 0.499},
+      {"density_g_per_cm3", m.density_g_per_cm3, 0.0, true, 100.0},
+      {"area_bulk_fraction", m.area_bulk_fraction, 0.0, false, 100.0},
+      {"flow_speed_mm_per_ms", s.flow_speed_mm_per_ms, 0.0, false, 100.0},
+      {"drag_time_ms", s.drag_time_ms, 0.0, true, 1e4},
+      {"ramp_ms", s.ramp_ms, 0.0, false, 1e4},
+      {"dt_ms", s.dt_ms, 0.0, false, 10.0},  // 0 = automatic
+      {"stiffness_ratio", s.stiffness_ratio, 0.0, true, 1000.0},
+      {"max_stiffness_ratio", s.max_stiffness_ratio, -1e300, false, 1e4},  // <= 0: off
+      {"max_step_mm", s.max_step_mm, 0.0, false, 100.0},                   // 0: automatic
+      {"tolerance_mm", s.tolerance_mm, 0.0, true, 10.0},
+      {"contact_thickness_mm", s.contact_thickness_mm, 0.0, false, 10.0},  // 0: automatic
+      {"contact_margin_mm", s.contact_margin_mm, 0.0, false, 10.0},
+      {"contact_exclusion_mm", s.contact_exclusion_mm, 0.0, false, 100.0},
+      {"iterations", static_cast<double>(s.iterations), 1.0, false, 1000.0},
+      {"window", static_cast<double>(s.window), 1.0, false, 1e6},
+      {"max_steps", static_cast<double>(s.max_steps), 1.0, false, 1e8},
+  };
+  std::vector<SettingsProblem> problems;
+  for (const Range& r : ranges) {
+    const bool above_lo = r.lo_open ? r.value > r.lo : r.value >= r.lo;
+    if (!std::isfinite(r.value)) {
+      problems.push_back({r.key, "must be a finite number"});
+    } else if (!above_lo || r.value > r.hi) {
+      char what[160];
+      if (r.lo <= -1e300)
+        std::snprintf(what, sizeof what, "%g is out of range (at most %g)", r.value, r.hi);
+      else
+        std::snprintf(what, sizeof what, "%g is out of range %s%g, %g]", r.value,
+                      r.lo_open ? "(" : "[", r.lo, r.hi);
+      problems.push_back({r.key, what});
+    }
+  }
+  return problems;
+}
+
 SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,
-                                    const SimulationSettings& defaults) {
+                                    const SimulationSettings& defaults, const std::string& file) {
   SimulationSettings s = defaults;
-  const std::string file = "case.json";
   const auto parsed = parseJson(json, file, diagnostics);
   if (!parsed) return s;
   JsonFields fields(file, diagnostics);
@@ -617,11 +678,13 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
         int out;
         if (fields.integer(value, where, out)) *ik.target = out;
       }
-    if (key == "contact" || key == "warm_start_lambda") {
+    if (key == "contact" || key == "warm_start_lambda" || key == "kinetic_damping") {
       known = true;
       bool out;
       if (fields.boolean(value, where, out))
-        (key == "contact" ? s.contact : s.warm_start_lambda) = out;
+        (key == "contact"           ? s.contact
+         : key == "kinetic_damping" ? s.kinetic_damping
+                                    : s.warm_start_lambda) = out;
     } else if (key == "phase") {
       known = true;
       std::string out;
@@ -636,6 +699,8 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
     }
     if (!known) fields.error(where, "unknown simulation setting");
   }
+  for (const SettingsProblem& problem : settingsProblems(s))
+    fields.error("simulation." + problem.key, problem.what);
   return s;
 }
 

@@ -24,6 +24,10 @@
 //   - a displacement clamp of max_step per step keeps contact detection from missing a
 //     crossing.
 //
+// Path to equilibrium: after the ramp, kinetic damping (all velocities zeroed whenever the
+// total kinetic energy drops) plus a weak drag; only the path changes, not the equilibrium
+// (docs/performance.md: 881 -> 516 steps for the default valve, warm starts 207 -> 60).
+//
 // Equilibrium criterion (quasi-static): after the ramp, the largest displacement of any
 // vertex within one time step stays below `tolerance_mm` for `window` consecutive steps.
 // NaN or an exploding position (or a jump of more than half the model radius in one step)
@@ -69,10 +73,13 @@ struct SimulationSettings {
   // leaflet velocity relaxes toward it with time constant drag_time_ms. After the ramp the
   // field is zero, so the drag only damps and the equilibrium does not depend on it.
   double flow_speed_mm_per_ms = 0.0;
-  double drag_time_ms = 1.0;
+  double drag_time_ms = 3.0;
   // Duration of the boundary interpolation (annulus, PM tips) and of the pressure ramp
   // (smoothstep 0 -> 1).
-  double ramp_ms = 1.0;
+  // 6 ms: a 1 ms ramp let the ~8,000-vertex valve fold sharply (dihedral angles ~2.6 rad)
+  // and diverge; with 6 ms it stays smooth and the coarse valves need no more steps (the
+  // leaflets take ~6 ms to close anyway).
+  double ramp_ms = 6.0;
   // Time step; 0 selects dt from the mesh so that the median vertex has the stiffness ratio
   // k_i dt^2 / m_i = `stiffness_ratio`, k_i summing stretching, area and bending stiffness
   // (measured: the warm-started solve with 2 iterations is stable up to ratios of ~20 and
@@ -82,6 +89,10 @@ struct SimulationSettings {
   // Vertices stiffer than this (ratio k_i dt^2 / m_i) get a larger, fictitious mass (selective
   // mass scaling; the equilibrium does not depend on masses). <= 0 disables it.
   double max_stiffness_ratio = 15.0;
+  // Kinetic damping (dynamic relaxation, Cundall 1976; Barnes 1999 "Form finding and
+  // analysis of tension structures by dynamic relaxation"): after the ramp, whenever the total
+  // kinetic energy drops, all velocities are set to zero.
+  bool kinetic_damping = true;
   int iterations = 2;  // Gauss-Seidel sweeps per time step
   // Carry lambda across steps and apply the last step's constraint impulses in the
   // prediction (xpbd_constraints.h): the equilibrium is then the elastic one for any number
@@ -95,7 +106,7 @@ struct SimulationSettings {
   int max_steps = 20000;
   bool contact = true;
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
-  double contact_margin_mm = 0.0;     // <= 0: 0.5 * contact thickness
+  double contact_margin_mm = 0.0;     // <= 0: 0.25 * contact thickness
   double contact_exclusion_mm = 0.0;  // <= 0: 2.5 * contact thickness (the list radius)
   ClosurePhase phase = ClosurePhase::kClose;
   // Called every `progress_every` steps (0: never) and once at the end.
@@ -108,11 +119,26 @@ struct SimulationSettings {
 //   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, dt_ms,
 //   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, max_step_mm, tolerance_mm,
 //   window, max_steps, contact, contact_thickness_mm, contact_margin_mm, contact_exclusion_mm,
+//   kinetic_damping,
 //   phase ("close" | "open").
 // Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
 // "simulation.<key>"); the remaining keys still apply.
+// Values are range-checked (settingsProblems) after parsing; out-of-range values are reported
+// as "simulation.<key>: <problem>" in `file`.
 SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,
-                                    const SimulationSettings& defaults = {});
+                                    const SimulationSettings& defaults = {},
+                                    const std::string& file = "case.json");
+
+// Range checks of the settings: every number finite, positive where the physics needs it,
+// and below a sane upper bound (e.g. pressure_mmhg in (0, 500]: far above any physiological
+// pressure, so a typo such as 1e300 is an input error, not a run). `key` is the JSON key of
+// settingsFromJson; empty when all settings are acceptable. simulate() refuses settings with
+// problems.
+struct SettingsProblem {
+  std::string key;
+  std::string what;
+};
+std::vector<SettingsProblem> settingsProblems(const SimulationSettings& settings);
 
 // A simulation problem in plain arrays. simulateClosure builds one from a case; tests and
 // benchmarks may build their own (e.g. a clamped disc).
@@ -150,6 +176,7 @@ struct SimulationResult {
   int contact_candidates = 0;        // candidate pairs in the last list
   int contacts = 0;                  // active contact constraints (lambda > 0) at the end
   long long projections = 0;         // constraint projections performed (for ns/projection)
+  int kinetic_stops = 0;             // velocity resets by kinetic damping
   std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
   bool ok() const { return error.empty(); }
 };

@@ -71,7 +71,7 @@ struct SyntheticCase {
 };
 
 // The tight solver settings of the truth: the simulator defaults with a 4x smaller
-// equilibrium tolerance and a 2x longer window (same step cap).
+// equilibrium tolerance and a 2x longer window, capped at 6000 steps.
 SimulationSettings truthSimulationSettings();
 
 // Builds a synthetic case. Throws std::invalid_argument naming the option for bad options

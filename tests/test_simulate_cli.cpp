@@ -22,22 +22,23 @@ class SimulateCommand : public ::testing::Test {
 };
 
 TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
-  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " +
-                             quoted(dir_ / "sim"));
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "sim"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("| Case | Area"), std::string::npos) << r.out;
   const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "sim" / "metrics.json"));
-  for (const char* key : {"min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm", "area_mm2",
-                          "prolapse_segments", "prolapse_max_height_mm", "converged", "steps",
-                          "sim_seconds"}) {
+  for (const char* key :
+       {"min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm", "area_mm2", "prolapse_segments",
+        "prolapse_max_height_mm", "converged", "steps", "sim_seconds"}) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_GT(metrics["steps"].get<int>(), 0);
   const std::string vtk = testing::readText(dir_ / "sim" / "closed.vtk");
   EXPECT_NE(vtk.find("SCALARS height_above_annulus_plane_mm"), std::string::npos);
   EXPECT_NE(vtk.find("SCALARS distance_to_tracing_mm"), std::string::npos);
-  EXPECT_NE(testing::readText(dir_ / "sim" / "closed.ply").find("property float prolapse_height_mm"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::readText(dir_ / "sim" / "closed.ply").find("property float prolapse_height_mm"),
+      std::string::npos);
 }
 
 TEST_F(SimulateCommand, IsDeterministicByteForByte) {
@@ -47,7 +48,8 @@ TEST_F(SimulateCommand, IsDeterministicByteForByte) {
   ASSERT_EQ(runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "b"))
                 .exit_code,
             0);
-  EXPECT_EQ(testing::readText(dir_ / "a" / "closed.ply"), testing::readText(dir_ / "b" / "closed.ply"));
+  EXPECT_EQ(testing::readText(dir_ / "a" / "closed.ply"),
+            testing::readText(dir_ / "b" / "closed.ply"));
 }
 
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
@@ -72,6 +74,41 @@ TEST_F(SimulateCommand, RejectsAnUnknownSimulationOverride) {
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --out " + quoted(dir_ / "sim"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("simulation.presure_mmhg"), std::string::npos) << r.err;
+}
+
+TEST_F(SimulateCommand, RejectsOutOfRangeSimulationSettingsNamingFileKeyAndProblem) {
+  // 1e300 mmHg used to "converge" in 28 steps; now every setting is range-checked up front.
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
+  c["simulation"] = {
+      {"pressure_mmhg", 1e300}, {"thickness_mm", -1.0}, {"tolerance_mm", 0.0}, {"iterations", 0}};
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2);
+  for (const char* key : {"simulation.pressure_mmhg", "simulation.thickness_mm",
+                          "simulation.tolerance_mm", "simulation.iterations"}) {
+    EXPECT_NE(r.err.find(key), std::string::npos) << key << "\n" << r.err;
+  }
+  EXPECT_NE(r.err.find("case.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("out of range"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+}
+
+TEST_F(SimulateCommand, ADivergingRunExitsWith3AndWritesNoOutput) {
+  // Settings inside their ranges can still break a run: with dt = 1e-200 ms, 1 / dt^2
+  // overflows, the first projection yields NaN positions and the step loop must stop with an
+  // error instead of writing them.
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
+  c["simulation"] = {{"dt_ms", 1e-200}};
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("diverged"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.vtk"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
 }
 
 }  // namespace

@@ -92,3 +92,45 @@ struct SweepCordOptions {
 int runSweepCord(const SweepCordOptions& options);
 
 }  // namespace chordfit::cli
+
+#include <vector>
+
+namespace chordfit::cli {
+
+// compare: close the case once per cord set, Table 1 side by side (issue 5 item 6).
+struct CompareOptions {
+  std::string case_dir;
+  std::vector<std::string> cords_files;  // one or more CordSet JSON files
+  std::string labels;                    // "a,b,...": one per file; default the file names
+  std::string out_dir;                   // optional: compare.md + compare.csv
+  bool quiet = false;
+};
+int runCompare(const CompareOptions& options);
+
+}  // namespace chordfit::cli
+
+#include <vector>
+
+namespace chordfit::cli {
+
+// fit: inverse fit of the cord rest lengths (and optionally the PM tips) to the tracings
+// (issue 5; inverse/fit_cords.h).
+struct FitCommandOptions {
+  std::string case_dir;
+  std::string seed_cords_file;     // optional; else the case's cords, else the heuristic
+  std::string params = "scales";   // scales | groups | scales+tips
+  std::string optimizer = "ceres";  // ceres | bobyqa | cobyla | sbplx | crs2
+  int max_sims = 400;               // forward closures in all
+  int threads = 2;
+  std::vector<double> scale_bounds{0.7, 1.5};
+  double tip_box_mm = 8.0;
+  bool prefit = true;               // global scale pre-fit before the optimiser
+  double fd_scale_step = 0.01;      // central-difference step on a scale
+  double fd_tip_step_mm = 0.1;      // ... on a tip offset coordinate
+  bool fd_warm_start = false;       // perturbed closures start from the base closed state
+  std::string out_dir;
+  bool quiet = false;
+};
+int runFit(const FitCommandOptions& options);
+
+}  // namespace chordfit::cli

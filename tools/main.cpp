@@ -97,6 +97,47 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
 
+void addCompare(CLI::App& app, CompareOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "compare", "Close the case once per cord set; Table 1 side by side (manual vs optimised)");
+  cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
+  cmd->add_option("CORDS", o.cords_files, "CordSet JSON files (one or more)")->required();
+  cmd->add_option("--labels", o.labels, "Row labels, comma-separated, one per file");
+  cmd->add_option("--out", o.out_dir, "Write compare.md and compare.csv here");
+  cmd->add_flag("--quiet", o.quiet, "No progress lines");
+}
+
+void addFit(CLI::App& app, FitCommandOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "fit", "Fit cord rest lengths (and PM tips) to the tracings with Ceres or NLopt");
+  cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
+  cmd->add_option("--seed-cords", o.seed_cords_file,
+                  "Seed CordSet JSON (default: the case's cords, else the heuristic); manual "
+                  "cords are the start, locked cords are kept");
+  cmd->add_option("--params", o.params, "scales | groups | scales+tips")->capture_default_str();
+  cmd->add_option("--optimizer", o.optimizer, "ceres | bobyqa | cobyla | sbplx | crs2")
+      ->capture_default_str();
+  cmd->add_option("--max-sims", o.max_sims, "Forward closures in all (budget)")
+      ->capture_default_str();
+  cmd->add_option("--threads", o.threads, "Parallel closures (finite differences, pre-fit)")
+      ->capture_default_str();
+  cmd->add_option("--scale-bounds", o.scale_bounds, "Lower and upper scale bound, e.g. 0.5,1.5")
+      ->expected(2)
+      ->delimiter(',')
+      ->capture_default_str();
+  cmd->add_option("--tip-box", o.tip_box_mm, "PM tip offset bound per axis, mm (scales+tips)")
+      ->capture_default_str();
+  cmd->add_flag("!--no-prefit", o.prefit, "Skip the global scale pre-fit");
+  cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
+      ->capture_default_str();
+  cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")
+      ->capture_default_str();
+  cmd->add_flag("--fd-warm", o.fd_warm_start,
+                "Warm-start finite-difference closures from the base closed state");
+  cmd->add_option("--out", o.out_dir, "Output directory")->required();
+  cmd->add_flag("--quiet", o.quiet, "No progress lines");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -117,6 +158,10 @@ int main(int argc, char** argv) {
   SweepCordOptions sweep_cord;
   addSweepCord(app, sweep_cord);
   addMakeCase(app, make_case);
+  FitCommandOptions fit;
+  addFit(app, fit);
+  CompareOptions compare;
+  addCompare(app, compare);
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -131,6 +176,8 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("simulate")) return runSimulate(simulate);
     if (app.got_subcommand("sweep-cord")) return runSweepCord(sweep_cord);
     if (app.got_subcommand("make-case")) return runMakeCase(make_case);
+    if (app.got_subcommand("fit")) return runFit(fit);
+    if (app.got_subcommand("compare")) return runCompare(compare);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

@@ -99,6 +99,12 @@ int runMakeCase(const MakeCaseOptions& options) {
               << ", the preset intends " << joinSegments(synthetic.preset.intended_prolapse)
               << "\n";
   }
+  const std::vector<std::string>& traced = synthetic.truth_metrics.tracing_prolapse.segments;
+  if (traced != synthetic.preset.intended_prolapse) {
+    std::cerr << "warning: the tracings show prolapse in " << joinSegments(traced)
+              << ", the preset intends " << joinSegments(synthetic.preset.intended_prolapse)
+              << "\n";
+  }
   int points = 0;
   for (const Tracing& t : synthetic.valve_case.tracings)
     points += static_cast<int>(t.points.rows());

@@ -95,7 +95,9 @@ int runSimulate(const SimulateOptions& options) {
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
   Diagnostics diagnostics;
-  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  SimulationSettings settings =
+      settingsFromJson(valve_case->simulation_json, diagnostics, {},
+                       (std::filesystem::path(options.case_dir) / "case.json").string());
   if (!diagnostics.ok()) return reportProblems(diagnostics);
   settings.phase = ClosurePhase::kClose;
 

@@ -40,7 +40,8 @@ int defaultP2PrimaryCord(const ValveCase& c, const CordSet& cords) {
   for (std::size_t i = 0; i < cords.cords.size(); ++i) {
     const Cord& cord = cords.cords[i];
     const Eigen::Vector3d p = c.mesh.V.row(cord.vertex).transpose();
-    if (cord.kind != CordKind::kPrimary || segmentOf(segments, p, c.mesh.leaflet(cord.vertex)) != kP2) {
+    if (cord.kind != CordKind::kPrimary ||
+        segmentOf(segments, p, c.mesh.leaflet(cord.vertex)) != kP2) {
       continue;
     }
     const double offset = std::abs(std::remainder(annulusAngle(frame, p) - M_PI, 2 * M_PI));
@@ -68,9 +69,9 @@ std::string sweepCsv(const std::vector<SweepPoint>& points) {
   csv << "scale,mean_deviation_mm,vertex_x_mm,vertex_y_mm,vertex_z_mm,vertex_height_mm,"
          "converged,steps\n";
   for (const SweepPoint& p : points) {
-    csv << p.scale << "," << p.mean_deviation << "," << p.vertex.x() << "," << p.vertex.y()
-        << "," << p.vertex.z() << "," << p.height << "," << (p.converged ? 1 : 0) << ","
-        << p.steps << "\n";
+    csv << p.scale << "," << p.mean_deviation << "," << p.vertex.x() << "," << p.vertex.y() << ","
+        << p.vertex.z() << "," << p.height << "," << (p.converged ? 1 : 0) << "," << p.steps
+        << "\n";
   }
   return csv.str();
 }
@@ -103,7 +104,9 @@ int runSweepCord(const SweepCordOptions& options) {
     return kExitBadInput;
   }
   Diagnostics diagnostics;
-  const SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  const SimulationSettings settings =
+      settingsFromJson(valve_case->simulation_json, diagnostics, {},
+                       (std::filesystem::path(options.case_dir) / "case.json").string());
   if (!diagnostics.ok()) return reportProblems(diagnostics);
 
   const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
@@ -133,13 +136,15 @@ int runSweepCord(const SweepCordOptions& options) {
         p.vertex = r.V.row(vertex).transpose();
         p.height = annulus.frame.plane.signedDistance(p.vertex);
         if (tracing_points.rows() > 0) {
-          p.mean_deviation = pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
+          p.mean_deviation =
+              pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
         }
       }
       std::lock_guard<std::mutex> lock(print);
-      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n",
-                   ++done, count, p.scale, p.height, p.mean_deviation,
-                   r.ok() ? (r.converged ? "" : " (not converged)") : (" ERROR " + r.error).c_str());
+      std::fprintf(
+          stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n", ++done,
+          count, p.scale, p.height, p.mean_deviation,
+          r.ok() ? (r.converged ? "" : " (not converged)") : (" ERROR " + r.error).c_str());
     }
   };
   std::vector<std::thread> pool;
@@ -160,26 +165,32 @@ int runSweepCord(const SweepCordOptions& options) {
     height.push_back(p.height);
     x.push_back(p.vertex.x()), y.push_back(p.vertex.y()), z.push_back(p.vertex.z());
   }
-  nlohmann::json summary = {{"cord", cord},
-                            {"vertex", vertex},
-                            {"base_rest_length_mm", base},
-                            {"range", options.range},
-                            {"step", options.step},
-                            {"all_converged", std::all_of(points.begin(), points.end(),
-                                                          [](const SweepPoint& p) { return p.converged; })},
-                            {"vertex_height", noiseJson(mapNoise(s, height, options.window))},
-                            {"vertex_x", noiseJson(mapNoise(s, x, options.window))},
-                            {"vertex_y", noiseJson(mapNoise(s, y, options.window))},
-                            {"vertex_z", noiseJson(mapNoise(s, z, options.window))}};
+  nlohmann::json summary = {
+      {"cord", cord},
+      {"vertex", vertex},
+      {"base_rest_length_mm", base},
+      {"range", options.range},
+      {"step", options.step},
+      {"all_converged",
+       std::all_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.converged; })},
+      {"vertex_height", noiseJson(mapNoise(s, height, options.window))},
+      {"vertex_x", noiseJson(mapNoise(s, x, options.window))},
+      {"vertex_y", noiseJson(mapNoise(s, y, options.window))},
+      {"vertex_z", noiseJson(mapNoise(s, z, options.window))}};
   std::vector<PlotPanel> panels;
   if (tracing_points.rows() > 0) {
     summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window));
-    panels.push_back({"Mean deviation to the tracings", "scale of cord " + std::to_string(cord),
-                      "mean deviation (mm)", {{"mean deviation", s, deviation, true, true}}, false});
+    panels.push_back({"Mean deviation to the tracings",
+                      "scale of cord " + std::to_string(cord),
+                      "mean deviation (mm)",
+                      {{"mean deviation", s, deviation, true, true}},
+                      false});
   }
   panels.push_back({"Height of the cord's leaflet vertex above the closed annulus plane",
-                    "scale of cord " + std::to_string(cord), "height (mm)",
-                    {{"vertex " + std::to_string(vertex), s, height, true, true}}, false});
+                    "scale of cord " + std::to_string(cord),
+                    "height (mm)",
+                    {{"vertex " + std::to_string(vertex), s, height, true, true}},
+                    false});
 
   const std::filesystem::path out(options.out_dir);
   writeFileAtomically(out / "sweep.csv", sweepCsv(points));
@@ -188,10 +199,11 @@ int runSweepCord(const SweepCordOptions& options) {
   for (const char* key : {"mean_deviation", "vertex_height"}) {
     if (!summary.contains(key)) continue;
     const auto& n = summary[key];
-    std::printf("%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
-                "signal/noise %.0f\n",
-                key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
-                n["change_over_0.5_percent"].get<double>(), n["signal_to_noise"].get<double>());
+    std::printf(
+        "%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
+        "signal/noise %.0f\n",
+        key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
+        n["change_over_0.5_percent"].get<double>(), n["signal_to_noise"].get<double>());
   }
   std::cout << "wrote " << (out / "sweep.csv").string() << ", sweep.svg, sweep.json\n";
   return kExitOk;

@@ -1,0 +1,405 @@
+#include "experiments/experiment_jobs.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <vector>
+
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/mesh_io.h"
+
+extern char** environ;
+
+namespace chordfit::experiments {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+std::string formatNumber(double value) {
+  char buffer[32];
+  std::snprintf(buffer, sizeof buffer, "%g", value);
+  return buffer;
+}
+
+// The command as a reader would type it from the source root: paths inside the source tree
+// are shown relative to it (results record no machine-specific prefix).
+std::string commandLine(const std::vector<std::string>& args) {
+  const std::string root = std::string(CHORDFIT_SOURCE_DIR) + "/";
+  std::string line;
+  for (std::string a : args) {
+    if (a.rfind(root, 0) == 0) a = a.substr(root.size());
+    const bool plain = a.find_first_of(" '\"\\$") == std::string::npos;
+    line += (line.empty() ? "" : " ") + (plain ? a : "'" + a + "'");
+  }
+  return line;
+}
+
+// Runs args[0] with stdout and stderr appended to `log`. Returns the exit code, or -1 when
+// the program could not be started (e.g. missing executable), 128 + signal when killed.
+int runProgram(const std::vector<std::string>& args, const fs::path& log) {
+  fs::create_directories(log.parent_path());
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, 1, log.c_str(), O_WRONLY | O_CREAT | O_APPEND, 0644);
+  posix_spawn_file_actions_adddup2(&actions, 1, 2);
+  posix_spawn_file_actions_addopen(&actions, 0, "/dev/null", O_RDONLY, 0);
+  std::vector<char*> argv;
+  for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  if (spawned != 0) return -1;
+  int status = 0;
+  if (waitpid(pid, &status, 0) < 0) return -1;
+  if (WIFEXITED(status)) return WEXITSTATUS(status);
+  return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+}
+
+std::string logTail(const fs::path& log, std::size_t lines = 6) {
+  std::ifstream in(log);
+  std::vector<std::string> all;
+  for (std::string line; std::getline(in, line);) all.push_back(line);
+  std::string tail;
+  for (std::size_t i = all.size() > lines ? all.size() - lines : 0; i < all.size(); ++i) {
+    tail += "\n    | " + all[i];
+  }
+  return tail;
+}
+
+StepOutcome failure(const std::string& what) { return {false, false, what, ""}; }
+
+// Runs a chordfit subcommand; on failure describes it with the log's last lines.
+bool runChordfit(const RunPaths& paths, std::vector<std::string> args, const fs::path& log,
+                 std::string& error, std::string* command_out = nullptr) {
+  args.insert(args.begin(), paths.chordfit.string());
+  if (command_out) *command_out = commandLine(args);
+  if (!fs::exists(paths.chordfit)) {
+    error = "chordfit executable not found: " + paths.chordfit.string();
+    return false;
+  }
+  const int code = runProgram(args, log);
+  if (code == 0) return true;
+  error = (code < 0 ? "could not start: " : "exit code " + std::to_string(code) + ": ") +
+          commandLine(args) + " (log " + log.string() + ")" + logTail(log);
+  return false;
+}
+
+json readJsonFile(const fs::path& path) {
+  std::string text;
+  if (!readWholeFile(path, text)) throw std::runtime_error(path.string() + ": file not found");
+  try {
+    return json::parse(text);
+  } catch (const json::exception& e) {
+    throw std::runtime_error(path.string() + ": not valid JSON: " + e.what());
+  }
+}
+
+json requireKey(const json& j, const char* key, const fs::path& file) {
+  if (!j.contains(key)) throw std::runtime_error(file.string() + ": missing key \"" + key + "\"");
+  return j.at(key);
+}
+
+// The Table 1 metrics of a simulate or fit metrics.json, checked.
+json tableMetrics(const json& m, const fs::path& file) {
+  json t;
+  for (const char* key : {"area_mm2", "min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm",
+                          "prolapse_reconstructed", "prolapse_segments"}) {
+    t[key] = requireKey(m, key, file);
+  }
+  t["tracing_prolapse_segments"] = m.value("tracing_prolapse_segments", json(nullptr));
+  return t;
+}
+
+// The true cord set on the CASE mesh: the case's cords (same order and vertices as the
+// truth's, synthetic_case.h) with the true rest lengths, and the true PM tips.
+CordSet trueCordsOnCaseMesh(const fs::path& case_dir, const json& truth) {
+  Diagnostics diagnostics;
+  CordSet seed, true_set;
+  if (!readCordSet(case_dir / "cords.json", "cords.json", seed, diagnostics) ||
+      !readCordSet(case_dir / "truth" / "cords.json", "truth/cords.json", true_set, diagnostics)) {
+    std::ostringstream out;
+    diagnostics.print(out);
+    throw std::runtime_error(case_dir.string() + ": " + out.str());
+  }
+  const json& cords = truth.at("cords");
+  if (cords.size() != seed.cords.size() || true_set.tips.size() != seed.tips.size()) {
+    throw std::runtime_error(case_dir.string() + ": truth.json and cords.json disagree in size");
+  }
+  CordSet result = seed;
+  result.tips = true_set.tips;
+  for (std::size_t i = 0; i < cords.size(); ++i) {
+    // true_rest_length_mm = true_scale_of_case_seed * case seed rest length (truth.json).
+    result.cords[i].rest_length = cords[i].at("true_rest_length_mm").get<double>();
+  }
+  return result;
+}
+
+// Distance (mm) of each cord's attachment, in the TRUE closed state, from the nearest
+// tracing plane: how directly the tracings observe the leaflet that cord holds.
+std::vector<double> attachmentPlaneDistances(const fs::path& case_dir, const json& truth) {
+  Diagnostics diagnostics;
+  const auto valve_case = loadCase(case_dir, diagnostics);
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  if (!valve_case ||
+      !readMesh(case_dir / "truth" / "closed.ply", V, F, diagnostics, "truth/closed.ply")) {
+    std::ostringstream out;
+    diagnostics.print(out);
+    throw std::runtime_error(case_dir.string() + ": " + out.str());
+  }
+  std::vector<double> distances;
+  for (const json& cord : truth.at("cords")) {
+    const Eigen::Vector3d p = V.row(cord.at("truth_vertex").get<int>()).transpose();
+    double nearest = std::numeric_limits<double>::infinity();
+    for (const Tracing& t : valve_case->tracings) {
+      nearest = std::min(nearest, std::abs(t.plane_normal.dot(p - t.plane_origin)));
+    }
+    distances.push_back(nearest);
+  }
+  return distances;
+}
+
+// Per-cord rest length against the truth; ruptured cords are marked (their true length is
+// a placeholder for "never taut", nothing a fitter can or should recover).
+json cordRecovery(const fs::path& case_dir, const fs::path& cords_file) {
+  const json truth = readJsonFile(case_dir / "truth" / "truth.json");
+  Diagnostics diagnostics;
+  CordSet fitted;
+  if (!readCordSet(cords_file, cords_file.string(), fitted, diagnostics)) {
+    std::ostringstream out;
+    diagnostics.print(out);
+    throw std::runtime_error(out.str());
+  }
+  const json& cords = truth.at("cords");
+  if (fitted.cords.size() != cords.size()) {
+    throw std::runtime_error(cords_file.string() + ": " + std::to_string(fitted.cords.size()) +
+                             " cords, the truth has " + std::to_string(cords.size()));
+  }
+  const std::vector<double> distances = attachmentPlaneDistances(case_dir, truth);
+  json rows = json::array();
+  for (std::size_t i = 0; i < cords.size(); ++i) {
+    const double true_length = cords[i].at("true_rest_length_mm").get<double>();
+    const double length = fitted.cords[i].rest_length;
+    rows.push_back({{"index", i},
+                    {"segment", cords[i].at("segment")},
+                    {"kind", cords[i].at("kind")},
+                    {"ruptured", cords[i].at("ruptured")},
+                    {"plane_distance_mm", distances[i]},
+                    {"rest_length_mm", length},
+                    {"true_rest_length_mm", true_length},
+                    {"relative_error", length / true_length - 1.0}});
+  }
+  return rows;
+}
+
+// AvgD against forward simulations from a fit's convergence.csv. The column names are read
+// from the header: the simulation count is the column named forward_sims (or sims), the
+// deviation the one named mean_mm (or mean_deviation_mm).
+json convergenceTrace(const fs::path& csv_file) {
+  std::ifstream in(csv_file);
+  if (!in) throw std::runtime_error(csv_file.string() + ": file not found");
+  std::string line;
+  std::getline(in, line);
+  std::vector<std::string> header;
+  std::istringstream hs(line);
+  for (std::string cell; std::getline(hs, cell, ',');) header.push_back(cell);
+  auto column = [&](std::initializer_list<const char*> names) {
+    for (const char* name : names) {
+      for (std::size_t k = 0; k < header.size(); ++k) {
+        if (header[k] == name) return static_cast<int>(k);
+      }
+    }
+    return -1;
+  };
+  const int sims = column({"forward_sims", "sims", "forward_simulations"});
+  const int mean = column({"mean_mm", "mean_deviation_mm", "avgd_mm"});
+  if (sims < 0 || mean < 0) {
+    throw std::runtime_error(csv_file.string() + ": header \"" + line +
+                             "\" has no forward_sims / mean_mm column");
+  }
+  json x = json::array(), y = json::array();
+  while (std::getline(in, line)) {
+    std::vector<std::string> cells;
+    std::istringstream ls(line);
+    for (std::string cell; std::getline(ls, cell, ',');) cells.push_back(cell);
+    if (static_cast<int>(cells.size()) <= std::max(sims, mean)) continue;
+    x.push_back(std::stod(cells[sims]));
+    y.push_back(std::stod(cells[mean]));
+  }
+  return {{"forward_sims", x}, {"mean_mm", y}};
+}
+
+// A directory under `source` holding a case generated with exactly `spec`'s options.
+fs::path matchingSourceCase(const CaseSpec& spec, const fs::path& source) {
+  if (source.empty() || !fs::is_directory(source)) return {};
+  std::vector<fs::path> candidates;
+  for (const auto& entry : fs::directory_iterator(source)) candidates.push_back(entry.path());
+  std::sort(candidates.begin(), candidates.end());
+  for (const fs::path& dir : candidates) {
+    std::string text;
+    if (!fs::exists(dir / "case.json") || !readWholeFile(dir / "truth" / "truth.json", text)) {
+      continue;
+    }
+    const json truth = json::parse(text, nullptr, false);
+    if (truth.is_discarded() || !truth.contains("generation")) continue;
+    const json& g = truth.at("generation");
+    auto same = [](const json& value, double wanted) {
+      return value.is_number() && std::abs(value.get<double>() - wanted) < 1e-12;
+    };
+    if (truth.value("preset", "") == spec.preset && truth.value("seed", -1) == spec.seed &&
+        same(g.value("case_edge_mm", json()), spec.edge_mm) &&
+        same(g.value("planes", json()), spec.planes) &&
+        same(g.value("noise_mm", json()), spec.noise_mm) &&
+        same(g.value("dropout_fraction", json()), spec.dropout) &&
+        same(g.value("truth_edge_mm", json()), spec.edge_mm / 2)) {
+      return dir;
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+fs::path caseDirectory(const RunPaths& paths, const std::string& case_id) {
+  return paths.work / "cases" / case_id;
+}
+
+fs::path jobResultPath(const RunPaths& paths, const std::string& job_id) {
+  return paths.results / "jobs" / (job_id + ".json");
+}
+
+StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
+  const fs::path dir = caseDirectory(paths, spec.id);
+  if (fs::exists(dir / "case.json")) return {true, true, "", "present"};
+  const fs::path staging =
+      paths.work / "cases" / (".staging-" + spec.id + "-" + std::to_string(::getpid()));
+  fs::remove_all(staging);
+  const fs::path log = paths.work / "logs" / ("case_" + spec.id + ".txt");
+  std::string error;
+  const auto start = Clock::now();
+  std::string how = "generated";
+  if (const fs::path source = matchingSourceCase(spec, paths.case_source); !source.empty()) {
+    fs::create_directories(staging);
+    fs::copy(source, staging, fs::copy_options::recursive);
+    how = "copied from " + source.string();
+  } else if (!runChordfit(
+                 paths,
+                 {"make-case", "--preset", spec.preset, "--seed", std::to_string(spec.seed),
+                  "--edge", formatNumber(spec.edge_mm), "--planes", std::to_string(spec.planes),
+                  "--noise", formatNumber(spec.noise_mm), "--dropout", formatNumber(spec.dropout),
+                  "--out", staging.string(), "--quiet"},
+                 log, error)) {
+    fs::remove_all(staging);
+    return failure("case " + spec.id + ": " + error);
+  }
+  std::error_code ec;
+  fs::rename(staging, dir, ec);  // fails when another shard was first: same files, keep theirs
+  if (ec) fs::remove_all(staging);
+  if (!fs::exists(dir / "case.json")) {
+    return failure("case " + spec.id + ": " + dir.string() + " missing after generation");
+  }
+  char seconds[32];
+  std::snprintf(seconds, sizeof seconds, " in %.1f s",
+                std::chrono::duration<double>(Clock::now() - start).count());
+  return {true, false, "", how + seconds};
+}
+
+StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, const JobSpec& job,
+                   const RunPaths& paths, bool force) {
+  const fs::path result_path = jobResultPath(paths, job.id);
+  if (!force && fs::exists(result_path)) return {true, true, "", "result present"};
+  const CaseSpec& spec = findCase(plan, job.case_id);
+  const StepOutcome made = ensureCase(spec, paths);
+  if (!made.ok) return made;
+
+  const fs::path case_dir = caseDirectory(paths, spec.id);
+  const fs::path run_dir = paths.work / "runs" / job.id;
+  const fs::path log = run_dir / "log.txt";
+  fs::remove_all(run_dir);
+  fs::create_directories(run_dir);
+  std::string error, command;
+  json result = {{"job", job.id},           {"case", spec.id},         {"preset", spec.preset},
+                 {"seed", spec.seed},       {"planes", spec.planes},   {"noise_mm", spec.noise_mm},
+                 {"dropout", spec.dropout}, {"edge_mm", spec.edge_mm}, {"method", methodTag(job)},
+                 {"label", job.label}};
+  const auto start = Clock::now();
+  try {
+    fs::path cords_file;
+    if (job.method == Method::kFit) {
+      const std::string max_sims = std::to_string(config.max_sims);
+      if (!runChordfit(paths,
+                       {"fit", case_dir.string(), "--params", job.params, "--optimizer",
+                        job.optimizer, "--max-sims", max_sims, "--threads",
+                        std::to_string(config.fit_threads), "--out", run_dir.string()},
+                       log, error, &command)) {
+        return failure("job " + job.id + ": " + error);
+      }
+      cords_file = run_dir / "cords.json";
+      result["params"] = job.params;
+      result["optimizer"] = job.optimizer;
+      result["max_sims"] = config.max_sims;
+    } else {
+      cords_file = case_dir / "cords.json";
+      if (job.method == Method::kTruth) {
+        const json truth = readJsonFile(case_dir / "truth" / "truth.json");
+        cords_file = run_dir / "true_cords_on_case_mesh.json";
+        writeCordSet(cords_file, trueCordsOnCaseMesh(case_dir, truth));
+        const fs::path floor_file = case_dir / "truth" / "metrics.json";
+        result["noise_floor"] = tableMetrics(readJsonFile(floor_file), floor_file);
+      }
+      if (!runChordfit(paths,
+                       {"simulate", case_dir.string(), "--cords", cords_file.string(), "--quiet",
+                        "--out", run_dir.string()},
+                       log, error, &command)) {
+        return failure("job " + job.id + ": " + error);
+      }
+    }
+    const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+    const fs::path metrics_file = run_dir / "metrics.json";
+    const json metrics = readJsonFile(metrics_file);
+    result["metrics"] = tableMetrics(metrics, metrics_file);
+    if (job.method == Method::kFit) {
+      for (const char* key : {"forward_sims", "fit_seconds", "initial_mean_mm"}) {
+        result[key] = requireKey(metrics, key, metrics_file);
+      }
+      result["convergence"] = convergenceTrace(run_dir / "convergence.csv");
+    } else {
+      result["forward_sims"] = 1;
+      result["converged"] = requireKey(metrics, "converged", metrics_file);
+      result["steps"] = requireKey(metrics, "steps", metrics_file);
+    }
+    result["wall_seconds"] = wall;
+    result["command"] = command;
+    result["revision"] = paths.revision;
+    result["cords"] = cordRecovery(case_dir, cords_file);
+  } catch (const std::exception& e) {
+    return failure("job " + job.id + ": " + e.what());
+  }
+  writeFileAtomically(result_path, result.dump(1) + "\n");
+  char summary[160];
+  std::snprintf(summary, sizeof summary, "AvgD %.2f mm, %d sims, %.1f s",
+                result["metrics"]["mean_mm"].is_number()
+                    ? result["metrics"]["mean_mm"].get<double>()
+                    : std::nan(""),
+                result["forward_sims"].get<int>(), result["wall_seconds"].get<double>());
+  return {true, false, "", summary};
+}
+
+}  // namespace chordfit::experiments

@@ -1,0 +1,82 @@
+// The benchmark experiments (issue "Benchmark experiments") as a fixed list of cases and jobs.
+// A case is one `chordfit make-case` run (preset, patient seed, tracing variant); a job is one
+// method on one case (heuristic closure, truth closure, or a `chordfit fit`). The plan is a
+// pure function of the configuration, so every process of a sharded run sees the same list
+// in the same order and picks its own share by index.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace chordfit::experiments {
+
+struct CaseSpec {
+  std::string id;  // directory name, e.g. "prolapse-P2_s1" or "prolapse-P2_s1_noise0.6"
+  std::string preset;
+  int seed = 1;
+  int planes = 6;
+  double noise_mm = 0.3;
+  double dropout = 0.1;
+  double edge_mm = 2.5;
+};
+
+enum class Method { kHeuristic, kTruth, kFit };
+
+struct JobSpec {
+  std::string id;  // "<case id>__<method tag>", a file name
+  std::string case_id;
+  Method method = Method::kHeuristic;
+  std::string params;     // fit only: groups | scales | scales+tips
+  std::string optimizer;  // fit only: ceres | bobyqa | cobyla | sbplx | crs2
+  std::string label;      // Table 1 row label: heuristic, manual-like, per-cord, ...
+};
+
+struct ExperimentConfig {
+  std::vector<std::string> presets;
+  std::vector<int> seeds;
+  double edge_mm = 2.5;
+  int planes = 6;
+  double noise_mm = 0.3;
+  double dropout = 0.1;
+  int max_sims = 300;  // forward-simulation budget of every fit (equal for all optimisers)
+  int fit_threads = 2;
+  // Optimiser comparison: these presets at the first seed, per-cord scales.
+  std::vector<std::string> optimizer_presets;
+  std::vector<std::string> optimizers;
+  // Sensitivity sweeps on this preset at the first seed: heuristic and per-cord fit.
+  std::string sensitivity_preset;
+  std::vector<double> noise_sweep;
+  std::vector<int> plane_sweep;
+};
+
+// Full run: every cohort preset, seeds 1-3, all optimisers, both sweeps.
+ExperimentConfig fullConfig();
+// CI smoke run: one case (normal-1 seed 2, edge 3 mm, 3 planes: the bundled small-normal),
+// small fit budget, every method and table kind but no extra sweep cases.
+ExperimentConfig smokeConfig();
+
+struct ExperimentPlan {
+  std::vector<CaseSpec> cases;
+  std::vector<JobSpec> jobs;
+};
+
+// Cases and jobs in a fixed order (cases: preset, seed, then sweep variants; jobs grouped by
+// case). A job shared by several experiments (the per-cord Ceres fit is Table 1, optimiser
+// comparison and sensitivity baseline at once) appears once.
+ExperimentPlan makePlan(const ExperimentConfig& config);
+
+const CaseSpec& findCase(const ExperimentPlan& plan, const std::string& case_id);
+
+// "i/N" with 1 <= i <= N. Returns false on malformed text.
+struct Shard {
+  int index = 1;  // 1-based
+  int count = 1;
+};
+bool parseShard(const std::string& text, Shard& shard);
+// Round-robin: item k (0-based, plan order) belongs to shard (k mod N) + 1.
+bool inShard(std::size_t item, const Shard& shard);
+
+// Table 1 labels of the methods, in table order.
+std::string methodTag(const JobSpec& job);  // "heuristic", "truth", "fit_scales_ceres", ...
+
+}  // namespace chordfit::experiments

@@ -1,0 +1,373 @@
+// run_experiments: the benchmark experiments of issue "Benchmark experiments" in one command.
+// Generates the cohort cases, runs every (case x method) job through the chordfit program and
+// merges the per-job results into the tables and plots of experiments/results/. See
+// experiments/README.md, "Benchmark experiments". Arguments are parsed by hand (CLI11 is
+// confined to tools/main.cpp for build time).
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/csv_text.h"
+#include "experiments/experiment_jobs.h"
+#include "experiments/experiment_plan.h"
+#include "experiments/experiment_tables.h"
+
+namespace {
+
+namespace fs = std::filesystem;
+using namespace chordfit::experiments;
+using Clock = std::chrono::steady_clock;
+
+constexpr int kExitOk = 0;
+constexpr int kExitJobsFailed = 1;
+constexpr int kExitUsage = 2;
+
+const char* kUsage = R"(usage: run_experiments COMMAND [options]
+
+commands:
+  all      run every case and job, then merge: the one command that regenerates
+           experiments/results/ from scratch
+  run      run the cases and jobs of one shard (--shard i/N); results go to RESULTS/jobs/
+  merge    build the tables and plots from RESULTS/jobs/*.json (after all shards ran)
+  check    verify that merged tables have every planned row and well-formed columns
+  list     print the plan: cases and jobs with their shard under --shard i/N
+
+options:
+  --smoke            reduced plan for CI: one case, one seed, small budget (default
+                     directories under the build tree, BUILD/experiments/smoke/)
+  --shard i/N        run only items i, i+N, i+2N, ... of the plan (1 <= i <= N)
+  --results DIR      tables, plots, jobs/*.json   (default: experiments/results)
+  --work DIR         cases and run directories     (default: experiments/work)
+  --chordfit PATH    chordfit executable           (default: the one built with this program)
+  --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
+                     options (e.g. the bundled build/cases) instead of generating it
+  --max-sims N       forward-simulation budget of every fit (full: 300, smoke: 12)
+  --methods LIST     only jobs whose method starts with one of these comma-separated
+                     names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
+  --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
+  --presets LIST     only the cases of these presets (comma-separated)
+  --force            rerun jobs whose result exists
+  --no-timing        merge: leave out wall-time columns (to diff two runs)
+  --allow-missing    merge/all: exit 0 even when some jobs have no result
+)";
+
+struct Arguments {
+  std::string command;
+  bool smoke = false;
+  Shard shard;
+  fs::path results, work, chordfit, case_source;
+  int max_sims = -1;
+  std::vector<std::string> methods;  // empty: all
+  std::vector<int> seeds;            // empty: all
+  std::vector<std::string> presets;  // empty: all
+  bool force = false;
+  bool no_timing = false;
+  bool allow_missing = false;
+};
+
+int usageError(const std::string& message) {
+  std::cerr << "run_experiments: error: " << message << "\n(run_experiments --help for usage)\n";
+  return kExitUsage;
+}
+
+// Returns kExitOk, or the exit code to stop with.
+int parseArguments(int argc, char** argv, Arguments& a) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    auto value = [&](std::string& out) {
+      if (i + 1 >= args.size()) return false;
+      out = args[++i];
+      return true;
+    };
+    std::string text;
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage;
+      std::exit(kExitOk);
+    } else if (arg == "--smoke") {
+      a.smoke = true;
+    } else if (arg == "--force") {
+      a.force = true;
+    } else if (arg == "--no-timing") {
+      a.no_timing = true;
+    } else if (arg == "--allow-missing") {
+      a.allow_missing = true;
+    } else if (arg == "--shard") {
+      if (!value(text) || !parseShard(text, a.shard)) {
+        return usageError("--shard: expected i/N with 1 <= i <= N, got \"" + text + "\"");
+      }
+    } else if (arg == "--results" || arg == "--work" || arg == "--chordfit" ||
+               arg == "--case-source") {
+      if (!value(text) || text.empty()) return usageError(arg + ": expected a path");
+      (arg == "--results"    ? a.results
+       : arg == "--work"     ? a.work
+       : arg == "--chordfit" ? a.chordfit
+                             : a.case_source) = text;
+    } else if (arg == "--methods") {
+      if (!value(text) || text.empty()) return usageError("--methods: expected a list");
+      std::istringstream in(text);
+      for (std::string m; std::getline(in, m, ',');) a.methods.push_back(m);
+    } else if (arg == "--presets") {
+      if (!value(text) || text.empty()) return usageError("--presets: expected a list");
+      std::istringstream in(text);
+      for (std::string p; std::getline(in, p, ',');) a.presets.push_back(p);
+    } else if (arg == "--seeds") {
+      if (!value(text) || text.empty()) return usageError("--seeds: expected a list");
+      std::istringstream in(text);
+      for (std::string seed; std::getline(in, seed, ',');) {
+        char* end = nullptr;
+        a.seeds.push_back(static_cast<int>(std::strtol(seed.c_str(), &end, 10)));
+        if (seed.empty() || *end != '\0') return usageError("--seeds: bad seed \"" + seed + "\"");
+      }
+    } else if (arg == "--max-sims") {
+      char* end = nullptr;
+      if (!value(text) || (a.max_sims = std::strtol(text.c_str(), &end, 10), *end != '\0') ||
+          a.max_sims < 1) {
+        return usageError("--max-sims: expected a positive integer, got \"" + text + "\"");
+      }
+    } else if (!arg.empty() && arg[0] != '-' && a.command.empty()) {
+      a.command = arg;
+    } else {
+      return usageError("unknown argument \"" + arg + "\"");
+    }
+  }
+  if (a.command != "all" && a.command != "run" && a.command != "merge" && a.command != "check" &&
+      a.command != "list") {
+    return usageError(a.command.empty() ? "no command" : "unknown command \"" + a.command + "\"");
+  }
+  if (a.shard.count > 1 && a.command != "run" && a.command != "list") {
+    return usageError("--shard applies to run and list; merge reads every shard's results");
+  }
+  const fs::path base = a.smoke ? fs::path(CHORDFIT_BINARY_DIR) / "experiments" / "smoke"
+                                : fs::path(CHORDFIT_SOURCE_DIR) / "experiments";
+  if (a.results.empty()) a.results = base / "results";
+  if (a.work.empty()) a.work = base / "work";
+  if (a.chordfit.empty()) a.chordfit = CHORDFIT_EXE;
+  return kExitOk;
+}
+
+// The revision of the source tree the programs were built from ("unknown" outside git).
+std::string sourceRevision() {
+  const std::string command =
+      "git -C '" + std::string(CHORDFIT_SOURCE_DIR) + "' describe --always --dirty 2>/dev/null";
+  std::string revision;
+  if (FILE* pipe = popen(command.c_str(), "r")) {
+    char buffer[128];
+    while (fgets(buffer, sizeof buffer, pipe)) revision += buffer;
+    pclose(pipe);
+  }
+  while (!revision.empty() && (revision.back() == '\n' || revision.back() == ' ')) {
+    revision.pop_back();
+  }
+  return revision.empty() ? "unknown" : revision;
+}
+
+// The plan restricted to the jobs of the chosen methods and seeds, and the cases they use.
+ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::string>& methods,
+                            const std::vector<int>& seeds,
+                            const std::vector<std::string>& presets) {
+  if (methods.empty() && seeds.empty() && presets.empty()) return plan;
+  ExperimentPlan kept;
+  for (const JobSpec& job : plan.jobs) {
+    const CaseSpec& c = findCase(plan, job.case_id);
+    if (!seeds.empty() && std::find(seeds.begin(), seeds.end(), c.seed) == seeds.end()) continue;
+    if (!presets.empty() && std::find(presets.begin(), presets.end(), c.preset) == presets.end()) {
+      continue;
+    }
+    bool method = methods.empty();
+    for (const std::string& m : methods) method |= methodTag(job).rfind(m, 0) == 0;
+    if (method) kept.jobs.push_back(job);
+  }
+  for (const CaseSpec& c : plan.cases) {
+    for (const JobSpec& job : kept.jobs) {
+      if (job.case_id == c.id) {
+        kept.cases.push_back(c);
+        break;
+      }
+    }
+  }
+  if (kept.jobs.empty()) {
+    throw std::invalid_argument("--methods / --seeds / --presets: no job of the plan matches");
+  }
+  return kept;
+}
+
+int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
+  const RunPaths paths{a.chordfit, a.results, a.work, sourceRevision(), a.case_source};
+  const auto start = Clock::now();
+  auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  std::vector<std::string> failures;
+  // Cases first (round-robin like the jobs), so a shard's jobs rarely wait on generation.
+  std::vector<const CaseSpec*> cases;
+  for (std::size_t k = 0; k < plan.cases.size(); ++k) {
+    if (inShard(k, a.shard)) cases.push_back(&plan.cases[k]);
+  }
+  std::vector<const JobSpec*> jobs;
+  for (std::size_t k = 0; k < plan.jobs.size(); ++k) {
+    if (inShard(k, a.shard)) jobs.push_back(&plan.jobs[k]);
+  }
+  std::fprintf(stderr,
+               "run_experiments: shard %d/%d: %zu of %zu cases, %zu of %zu jobs; results "
+               "in %s\n",
+               a.shard.index, a.shard.count, cases.size(), plan.cases.size(), jobs.size(),
+               plan.jobs.size(), a.results.string().c_str());
+  for (std::size_t k = 0; k < cases.size(); ++k) {
+    std::fprintf(stderr, "[case %zu/%zu] %s: generating unless present...\n", k + 1, cases.size(),
+                 cases[k]->id.c_str());
+    const StepOutcome o = ensureCase(*cases[k], paths);
+    if (o.ok) {
+      std::fprintf(stderr, "[case %zu/%zu] %s: %s (%.0f s elapsed)\n", k + 1, cases.size(),
+                   cases[k]->id.c_str(), o.summary.c_str(), elapsed());
+    } else {
+      std::fprintf(stderr, "[case %zu/%zu] FAILED %s\n", k + 1, cases.size(), o.error.c_str());
+      failures.push_back(o.error);
+    }
+  }
+  for (std::size_t k = 0; k < jobs.size(); ++k) {
+    const JobSpec& job = *jobs[k];
+    std::fprintf(stderr, "[job %zu/%zu] %s: running...\n", k + 1, jobs.size(), job.id.c_str());
+    const StepOutcome o = runJob(plan, config, job, paths, a.force);
+    if (o.ok) {
+      std::fprintf(stderr, "[job %zu/%zu] %s: %s (%.0f s elapsed)\n", k + 1, jobs.size(),
+                   job.id.c_str(), o.summary.c_str(), elapsed());
+    } else {
+      std::fprintf(stderr, "[job %zu/%zu] FAILED %s\n", k + 1, jobs.size(), o.error.c_str());
+      failures.push_back(o.error);
+    }
+  }
+  std::fprintf(stderr, "run_experiments: shard %d/%d done in %.0f s, %zu failure(s)\n",
+               a.shard.index, a.shard.count, elapsed(), failures.size());
+  for (const std::string& f : failures) std::fprintf(stderr, "  failed: %s\n", f.c_str());
+  return failures.empty() ? kExitOk : kExitJobsFailed;
+}
+
+int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
+  const MergeSummary s = mergeResults(plan, config, a.results, {a.no_timing});
+  std::printf("merged %d of %zu job results into %s:", s.jobs_found, plan.jobs.size(),
+              a.results.string().c_str());
+  for (const std::string& f : s.written_files) std::printf(" %s", f.c_str());
+  std::printf("\n");
+  if (s.missing_jobs.empty()) return kExitOk;
+  std::fprintf(stderr, "%s: %zu job(s) without a result (no rows for them):\n",
+               a.allow_missing ? "warning" : "error", s.missing_jobs.size());
+  for (const std::string& id : s.missing_jobs) std::fprintf(stderr, "  %s\n", id.c_str());
+  return a.allow_missing ? kExitOk : kExitJobsFailed;
+}
+
+std::vector<std::vector<std::string>> readCsv(const fs::path& path) {
+  std::ifstream in(path);
+  std::ostringstream text;
+  text << in.rdbuf();
+  return chordfit::parseSimpleCsv(text.str());
+}
+
+// Every table exists, has the documented header, rows of the header's width, and one Table 1
+// row per planned Table 1 job (plus a noise-floor row per truth job) with an AvgD.
+int check(const ExperimentPlan& plan, const Arguments& a) {
+  std::vector<std::string> problems;
+  auto header = [](const std::string& h) { return h.substr(0, h.size() - 1); };
+  struct Table {
+    const char* file;
+    std::string header;
+  };
+  const bool timing = [&] {
+    const auto rows = readCsv(a.results / "table1.csv");
+    return !rows.empty() && !rows[0].empty() && rows[0].back() == "wall_seconds";
+  }();
+  bool has_fits = false;
+  for (const JobSpec& job : plan.jobs) has_fits |= job.method == Method::kFit;
+  const std::vector<Table> tables = {{"table1.csv", header(table1CsvHeader(timing))},
+                                     {"optimizers.csv", header(optimizersCsvHeader(timing))},
+                                     {"recovery.csv", header(recoveryCsvHeader())},
+                                     {"sensitivity.csv", header(sensitivityCsvHeader())}};
+  for (const Table& t : tables) {
+    const auto rows = readCsv(a.results / t.file);
+    if (rows.empty()) {
+      problems.push_back(std::string(t.file) + ": missing or empty");
+      continue;
+    }
+    std::string got;
+    for (const std::string& c : rows[0]) got += (got.empty() ? "" : ",") + c;
+    if (got != t.header) problems.push_back(std::string(t.file) + ": header \"" + got + "\"");
+    const bool optional = std::string(t.file) == "optimizers.csv" && !has_fits;
+    if (rows.size() < 2 && !optional) problems.push_back(std::string(t.file) + ": no data rows");
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      if (rows[r].size() != rows[0].size()) {
+        problems.push_back(std::string(t.file) + ": row " + std::to_string(r) + " has " +
+                           std::to_string(rows[r].size()) + " cells, header " +
+                           std::to_string(rows[0].size()));
+      }
+    }
+  }
+  for (const char* file :
+       {"table1.md", "optimizers.md", "optimizers.svg", "recovery.md", "recovery.svg",
+        "recovery_cords.csv", "sensitivity.md", "sensitivity.svg", "index.md"}) {
+    if (!fs::exists(a.results / file)) problems.push_back(std::string(file) + ": missing");
+  }
+  // One row per table-1 job of the preset x seed cases (with a mean deviation).
+  const auto rows = readCsv(a.results / "table1.csv");
+  for (const JobSpec& job : plan.jobs) {
+    if (job.method == Method::kFit && job.optimizer != "ceres") continue;
+    const std::string tag = methodTag(job);
+    bool base_case = false;
+    for (const CaseSpec& c : plan.cases) {
+      base_case |= c.id == job.case_id && c.id == c.preset + "_s" + std::to_string(c.seed);
+    }
+    if (!base_case) continue;
+    bool found = false;
+    for (std::size_t r = 1; r < rows.size(); ++r) {
+      found |= rows[r].size() > 9 && rows[r][0] == job.case_id && rows[r][3] == tag &&
+               !rows[r][9].empty();
+    }
+    if (!found) problems.push_back("table1.csv: no row with an AvgD for job " + job.id);
+  }
+  for (const std::string& p : problems) std::fprintf(stderr, "check: %s\n", p.c_str());
+  std::printf("check: %s (%s)\n", problems.empty() ? "ok" : "FAILED", a.results.string().c_str());
+  return problems.empty() ? kExitOk : kExitJobsFailed;
+}
+
+int list(const ExperimentPlan& plan, const Arguments& a) {
+  for (std::size_t k = 0; k < plan.cases.size(); ++k) {
+    const CaseSpec& c = plan.cases[k];
+    if (!inShard(k, a.shard)) continue;
+    std::printf("case %-32s preset %s seed %d planes %d noise %g dropout %g edge %g\n",
+                c.id.c_str(), c.preset.c_str(), c.seed, c.planes, c.noise_mm, c.dropout, c.edge_mm);
+  }
+  for (std::size_t k = 0; k < plan.jobs.size(); ++k) {
+    if (inShard(k, a.shard)) std::printf("job  %s\n", plan.jobs[k].id.c_str());
+  }
+  return kExitOk;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Arguments a;
+  if (const int code = parseArguments(argc, argv, a); code != kExitOk) return code;
+  ExperimentConfig config = a.smoke ? smokeConfig() : fullConfig();
+  if (a.max_sims > 0) config.max_sims = a.max_sims;
+  try {
+    const ExperimentPlan plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets);
+    if (a.command == "list") return list(plan, a);
+    if (a.command == "merge") return merge(plan, config, a);
+    if (a.command == "check") return check(plan, a);
+    const int ran = runShard(plan, config, a);
+    if (a.command == "run") return ran;
+    const int merged = merge(plan, config, a);
+    if (a.smoke) {
+      const int checked = check(plan, a);
+      if (checked != kExitOk) return checked;
+    }
+    return ran != kExitOk && !a.allow_missing ? ran : merged;
+  } catch (const std::exception& e) {
+    std::cerr << "run_experiments: error: " << e.what() << "\n";
+    return kExitJobsFailed;
+  }
+}

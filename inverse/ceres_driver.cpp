@@ -1,0 +1,161 @@
+#include "inverse/ceres_driver.h"
+
+#include <cmath>
+#include <mutex>
+#include <vector>
+
+#include <ceres/ceres.h>
+#include <glog/logging.h>
+
+namespace chordfit::inverse {
+
+namespace {
+
+Eigen::VectorXd toVector(const double* x, int n) { return Eigen::Map<const Eigen::VectorXd>(x, n); }
+
+// Residual i = distance of tracing point i to the closed surface; its Jacobian row comes from
+// the objective's central differences at x.
+class DataPointCost : public ceres::CostFunction {
+ public:
+  DataPointCost(FitObjective& objective, int point) : objective_(objective), point_(point) {
+    set_num_residuals(1);
+    mutable_parameter_block_sizes()->push_back(objective.parameterCount());
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int n = objective_.parameterCount();
+    const Eigen::VectorXd x = toVector(parameters[0], n);
+    const auto evaluation = objective_.evaluate(x);
+    if (!evaluation->ok()) return false;  // Ceres treats the step as invalid and shrinks
+    residuals[0] = evaluation->data(point_);
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      std::string error;
+      const auto J = objective_.jacobian(x, error);
+      if (!J) return false;
+      for (int p = 0; p < n; ++p) jacobians[0][p] = (*J)(point_, p);
+    }
+    return true;
+  }
+
+ private:
+  FitObjective& objective_;
+  int point_;
+};
+
+// r = A x - b, Jacobian A (row-major for Ceres).
+class RegularisationCost : public ceres::CostFunction {
+ public:
+  explicit RegularisationCost(const ForwardResidual& residual) : residual_(residual) {
+    set_num_residuals(residual.regularisationCount());
+    mutable_parameter_block_sizes()->push_back(residual.parameters().size());
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const Eigen::MatrixXd& A = residual_.regularisationJacobian();
+    const Eigen::VectorXd r = residual_.regularisation(toVector(parameters[0], A.cols()));
+    Eigen::Map<Eigen::VectorXd>(residuals, r.size()) = r;
+    if (jacobians != nullptr && jacobians[0] != nullptr) {
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>>(
+          jacobians[0], A.rows(), A.cols()) = A;
+    }
+    return true;
+  }
+
+ private:
+  const ForwardResidual& residual_;
+};
+
+class ProgressAndBudget : public ceres::IterationCallback {
+ public:
+  ProgressAndBudget(FitObjective& objective, const std::vector<double>& x)
+      : objective_(objective), x_(x) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    const auto at = objective_.cached(toVector(x_.data(), static_cast<int>(x_.size())));
+    objective_.recordIteration("ceres", summary.iteration, summary.cost,
+                               at ? at->mean_deviation_mm : NAN);
+    if (!objective_.budgetAllows(1 + objective_.jacobianSims())) {
+      budget_reached = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+  bool budget_reached = false;
+
+ private:
+  FitObjective& objective_;
+  const std::vector<double>& x_;  // Ceres updates it every iteration
+};
+
+}  // namespace
+
+void quietCeresLogging() {
+  static std::once_flag once;
+  std::call_once(once, [] {
+    FLAGS_minloglevel = google::GLOG_ERROR;
+    FLAGS_logtostderr = true;
+    if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("chordfit");
+  });
+}
+
+std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
+  quietCeresLogging();
+  const ForwardResidual& residual = objective.residual();
+  const FitParameterization& parameters = residual.parameters();
+  const int n = parameters.size();
+  if (n == 0) return "nothing to fit (every cord is locked)";
+  std::vector<double> x(parameters.initial().data(), parameters.initial().data() + n);
+  const bool start_known = objective.cached(parameters.initial()) != nullptr;
+  if (!objective.budgetAllows((start_known ? 0 : 1) + objective.jacobianSims())) {
+    return "budget of " + std::to_string(objective.maxSims()) +
+           " forward runs is below one Jacobian (" + std::to_string(1 + 2 * n) + " runs)";
+  }
+
+  ceres::Problem problem;
+  problem.AddParameterBlock(x.data(), n);
+  for (int p = 0; p < n; ++p) {
+    problem.SetParameterLowerBound(x.data(), p, parameters.lower()(p));
+    problem.SetParameterUpperBound(x.data(), p, parameters.upper()(p));
+  }
+  // The problem owns cost and loss functions (one loss object per block: no shared
+  // ownership to get wrong).
+  for (int i = 0; i < residual.dataCount(); ++i) {
+    problem.AddResidualBlock(new DataPointCost(objective, i),
+                             new ceres::HuberLoss(residual.options().huber_delta_mm), x.data());
+  }
+  if (residual.regularisationCount() > 0) {
+    problem.AddResidualBlock(new RegularisationCost(residual), nullptr, x.data());
+  }
+
+  ceres::Solver::Options options;
+  options.minimizer_type = ceres::TRUST_REGION;
+  options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  options.linear_solver_type = ceres::DENSE_QR;
+  options.num_threads = 1;
+  options.max_num_iterations = settings.max_iterations;
+  options.function_tolerance = settings.function_tolerance;
+  options.parameter_tolerance = settings.parameter_tolerance;
+  options.gradient_tolerance = 1e-10;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.update_state_every_iteration = true;
+  // A cautious first step: Ceres' default (1e4, nearly Gauss-Newton) jumps to the bounds,
+  // where closures diverge or crawl to the step cap.
+  options.initial_trust_region_radius = settings.initial_trust_region_radius;
+  // With bounds Ceres by default runs a line search along the projected step, which asks for
+  // Jacobians (2P closures each) at trial points; one Jacobian per accepted step is enough.
+  options.max_num_line_search_step_size_iterations = 0;
+  ProgressAndBudget callback(objective, x);
+  options.callbacks.push_back(&callback);
+
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  if (callback.budget_reached || objective.budgetRefused()) {
+    return "budget of " + std::to_string(objective.maxSims()) + " forward runs reached";
+  }
+  return std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
+                     : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "
+                                                                         : "stopped: ") +
+         summary.message;
+}
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,29 @@
+// Ceres Solver driver: trust-region Levenberg-Marquardt with parameter bounds.
+//
+// Problem layout: one parameter block (all P parameters, with their bounds); one residual
+// block per tracing point, each with its own ceres::HuberLoss (a loss applies to a whole
+// block, so per-point blocks make it robust per point); one block for the linear
+// regularisation (analytic Jacobian, no loss). The data blocks share the FitObjective: the
+// first block evaluated at a new x runs the closure (and, when Ceres asks for Jacobians, the
+// parallel central differences), the others read the cache. Ceres itself runs on one thread
+// (num_threads = 1); the parallelism is over the finite-difference closures.
+//
+// Budget: a Levenberg-Marquardt iteration costs one closure for the trial point plus 2P for
+// the Jacobian when the step is accepted, so the iteration callback stops the solve when
+// fewer than 1 + 2P runs remain. The run never exceeds the budget.
+#pragma once
+
+#include "inverse/optimizer.h"
+
+namespace chordfit::inverse {
+
+class CeresDriver : public Optimizer {
+ public:
+  std::string name() const override { return "ceres"; }
+  std::string minimize(FitObjective& objective, const OptimizerSettings& settings) override;
+};
+
+// Silences glog (Ceres' logger) once per process: only errors reach stderr.
+void quietCeresLogging();
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,55 @@
+// Central-difference Jacobian of the data residuals (DESIGN §7, issue 5 item 2).
+//
+//   J(:, p) = (r(x + h_p e_p) - r(x - h_p e_p)) / (2 h_p)
+//
+// Central differences: truncation error O(h^2) against O(h) for forward ones, for twice the
+// forward runs. The step h must stand well above the forward map's noise: the closure stops
+// at a quasi-static equilibrium within a tolerance (simulator.h), so r(x) is reproducible only
+// to some epsilon; the derivative error is then ~epsilon / h. Steps and their measurement:
+// docs/fitting.md ("Finite-difference step").
+//
+// The 2P perturbed closures are independent: they run on `threads` threads, each writing its
+// own column, so J does not depend on the thread count or the order of completion. Each may
+// warm-start from the base closed state (far fewer time steps; both sides of a difference
+// start from the same state), but a warm-started closure can settle in a different
+// equilibrium than the full closure the reported value comes from (contact, slack cords), so
+// the default is a full closure for every perturbation.
+#pragma once
+
+#include <functional>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "inverse/forward_residual.h"
+
+namespace chordfit::inverse {
+
+struct FiniteDifferenceOptions {
+  double scale_step = 0.01;  // on a scale (dimensionless), see docs/fitting.md
+  double tip_step_mm = 0.1;  // on a tip offset coordinate, mm
+  // Start perturbed closures from the base closed state. Off by default: measured on the
+  // bundled small case, warm-started differences stalled the fit (the warm-started
+  // equilibrium is not the one a full closure reaches; docs/fitting.md).
+  bool warm_start = false;
+  int threads = 2;
+};
+
+struct JacobianResult {
+  Eigen::MatrixXd J;     // #data by #parameters
+  int forward_sims = 0;  // closures run (2 per parameter)
+  std::string error;     // first failed perturbation, if any (J is then unusable)
+  bool ok() const { return error.empty(); }
+};
+
+// base_closed: the closed state at x (warm start of the perturbations; ignored when
+// options.warm_start is false).
+JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const Eigen::VectorXd& x,
+                                         const Eigen::MatrixXd& base_closed,
+                                         const FiniteDifferenceOptions& options);
+
+// Runs task(i) for i in [0, count) on `threads` threads (work stealing by an atomic counter).
+// The tasks must write only to their own slots.
+void parallelFor(int count, int threads, const std::function<void(int)>& task);
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,99 @@
+#include "inverse/fit_cords.h"
+
+#include <chrono>
+
+namespace chordfit::inverse {
+
+FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
+                    const SimulationSettings& settings, const FitOptions& options) {
+  using Clock = FitObjective::Clock;
+  const Clock::time_point start = Clock::now();
+  FitOutcome outcome;
+  outcome.seed = seed;
+  auto optimizer = makeOptimizer(options.optimizer);
+  if (!optimizer) {
+    outcome.error = "unknown optimizer \"" + options.optimizer + "\"";
+    return outcome;
+  }
+  if (!(options.bounds.scale_lower > 0.0 &&
+        options.bounds.scale_lower < options.bounds.scale_upper)) {
+    outcome.error = "scale bounds: need 0 < lower < upper";
+    return outcome;
+  }
+  auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
+  auto record = [&](const std::string& stage, int iteration, const ForwardEvaluation& e,
+                    double best_cost) {
+    IterationRecord r{
+        stage, iteration, e.cost, best_cost, e.mean_deviation_mm, outcome.forward_sims, seconds()};
+    outcome.history.push_back(r);
+    if (options.on_iteration) options.on_iteration(r);
+  };
+
+  // Seed closure (full, from the open state): the "before" of every report.
+  const FitParameterization seed_parameters(valve_case, seed, options.mode, options.bounds);
+  const ForwardResidual seed_residual(valve_case, seed_parameters, settings, options.residual);
+  outcome.seed_evaluation = seed_residual.evaluate(seed_parameters.initial());
+  outcome.forward_sims = 1;
+  if (!outcome.seed_evaluation.ok()) {
+    outcome.error = "seed closure failed: " + outcome.seed_evaluation.error;
+    return outcome;
+  }
+  record("seed", 0, outcome.seed_evaluation, outcome.seed_evaluation.cost);
+
+  CordSet start_set = seed;
+  ForwardEvaluation start_evaluation = outcome.seed_evaluation;
+  if (options.prefit.enabled && seed_parameters.size() > 0) {
+    PrefitOptions prefit = options.prefit;
+    prefit.threads = options.finite_difference.threads;
+    const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
+                                                  options.bounds, seed_residual, prefit);
+    outcome.forward_sims += result.forward_sims;
+    outcome.prefit_factor = result.factor;
+    start_set = result.start;
+    start_evaluation = result.best;
+    record("prefit", 1, start_evaluation, start_evaluation.cost);
+  }
+
+  const FitParameterization parameters(valve_case, start_set, options.mode, options.bounds);
+  const ForwardResidual residual(valve_case, parameters, settings, options.residual);
+  FitObjective objective(residual, options.finite_difference, options.max_sims,
+                         outcome.forward_sims, start, options.on_iteration);
+  if (!parameters.startClamped()) {
+    // The start's closure is already known (the same cords): reuse it, with this
+    // parameterisation's x and regularisation (zero at the start).
+    start_evaluation.x = parameters.initial();
+    start_evaluation.regularisation = residual.regularisation(start_evaluation.x);
+    start_evaluation.cost = residual.cost(start_evaluation.data, start_evaluation.regularisation);
+    objective.remember(start_evaluation);
+  }
+  outcome.termination = optimizer->minimize(objective, options.optimizer_settings);
+  for (const IterationRecord& r : objective.history()) outcome.history.push_back(r);
+  outcome.forward_sims = objective.forwardSims();
+  outcome.parameter_names = parameters.names();
+
+  auto best = objective.best();
+  if (!best) best = objective.evaluate(parameters.initial());
+  outcome.forward_sims = objective.forwardSims();
+  if (!best->ok()) {
+    outcome.error = "closure at the pre-fit start failed: " + best->error;
+    return outcome;
+  }
+  outcome.x = best->x;
+  outcome.final_evaluation = *best;
+  outcome.fitted = parameters.apply(best->x);
+  // Provenance against the seed as given: the pre-fit may have changed a cord the optimiser
+  // left alone.
+  for (std::size_t c = 0; c < outcome.fitted.cords.size(); ++c) {
+    Cord& cord = outcome.fitted.cords[c];
+    const Cord& original = seed.cords[c];
+    if (cord.rest_length == original.rest_length) {
+      cord.provenance = original.provenance;
+    } else {
+      cord.provenance = Provenance::kFitted;
+    }
+  }
+  outcome.seconds = seconds();
+  return outcome;
+}
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,58 @@
+// A whole fit of a case's cords (DESIGN §7, issue 5): seed closure, optional global scale
+// pre-fit (global_prefit.h), the chosen optimiser on the chosen parameterisation, and the
+// fitted CordSet with its full closure. This is what `chordfit fit` and the tests call.
+//
+// Manual edits: locked cords are constants (bit for bit); unlocked manual cords are the start
+// and the prior of their parameters and are not touched by the pre-fit.
+// Reporting: every value reported (the seed's and the fit's cost, mean deviation, closed mesh)
+// comes from a full closure from the open state.
+#pragma once
+
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/case_data.h"
+#include "core/cordset.h"
+#include "core/simulator.h"
+#include "inverse/finite_difference.h"
+#include "inverse/fit_objective.h"
+#include "inverse/fit_parameters.h"
+#include "inverse/forward_residual.h"
+#include "inverse/global_prefit.h"
+#include "inverse/optimizer.h"
+
+namespace chordfit::inverse {
+
+struct FitOptions {
+  ParameterMode mode = ParameterMode::kScales;
+  ParameterBounds bounds;
+  ResidualOptions residual;
+  FiniteDifferenceOptions finite_difference;  // .threads also used by the pre-fit
+  PrefitOptions prefit;
+  std::string optimizer = "ceres";
+  OptimizerSettings optimizer_settings;
+  int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
+  std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
+};
+
+struct FitOutcome {
+  std::string error;  // bad options or a failed seed closure; the rest is then unset
+  CordSet seed;       // as given
+  CordSet fitted;     // provenance kFitted where the rest length differs from the seed
+  ForwardEvaluation seed_evaluation;   // full closure of the seed
+  ForwardEvaluation final_evaluation;  // full closure of the fitted set
+  double prefit_factor = 1.0;
+  std::vector<std::string> parameter_names;
+  Eigen::VectorXd x;                     // fitted parameters
+  std::vector<IterationRecord> history;  // seed, pre-fit and optimiser records
+  int forward_sims = 0;
+  double seconds = 0.0;
+  std::string termination;
+  bool ok() const { return error.empty(); }
+};
+
+FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
+                    const SimulationSettings& settings, const FitOptions& options);
+
+}  // namespace chordfit::inverse

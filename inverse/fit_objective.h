@@ -1,0 +1,93 @@
+// What every optimiser driver works against: the forward residual with its bookkeeping
+// (issue 5 item 3). It
+//   - runs full closures from the open state (evaluate) and caches them by exact x, so a
+//     driver asking twice for one point pays once;
+//   - computes the data Jacobian at an evaluated point by parallel central differences
+//     warm-started from that point's closed state (finite_difference.h);
+//   - counts forward simulations against a budget (max_sims) and the wall time;
+//   - keeps the best full-closure evaluation seen: what a fit reports always comes from a
+//     full closure, never from a warm-started perturbation, and never from a worse point an
+//     optimiser happened to end on (COBYLA may not return its best point);
+//   - records the convergence history (one record per driver iteration or evaluation).
+// Not thread-safe: drivers call it from one thread; the parallelism is inside jacobian().
+#pragma once
+
+#include <chrono>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "inverse/finite_difference.h"
+#include "inverse/forward_residual.h"
+
+namespace chordfit::inverse {
+
+struct IterationRecord {
+  std::string stage;               // "seed", "prefit", or the optimiser's name
+  int iteration = 0;               // driver iteration (Ceres) or evaluation (NLopt)
+  double cost = 0.0;               // at the driver's current point
+  double best_cost = 0.0;          // best full-closure cost so far
+  double mean_deviation_mm = 0.0;  // at the driver's current point
+  int forward_sims = 0;            // cumulative, all stages
+  double elapsed_s = 0.0;          // since the fit started
+};
+
+class FitObjective {
+ public:
+  using Clock = std::chrono::steady_clock;
+  // sims_before / start: forward runs already spent and the fit's start time (earlier stages).
+  FitObjective(const ForwardResidual& residual, const FiniteDifferenceOptions& fd, int max_sims,
+               int sims_before, Clock::time_point start,
+               std::function<void(const IterationRecord&)> on_iteration);
+
+  const ForwardResidual& residual() const { return residual_; }
+  int parameterCount() const { return residual_.parameters().size(); }
+
+  // Full closure at x (cached). Counts one forward run when not cached. Failed closures are
+  // returned with error set and never become the best.
+  std::shared_ptr<const ForwardEvaluation> evaluate(const Eigen::VectorXd& x);
+  // Data Jacobian (#data by #parameters) at x (evaluates x first if needed); 2 runs per
+  // parameter. nullptr and `error` set when a closure failed.
+  std::shared_ptr<const Eigen::MatrixXd> jacobian(const Eigen::VectorXd& x, std::string& error);
+
+  // The budget is enforced here too: a closure (or Jacobian) that would exceed it is not run;
+  // evaluate() then returns an evaluation with error set, jacobian() nullptr.
+  bool budgetRefused() const { return budget_refused_; }
+  int forwardSims() const { return sims_; }
+  int maxSims() const { return max_sims_; }
+  bool budgetAllows(int more_sims) const { return sims_ + more_sims <= max_sims_; }
+  int jacobianSims() const { return 2 * parameterCount(); }
+  double elapsedSeconds() const;
+
+  std::shared_ptr<const ForwardEvaluation> best() const { return best_; }
+  // Adds a full closure run elsewhere (e.g. the pre-fit's best) to the cache, uncounted.
+  void remember(const ForwardEvaluation& evaluation);
+  // The cached full closure at x, or nullptr (no forward run).
+  std::shared_ptr<const ForwardEvaluation> cached(const Eigen::VectorXd& x);
+  // Appends a history record for the driver's current point and calls on_iteration.
+  void recordIteration(const std::string& stage, int iteration, double cost,
+                       double mean_deviation_mm);
+  const std::vector<IterationRecord>& history() const { return history_; }
+
+ private:
+  struct Entry {
+    std::shared_ptr<const ForwardEvaluation> evaluation;
+    std::shared_ptr<const Eigen::MatrixXd> jacobian;
+  };
+  Entry* find(const Eigen::VectorXd& x);
+
+  const ForwardResidual& residual_;
+  FiniteDifferenceOptions fd_;
+  int max_sims_;
+  int sims_;
+  bool budget_refused_ = false;
+  Clock::time_point start_;
+  std::function<void(const IterationRecord&)> on_iteration_;
+  std::deque<Entry> cache_;  // most recent last; a few entries suffice (LM: current + trial)
+  std::shared_ptr<const ForwardEvaluation> best_;
+  std::vector<IterationRecord> history_;
+};
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,113 @@
+#include "inverse/forward_residual.h"
+
+#include <algorithm>
+#include <map>
+#include <tuple>
+
+#include "core/annulus_plane.h"
+#include "core/carpentier.h"
+#include "core/metrics.h"
+#include "inverse/robust_loss.h"
+
+namespace chordfit::inverse {
+
+std::vector<std::pair<int, int>> neighbouringCords(const ValveCase& valve_case,
+                                                   const FitParameterization& parameters) {
+  std::vector<std::pair<int, int>> pairs;
+  if (parameters.mode() == ParameterMode::kGroups) return pairs;
+  const CordSet& start = parameters.start();
+  const std::vector<std::string> groups = cordGroups(valve_case, start);
+  const AnnulusFrame frame = openAnnulusFrame(valve_case.mesh);
+  // (group, kind) -> [(angle, cord)]
+  std::map<std::pair<std::string, int>, std::vector<std::pair<double, int>>> chains;
+  for (std::size_t c = 0; c < start.cords.size(); ++c) {
+    if (parameters.cordParameter()[c] < 0) continue;
+    const Cord& cord = start.cords[c];
+    const double angle = annulusAngle(frame, valve_case.mesh.V.row(cord.vertex).transpose());
+    chains[{groups[c], static_cast<int>(cord.kind)}].push_back({angle, static_cast<int>(c)});
+  }
+  for (auto& [key, chain] : chains) {
+    // A group lies on one side of the annulus (one tip), so it never straddles the angle
+    // cut of atan2 at +-pi in the mitral layout; sorting by angle orders it along the annulus.
+    std::sort(chain.begin(), chain.end());
+    for (std::size_t i = 1; i < chain.size(); ++i) {
+      pairs.push_back({chain[i - 1].second, chain[i].second});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end());
+  return pairs;
+}
+
+ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameterization& parameters,
+                                 const SimulationSettings& settings, const ResidualOptions& options)
+    : case_(valve_case),
+      parameters_(parameters),
+      settings_(settings),
+      options_(options),
+      tracing_points_(stackTracingPoints(valve_case.tracings)),
+      neighbours_(neighbouringCords(valve_case, parameters)) {
+  settings_.progress_every = 0;
+  settings_.progress = nullptr;
+  const int n = parameters.size();
+  const Eigen::VectorXd& x0 = parameters.initial();
+  std::vector<Eigen::VectorXd> rows;
+  std::vector<double> rhs;
+  auto addRow = [&](const Eigen::VectorXd& row) {
+    rows.push_back(row);
+    rhs.push_back(row.dot(x0));  // every term is zero at the start: r = row . (x - x0)
+  };
+  for (int p = 0; p < n; ++p) {
+    Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+    row(p) = parameters.isScale(p) ? options.weights.seed : options.weights.tip_per_mm;
+    if (row(p) != 0.0) addRow(row);
+  }
+  if (options.weights.neighbour != 0.0) {
+    for (const auto& [c, d] : neighbours_) {
+      Eigen::VectorXd row = Eigen::VectorXd::Zero(n);
+      row(parameters.cordParameter()[c]) += options.weights.neighbour;
+      row(parameters.cordParameter()[d]) -= options.weights.neighbour;
+      addRow(row);
+    }
+  }
+  A_.resize(static_cast<Eigen::Index>(rows.size()), n);
+  b_.resize(static_cast<Eigen::Index>(rows.size()));
+  for (std::size_t r = 0; r < rows.size(); ++r) {
+    A_.row(r) = rows[r].transpose();
+    b_(r) = rhs[r];
+  }
+}
+
+Eigen::VectorXd ForwardResidual::dataResiduals(const Eigen::MatrixXd& closed_V) const {
+  return pointToSurfaceDistances(closed_V, case_.mesh.F, tracing_points_);
+}
+
+double ForwardResidual::cost(const Eigen::VectorXd& data,
+                             const Eigen::VectorXd& regularisation) const {
+  double sum = 0.0;
+  for (Eigen::Index i = 0; i < data.size(); ++i) {
+    sum += huberRho(data(i) * data(i), options_.huber_delta_mm);
+  }
+  return 0.5 * sum + 0.5 * regularisation.squaredNorm();
+}
+
+ForwardEvaluation ForwardResidual::evaluate(const Eigen::VectorXd& x,
+                                            const Eigen::MatrixXd* warm_start) const {
+  ForwardEvaluation e;
+  e.x = x;
+  e.warm_started = warm_start != nullptr;
+  const CordSet cords = parameters_.apply(x);
+  SimulationResult r = simulateClosure(case_, cords, settings_, warm_start);
+  if (!r.ok()) {
+    e.error = r.error;
+    return e;
+  }
+  e.converged = r.converged;
+  e.closed_V = std::move(r.V);
+  e.data = dataResiduals(e.closed_V);
+  e.regularisation = regularisation(x);
+  e.cost = cost(e.data, e.regularisation);
+  e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+  return e;
+}
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,55 @@
+// Global scale pre-fit: one common factor on the rest lengths of every free, non-manual cord,
+// chosen on a grid before the per-cord (or group) optimisation.
+//
+// Why: a cord that is slack in the closed state has an exactly zero data gradient, so a
+// gradient method started where most cords are slack cannot move them. The paper's heuristic
+// rest length is an upper bound (docs/fitting.md): from the heuristic seed most cords are
+// slack and the valve prolapses everywhere. The paper's user first scales all cords; so does
+// this stage, derivative-free: a grid of `points` factors over the scale bounds, then
+// `refine_points` between the best grid point's neighbours. The closures are independent and
+// run on `threads` threads (results per slot: independent of the thread count). The choice is
+// by the data cost 1/2 sum rho(r^2) alone.
+// Manual (provenance manual) and locked cords keep their values: the user's edits are the
+// starting point and prior of the optimisation, not something to rescale.
+#pragma once
+
+#include <chrono>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "core/case_data.h"
+#include "core/cordset.h"
+#include "core/simulator.h"
+#include "inverse/fit_objective.h"
+#include "inverse/fit_parameters.h"
+#include "inverse/forward_residual.h"
+
+namespace chordfit::inverse {
+
+struct PrefitOptions {
+  bool enabled = true;
+  int points = 9;         // grid over [scale_lower, scale_upper], ends included
+  int refine_points = 4;  // then evenly inside the best point's two grid intervals
+  int threads = 2;
+};
+
+struct PrefitResult {
+  double factor = 1.0;     // best factor (1: no change)
+  CordSet start;           // the seed with the factor applied
+  ForwardEvaluation best;  // full closure at the best factor
+  int forward_sims = 0;
+  std::vector<double> factors, costs;  // every factor tried, in order, and its data cost
+  std::string error;
+};
+
+// seed_evaluation: the seed's closure (factor 1), already run; it is not run again.
+PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
+                               const ForwardEvaluation& seed_evaluation,
+                               const ParameterBounds& bounds, const ForwardResidual& residual,
+                               const PrefitOptions& options);
+
+// The seed with every free non-manual cord's rest length multiplied by `factor`.
+CordSet scaleFreeCords(const CordSet& seed, double factor);
+
+}  // namespace chordfit::inverse

@@ -1,0 +1,168 @@
+// `chordfit compare` end to end: two cord sets on the bundled small case (each closure takes
+// about a second), and the input errors that must stop it before any simulation.
+#include <filesystem>
+#include <sstream>
+#include <vector>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "core/csv_text.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::readText;
+using testing::runChordfit;
+using testing::TempDir;
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+std::vector<std::vector<std::string>> csvRows(const std::string& text) {
+  return parseSimpleCsv(text);
+}
+
+class CompareCommand : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    if (!fs::exists(caseDir() / "case.json")) return;  // reported by SetUp
+    // A "manual" edit: every cord 40 % longer than the heuristic seed. Loose cords let the
+    // leaflets billow, so this set must close differently.
+    nlohmann::json cords = nlohmann::json::parse(readText(caseDir() / "cords.json"));
+    for (auto& cord : cords["cords"]) {
+      cord["rest_length_mm"] = 1.4 * cord["rest_length_mm"].get<double>();
+      cord["scale"] = 1.4;
+      cord["provenance"] = "manual";
+    }
+    testing::writeText(*dir_ / "loose.json", cords.dump(1));
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  void SetUp() override {
+    ASSERT_TRUE(fs::exists(caseDir() / "case.json"))
+        << caseDir() << ": bundled case missing (cmake --build BUILD --target cohort_cases)";
+  }
+  // The bundled small test case (cases/CMakeLists.txt: normal-1 seed 2, edge 3 mm, 3 planes).
+  static fs::path caseDir() {
+    return fs::path(CHORDFIT_EXE).parent_path().parent_path() / "cases" / "small-normal";
+  }
+
+  static TempDir* dir_;
+};
+TempDir* CompareCommand::dir_ = nullptr;
+
+TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAndCsv) {
+  const fs::path out = *dir_ / "compare";
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --labels heuristic,loose --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| Case | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | "
+                       "Prolapse Recon. |"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("| heuristic | "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| loose | "), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("compare: [2/2] loose"), std::string::npos) << "progress on stderr";
+
+  const std::string md = readText(out / "compare.md");
+  EXPECT_NE(md.find("| heuristic | "), std::string::npos);
+  EXPECT_NE(md.find(" ± "), std::string::npos) << "AvgD ± SD";
+
+  const auto rows = csvRows(readText(out / "compare.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"label", "cords_file", "area_mm2", "min_mm",
+                                               "median_mm", "max_mm", "mean_mm", "sd_mm",
+                                               "prolapse_reconstructed", "prolapse_segments",
+                                               "tracing_prolapse_segments", "converged", "steps"}));
+  for (std::size_t r = 1; r < rows.size(); ++r) {
+    ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
+    EXPECT_TRUE(rows[r][8] == "yes" || rows[r][8] == "no") << rows[r][8];
+    EXPECT_GT(std::stoi(rows[r][12]), 0) << "steps";
+    EXPECT_LE(std::stod(rows[r][3]), std::stod(rows[r][4]));  // min <= median
+    EXPECT_LE(std::stod(rows[r][4]), std::stod(rows[r][5]));  // median <= max
+  }
+  EXPECT_EQ(rows[1][0], "\"heuristic\"");
+  EXPECT_EQ(rows[2][0], "\"loose\"");
+  // The loose set closes differently: a different mean deviation (the test would pass with
+  // two identical rows otherwise).
+  EXPECT_NE(rows[1][6], rows[2][6]);
+}
+
+TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {
+  const auto r = runChordfit("compare " + quoted(caseDir()) + " " +
+                             quoted(caseDir() / "cords.json") + " --quiet");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("| " + (caseDir() / "cords.json").string() + " | "), std::string::npos)
+      << r.out;
+  EXPECT_TRUE(r.err.empty()) << "--quiet: " << r.err;
+}
+
+TEST_F(CompareCommand, RejectsALabelCountMismatchBeforeSimulating) {
+  const fs::path out = *dir_ / "mismatch";
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --labels only-one --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--labels: 1 label(s) for 2 cord file(s)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("closing"), std::string::npos) << "no simulation may start";
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST_F(CompareCommand, RejectsDuplicateLabels) {
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --labels same,same");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("\"same\" appears twice"), std::string::npos) << r.err;
+}
+
+TEST_F(CompareCommand, RejectsAMissingCordFileWithoutWritingAnything) {
+  const fs::path out = *dir_ / "missing";
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "nope.json") + " --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nope.json"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("file not found"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("closing"), std::string::npos) << "checked before the first closure";
+  EXPECT_FALSE(fs::exists(out / "compare.csv"));
+}
+
+TEST_F(CompareCommand, RejectsAMissingCase) {
+  const auto r =
+      runChordfit("compare " + quoted(*dir_ / "no-case") + " " + quoted(caseDir() / "cords.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("no-case"), std::string::npos) << r.err;
+}
+
+TEST_F(CompareCommand, RejectsACordSetOfAnotherMesh) {
+  // truth/cords.json belongs to the finer truth mesh: vertex indices beyond the case mesh.
+  const auto r = runChordfit("compare " + quoted(caseDir()) + " " +
+                             quoted(caseDir() / "truth" / "cords.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("truth/cords.json"), std::string::npos) << r.err;
+}
+
+TEST_F(CompareCommand, ADivergingClosureExitsWith3AndWritesNothing) {
+  // dt = 1e-200 ms is inside the accepted range, but 1 / dt^2 overflows: the first step gives
+  // NaN positions (as in SimulateCommand.ADivergingRunExitsWith3AndWritesNoOutput).
+  const fs::path case_copy = *dir_ / "diverging-case";
+  fs::copy(caseDir(), case_copy, fs::copy_options::recursive);
+  nlohmann::json c = nlohmann::json::parse(readText(case_copy / "case.json"));
+  c["simulation"] = {{"dt_ms", 1e-200}};
+  testing::writeText(case_copy / "case.json", c.dump());
+  const fs::path out = *dir_ / "diverged";
+  const auto r =
+      runChordfit("compare " + quoted(case_copy) + " " + quoted(case_copy / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --labels a,b --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("simulation failed"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(out / "compare.md"));
+  EXPECT_FALSE(fs::exists(out / "compare.csv"));
+}
+
+}  // namespace
+}  // namespace chordfit

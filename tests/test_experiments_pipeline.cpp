@@ -1,0 +1,234 @@
+// The benchmark pipeline (experiments/run_experiments, issue "Benchmark experiments"): the
+// plan and its shards, merge from per-job results, and a small real run (heuristic and truth
+// closures of the smoke case) that must give the same tables in one piece and in two shards.
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <sstream>
+#include <vector>
+
+#include <sys/wait.h>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::readText;
+using testing::TempDir;
+using testing::writeText;
+
+// The runner is built beside chordfit: <build>/tools/chordfit -> <build>/experiments/.
+fs::path runnerPath() {
+  return fs::path(CHORDFIT_EXE).parent_path().parent_path() / "experiments" / "run_experiments";
+}
+
+std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+
+testing::CommandResult runRunner(const std::string& arguments) {
+  TempDir capture;
+  const std::string command = quoted(runnerPath()) + " " + arguments + " >" +
+                              quoted(capture / "out") + " 2>" + quoted(capture / "err") +
+                              " </dev/null";
+  const int status = std::system(command.c_str());
+  testing::CommandResult r;
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  r.out = readText(capture / "out");
+  r.err = readText(capture / "err");
+  return r;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> result;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) result.push_back(line);
+  return result;
+}
+
+std::vector<std::string> cells(const std::string& line) {
+  std::vector<std::string> result;
+  std::istringstream in(line);
+  for (std::string cell; std::getline(in, cell, ',');) result.push_back(cell);
+  if (!line.empty() && line.back() == ',') result.push_back("");
+  return result;
+}
+
+class ExperimentsPipeline : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ASSERT_TRUE(fs::exists(runnerPath()))
+        << runnerPath() << " is not built (cmake --build BUILD --target run_experiments)";
+  }
+};
+
+TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
+  const auto r = runRunner("list");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::set<std::string> jobs;
+  int cases = 0;
+  for (const std::string& line : lines(r.out)) {
+    if (line.rfind("case ", 0) == 0) ++cases;
+    if (line.rfind("job  ", 0) == 0) EXPECT_TRUE(jobs.insert(line.substr(5)).second) << line;
+  }
+  // 7 presets x 3 seeds, plus 3 noise and 2 plane-count variants of prolapse-P2 seed 1.
+  EXPECT_EQ(cases, 21 + 5);
+  for (const char* preset : {"normal-1", "normal-2", "prolapse-P2", "prolapse-A2", "prolapse-P3",
+                             "bileaflet", "flail-P2"}) {
+    for (int seed = 1; seed <= 3; ++seed) {
+      const std::string id = std::string(preset) + "_s" + std::to_string(seed);
+      for (const char* method : {"heuristic", "fit_groups_ceres", "fit_scales_ceres",
+                                 "fit_scales-tips_ceres", "truth"}) {
+        EXPECT_TRUE(jobs.count(id + "__" + method)) << id << " " << method;
+      }
+    }
+  }
+  for (const char* optimizer : {"bobyqa", "cobyla", "sbplx", "crs2"}) {
+    EXPECT_TRUE(jobs.count(std::string("prolapse-A2_s1__fit_scales_") + optimizer)) << optimizer;
+    EXPECT_FALSE(jobs.count(std::string("normal-1_s1__fit_scales_") + optimizer))
+        << "the optimiser comparison is on the pathological presets";
+  }
+  EXPECT_TRUE(jobs.count("prolapse-P2_s1_noise0__fit_scales_ceres"));
+  EXPECT_TRUE(jobs.count("prolapse-P2_s1_noise1__truth"));
+  EXPECT_TRUE(jobs.count("prolapse-P2_s1_planes12__heuristic"));
+}
+
+TEST_F(ExperimentsPipeline, ShardsPartitionThePlan) {
+  const auto whole = runRunner("list");
+  ASSERT_EQ(whole.exit_code, 0);
+  std::multiset<std::string> from_shards;
+  for (int i = 1; i <= 3; ++i) {
+    const auto r = runRunner("list --shard " + std::to_string(i) + "/3");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const auto shard_lines = lines(r.out);
+    EXPECT_LT(shard_lines.size(), lines(whole.out).size() / 2) << "shard " << i;
+    from_shards.insert(shard_lines.begin(), shard_lines.end());
+  }
+  const auto all = lines(whole.out);
+  EXPECT_EQ(from_shards, std::multiset<std::string>(all.begin(), all.end()));
+}
+
+TEST_F(ExperimentsPipeline, RejectsBadArguments) {
+  auto r = runRunner("run --shard 3/2");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--shard: expected i/N"), std::string::npos) << r.err;
+  r = runRunner("frobnicate");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("unknown command \"frobnicate\""), std::string::npos) << r.err;
+  r = runRunner("merge --shard 1/2");
+  EXPECT_EQ(r.exit_code, 2);
+  r = runRunner("list --methods nothing-like-this");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--methods"), std::string::npos) << r.err;
+}
+
+// A job result as run_experiments writes it, with made-up numbers (test fixture).
+nlohmann::json fixtureResult(const std::string& method, double mean_mm,
+                             const std::vector<std::pair<double, double>>& cords) {
+  nlohmann::json metrics = {{"area_mm2", 900.0},
+                            {"min_mm", 0.0},
+                            {"median_mm", mean_mm},
+                            {"max_mm", 2 * mean_mm},
+                            {"mean_mm", mean_mm},
+                            {"sd_mm", 0.1},
+                            {"prolapse_reconstructed", false},
+                            {"prolapse_segments", {"A1"}},
+                            {"tracing_prolapse_segments", nlohmann::json::array()}};
+  nlohmann::json rows = nlohmann::json::array();
+  for (std::size_t i = 0; i < cords.size(); ++i) {
+    rows.push_back({{"index", i},
+                    {"segment", "P2"},
+                    {"kind", "primary"},
+                    {"ruptured", false},
+                    {"plane_distance_mm", cords[i].first},
+                    {"rest_length_mm", 10.0 * (1 + cords[i].second)},
+                    {"true_rest_length_mm", 10.0},
+                    {"relative_error", cords[i].second}});
+  }
+  nlohmann::json r = {{"job", "normal-1_s2__" + method},
+                      {"case", "normal-1_s2"},
+                      {"method", method},
+                      {"metrics", metrics},
+                      {"forward_sims", 1},
+                      {"wall_seconds", 1.5},
+                      {"cords", rows},
+                      {"revision", "abc1234"}};
+  if (method == "truth") r["noise_floor"] = metrics;
+  return r;
+}
+
+TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissingOnes) {
+  TempDir dir;
+  writeText(dir / "jobs" / "normal-1_s2__heuristic.json",
+            fixtureResult("heuristic", 1.25, {{0.5, 0.10}, {0.8, -0.30}, {4.0, 0.02}}).dump());
+  writeText(dir / "jobs" / "normal-1_s2__truth.json",
+            fixtureResult("truth", 0.40, {{0.5, 0.0}}).dump());
+  auto r = runRunner("merge --smoke --results " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 1) << "fit jobs have no result";
+  EXPECT_NE(r.err.find("normal-1_s2__fit_scales_ceres"), std::string::npos) << r.err;
+
+  const auto table = lines(readText(dir / "table1.csv"));
+  ASSERT_EQ(table.size(), 4u) << readText(dir / "table1.csv");  // header, heuristic, truth, floor
+  EXPECT_EQ(cells(table[1])[3], "heuristic");
+  EXPECT_EQ(cells(table[1])[9], "1.2500");
+  EXPECT_EQ(cells(table[1])[12], "A1");
+  EXPECT_EQ(cells(table[2])[3], "truth");
+  EXPECT_EQ(cells(table[3])[4], "noise floor");
+  EXPECT_EQ(cells(table[3])[14], "") << "the noise floor took no forward simulation of ours";
+  const std::string md = readText(dir / "table1.md");
+  EXPECT_NE(md.find("**Missing**"), std::string::npos);
+  EXPECT_NE(md.find("`normal-1_s2__fit_groups_ceres`"), std::string::npos);
+  EXPECT_EQ(md.find("manual-like |"), std::string::npos) << "no row for a missing job";
+
+  // Recovery of the heuristic: |errors| 10 % and 30 % within 1 mm (median 20 %), 2 % at 4 mm.
+  const std::string recovery = readText(dir / "recovery.csv");
+  EXPECT_NE(recovery.find("heuristic,0–1 mm,2,20.000,"), std::string::npos) << recovery;
+  EXPECT_NE(recovery.find("heuristic,3–6 mm,1,2.000,2.000"), std::string::npos) << recovery;
+  EXPECT_NE(recovery.find("heuristic,all,3,10.000,"), std::string::npos) << recovery;
+  EXPECT_EQ(recovery.find("truth,"), std::string::npos) << "truth recovers itself trivially";
+
+  r = runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readText(dir / "table1.csv").find("wall_seconds"), std::string::npos);
+}
+
+// Real closures (chordfit make-case and simulate on the smoke case; a few seconds): results
+// are the same in one piece and in two shards, and the truth closure fits its own tracings
+// better than the heuristic.
+TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
+  TempDir dir;
+  // The smoke case is the bundled small-normal: copied, not generated (--case-source).
+  const fs::path bundled = fs::path(CHORDFIT_EXE).parent_path().parent_path() / "cases";
+  ASSERT_TRUE(fs::exists(bundled / "small-normal" / "case.json")) << "build target cohort_cases";
+  const std::string common = " --smoke --methods heuristic,truth --case-source " + quoted(bundled) +
+                             " --work " + quoted(dir / "work");
+  auto r = runRunner("all" + common + " --results " + quoted(dir / "whole"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("[job 1/2] normal-1_s2__heuristic: AvgD"), std::string::npos) << r.err;
+  for (int i = 1; i <= 2; ++i) {
+    r = runRunner("run" + common + " --shard " + std::to_string(i) + "/2 --results " +
+                  quoted(dir / "sharded"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  for (const char* results : {"whole", "sharded"}) {
+    r = runRunner("merge" + common + " --no-timing --results " + quoted(dir / results));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  for (const char* file : {"table1.csv", "table1.md", "recovery.csv", "recovery_cords.csv",
+                           "sensitivity.csv", "sensitivity.svg"}) {
+    EXPECT_EQ(readText(dir / "whole" / file), readText(dir / "sharded" / file)) << file;
+  }
+  const auto table = lines(readText(dir / "whole" / "table1.csv"));
+  ASSERT_EQ(table.size(), 4u);
+  const double heuristic = std::stod(cells(table[1])[9]);
+  const double truth = std::stod(cells(table[2])[9]);
+  const double floor = std::stod(cells(table[3])[9]);
+  EXPECT_LT(truth, heuristic);
+  EXPECT_LT(floor, heuristic);
+}
+
+}  // namespace
+}  // namespace chordfit

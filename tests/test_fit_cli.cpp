@@ -1,0 +1,98 @@
+// `chordfit fit` end to end: bad input exits 2 with a message naming the option or file; a
+// tiny fit writes every output with the documented keys; locked cords stay bit for bit.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+using testing::runChordfit;
+using testing::TempDir;
+
+std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
+std::filesystem::path smallCase() {
+  return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+}
+
+TEST(FitCommand, RejectsAnUnknownOptimizerWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --optimizer newton --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--optimizer"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("newton"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
+TEST(FitCommand, RejectsAnUnknownParameterModeWithExitCode2) {
+  TempDir dir;
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " --params lengths --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--params"), std::string::npos) << r.err;
+}
+
+TEST(FitCommand, RejectsAMissingSeedFileWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --seed-cords " +
+                             quoted(dir / "nowhere.json") + " --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nowhere.json"), std::string::npos) << r.err;
+}
+
+TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 1.5,0.7 --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--scale-bounds"), std::string::npos) << r.err;
+}
+
+// One free cord (the others locked, as the paper's editor would write them): 1 + 2 + 1 runs.
+TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
+  TempDir dir;
+  auto seed = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  for (std::size_t c = 1; c < seed["cords"].size(); ++c) {
+    seed["cords"][c]["locked"] = true;
+    seed["cords"][c]["provenance"] = "manual";
+  }
+  testing::writeText(dir / "seed.json", seed.dump(2));
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
+                  " --no-prefit --max-sims 4 --threads 2 --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("ceres   iter"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("| seed |"), std::string::npos) << r.out;
+  for (const char* file : {"cords.json", "closed.ply", "closed.vtk", "metrics.json",
+                           "convergence.csv", "convergence.svg", "report.md"}) {
+    EXPECT_TRUE(std::filesystem::exists(dir / "fit" / file)) << file;
+  }
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  for (const char* key : {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims",
+                          "fit_seconds", "initial_mean_mm"}) {
+    EXPECT_TRUE(metrics.contains(key)) << key;
+  }
+  EXPECT_EQ(metrics["optimizer"], "ceres");
+  EXPECT_LE(metrics["forward_sims"].get<int>(), 5);  // budget 4 + the closure written
+  EXPECT_LE(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>());
+  const auto fitted = nlohmann::json::parse(testing::readText(dir / "fit" / "cords.json"));
+  ASSERT_EQ(fitted["cords"].size(), seed["cords"].size());
+  for (std::size_t c = 1; c < seed["cords"].size(); ++c) {
+    EXPECT_EQ(fitted["cords"][c]["rest_length_mm"].get<double>(),
+              seed["cords"][c]["rest_length_mm"].get<double>())
+        << c;
+    EXPECT_EQ(fitted["cords"][c]["provenance"], "manual") << c;
+  }
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("| seed |"), std::string::npos);
+  EXPECT_NE(report.find("| fit |"), std::string::npos);
+  EXPECT_NE(report.find("Fitted length"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace chordfit

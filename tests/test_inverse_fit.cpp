@@ -1,0 +1,216 @@
+// The inverse fit (inverse/fit_cords.h) on the bundled small case: recovery of perturbed
+// cords from noise-free tracings, locks and bounds, every optimiser through the common
+// interface, and independence of the thread count.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <set>
+
+#include "core/case_io.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "core/tracing_sampler.h"
+#include "inverse/fit_cords.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kRecoveryTolerance = 0.02;  // issue 5: recovered within 2 %
+constexpr double kTrueScale = 0.65;          // every cord taut, as in the cohort's truth
+constexpr double kPerturbation = 0.15;       // issue 5: four cords perturbed by +-15 %
+constexpr double kNearPlaneMm = 3.0;         // identifiable: attached this near a plane
+
+std::filesystem::path smallCase() {
+  return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+}
+
+// The small case with noise-free tracings of a closure in which four identifiable cords are
+// perturbed; `base` is the unperturbed set (the fit's seed, every other cord locked).
+struct RecoveryProblem {
+  ValveCase valve_case;
+  SimulationSettings settings;
+  CordSet base, truth;
+  std::vector<int> perturbed;
+};
+
+const RecoveryProblem& recoveryProblem() {
+  static const RecoveryProblem problem = [] {
+    RecoveryProblem p;
+    Diagnostics diagnostics;
+    auto loaded = loadCase(smallCase(), diagnostics);
+    if (!loaded || !loaded->cords) throw std::runtime_error("bundled case small-normal missing");
+    p.valve_case = *loaded;
+    p.settings = settingsFromJson(p.valve_case.simulation_json, diagnostics);
+    p.base = *p.valve_case.cords;
+    for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kTrueScale;
+    const SimulationResult closed = simulateClosure(p.valve_case, p.base, p.settings);
+    if (!closed.ok()) throw std::runtime_error(closed.error);
+    // Identifiable: taut in the closed state and attached near a tracing plane; take the four
+    // tautest, so the choice is deterministic.
+    std::vector<std::pair<double, int>> candidates;
+    for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
+      const Eigen::Vector3d v = closed.V.row(p.base.cords[c].vertex).transpose();
+      double nearest = INFINITY;
+      for (const Tracing& t : p.valve_case.tracings) {
+        nearest = std::min(nearest, std::abs(t.plane_normal.dot(v - t.plane_origin)));
+      }
+      if (closed.cord_force(c) > 0.0 && nearest < kNearPlaneMm) {
+        candidates.push_back({-closed.cord_force(c), static_cast<int>(c)});
+      }
+    }
+    std::sort(candidates.begin(), candidates.end());
+    // One cord per group (leaflet x tip): perturbed neighbours would trade off against each
+    // other (a lengthened cord next to a shortened one may hang slack at the seed).
+    {
+      const std::vector<std::string> groups = inverse::cordGroups(p.valve_case, p.base);
+      std::vector<std::pair<double, int>> spread;
+      std::set<std::string> used;
+      for (const auto& candidate : candidates) {
+        if (used.insert(groups[candidate.second]).second) spread.push_back(candidate);
+      }
+      for (const auto& candidate : candidates) {
+        if (std::find(spread.begin(), spread.end(), candidate) == spread.end()) {
+          spread.push_back(candidate);
+        }
+      }
+      candidates = spread;
+    }
+    // Lengthen each by 15 %; a cord lengthened into slackness would be unidentifiable (every
+    // longer length closes the same), so such a cord is shortened by 15 % instead, and a cord
+    // slack even then is replaced by the next candidate.
+    SimulationResult truth;
+    std::size_t next = 0;
+    std::vector<double> factors;
+    while (p.perturbed.size() < 4 || !truth.ok()) {
+      while (p.perturbed.size() < 4 && next < candidates.size()) {
+        p.perturbed.push_back(candidates[next++].second);
+        factors.push_back(1.0 + kPerturbation);
+      }
+      if (p.perturbed.size() < 4) throw std::runtime_error("fewer than 4 identifiable cords");
+      p.truth = p.base;
+      for (int k = 0; k < 4; ++k) p.truth.cords[p.perturbed[k]].rest_length *= factors[k];
+      truth = simulateClosure(p.valve_case, p.truth, p.settings);
+      if (!truth.ok()) throw std::runtime_error(truth.error);
+      if (truth.cord_force.size() == 0) throw std::runtime_error("no cord forces");
+      bool all_taut = true;
+      for (int k = 3; k >= 0; --k) {
+        if (truth.cord_force(p.perturbed[k]) > 0.0) continue;
+        all_taut = false;
+        if (factors[k] > 1.0) {
+          factors[k] = 1.0 - kPerturbation;  // shortened instead: stays taut
+        } else {
+          p.perturbed.erase(p.perturbed.begin() + k);
+          factors.erase(factors.begin() + k);
+        }
+      }
+      if (!all_taut) truth.error = "again";
+    }
+    std::sort(p.perturbed.begin(), p.perturbed.end());
+    TracingSamplerOptions sampler;
+    sampler.planes = 3;  // as the bundled case
+    sampler.noise_mm = 0.0;
+    sampler.dropout_fraction = 0.0;
+    SeededRandom random(1);
+    p.valve_case.tracings = sampleTracings(truth.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
+                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
+      if (std::find(p.perturbed.begin(), p.perturbed.end(), static_cast<int>(c)) ==
+          p.perturbed.end()) {
+        p.base.cords[c].locked = true;
+        p.base.cords[c].provenance = Provenance::kManual;
+      }
+    }
+    return p;
+  }();
+  return problem;
+}
+
+inverse::FitOptions perCordOptions(const std::string& optimizer, int max_sims, int threads) {
+  inverse::FitOptions options;
+  options.mode = inverse::ParameterMode::kScales;
+  options.bounds.scale_lower = 0.4;  // the problem's scales (0.65 +- 15 %) lie below 0.7
+  options.bounds.scale_upper = 1.5;
+  options.prefit.enabled = false;  // the four free cords start at their unperturbed values
+  options.optimizer = optimizer;
+  options.max_sims = max_sims;
+  options.finite_difference.threads = threads;
+  return options;
+}
+
+TEST(InverseFit, RecoversFourPerturbedCordsWithinTwoPercentAndKeepsLockedCords) {
+  const RecoveryProblem& p = recoveryProblem();
+  inverse::FitOptions options = perCordOptions("ceres", 110, 2);
+  // Noise-free tracings: the data alone determine the four cords, so the prior is made 10x
+  // weaker than the default (which biases a weakly seen cord by ~2 % here toward its seed).
+  options.residual.weights.seed *= 0.1;
+  options.residual.weights.neighbour *= 0.1;
+  const inverse::FitOutcome fit = inverse::fitCords(p.valve_case, p.base, p.settings, options);
+  ASSERT_TRUE(fit.ok()) << fit.error;
+  ASSERT_EQ(fit.x.size(), 4);
+  for (int c : p.perturbed) {
+    const double truth = p.truth.cords[c].rest_length;
+    EXPECT_NEAR(fit.fitted.cords[c].rest_length / truth, 1.0, kRecoveryTolerance)
+        << "cord " << c << ": seed " << p.base.cords[c].rest_length << ", truth " << truth
+        << ", fitted " << fit.fitted.cords[c].rest_length << " (" << fit.termination << ")";
+    EXPECT_EQ(fit.fitted.cords[c].provenance, Provenance::kFitted);
+  }
+  for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
+    if (!p.base.cords[c].locked) continue;
+    EXPECT_EQ(fit.fitted.cords[c].rest_length, p.base.cords[c].rest_length) << "cord " << c;
+    EXPECT_EQ(fit.fitted.cords[c].provenance, Provenance::kManual);
+  }
+  EXPECT_LT(fit.final_evaluation.mean_deviation_mm, 0.2 * fit.seed_evaluation.mean_deviation_mm);
+  EXPECT_LE(fit.forward_sims, 110);
+}
+
+TEST(InverseFit, KeepsEveryScaleWithinItsBounds) {
+  const RecoveryProblem& p = recoveryProblem();
+  inverse::FitOptions options = perCordOptions("ceres", 40, 2);
+  options.bounds.scale_lower = 0.62;  // the cords perturbed upward want 0.7475: held at 0.68
+  options.bounds.scale_upper = 0.68;
+  const inverse::FitOutcome fit = inverse::fitCords(p.valve_case, p.base, p.settings, options);
+  ASSERT_TRUE(fit.ok()) << fit.error;
+  for (int c : p.perturbed) {
+    EXPECT_GE(fit.fitted.cords[c].scale(), 0.62 - 1e-12) << "cord " << c;
+    EXPECT_LE(fit.fitted.cords[c].scale(), 0.68 + 1e-12) << "cord " << c;
+  }
+}
+
+TEST(InverseFit, EveryOptimizerRunsThroughTheCommonInterfaceWithinItsBudget) {
+  const RecoveryProblem& p = recoveryProblem();
+  for (const std::string& name : inverse::optimizerNames()) {
+    constexpr int kBudget = 10;  // seed + one Ceres Jacobian (8) + a trial point
+    const inverse::FitOutcome fit =
+        inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions(name, kBudget, 2));
+    ASSERT_TRUE(fit.ok()) << name << ": " << fit.error;
+    EXPECT_LE(fit.forward_sims, kBudget) << name;
+    EXPECT_GE(fit.history.size(), 2u) << name << ": no iteration recorded";
+    EXPECT_LE(fit.final_evaluation.cost, fit.seed_evaluation.cost) << name;
+    EXPECT_FALSE(fit.termination.empty()) << name;
+  }
+}
+
+TEST(InverseFit, GivesBitIdenticalResultsWithOneAndTwoThreads) {
+  const RecoveryProblem& p = recoveryProblem();
+  const inverse::FitOutcome one =
+      inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions("ceres", 20, 1));
+  const inverse::FitOutcome two =
+      inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions("ceres", 20, 2));
+  ASSERT_TRUE(one.ok() && two.ok());
+  EXPECT_EQ(one.forward_sims, two.forward_sims);
+  ASSERT_EQ(one.x.size(), two.x.size());
+  for (Eigen::Index i = 0; i < one.x.size(); ++i) EXPECT_EQ(one.x(i), two.x(i)) << i;
+  EXPECT_EQ(one.final_evaluation.cost, two.final_evaluation.cost);
+}
+
+TEST(InverseFit, RejectsAnUnknownOptimizer) {
+  const RecoveryProblem& p = recoveryProblem();
+  const inverse::FitOutcome fit =
+      inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions("newton", 5, 1));
+  EXPECT_FALSE(fit.ok());
+  EXPECT_NE(fit.error.find("newton"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace chordfit

@@ -1,0 +1,76 @@
+// Range checks of the simulation settings (settingsProblems / settingsFromJson): nonsense
+// such as a 1e300 mmHg pressure or a NaN tolerance is an input error, never a run.
+#include <cmath>
+#include <limits>
+
+#include <gtest/gtest.h>
+
+#include "core/simulator.h"
+
+namespace chordfit {
+namespace {
+
+bool hasProblem(const std::vector<SettingsProblem>& problems, const std::string& key) {
+  for (const SettingsProblem& p : problems)
+    if (p.key == key) return true;
+  return false;
+}
+
+TEST(SimulatorSettingsRanges, DefaultsAreAccepted) {
+  EXPECT_TRUE(settingsProblems(SimulationSettings{}).empty());
+}
+
+TEST(SimulatorSettingsRanges, NonFiniteValuesAreReportedByKey) {
+  SimulationSettings s;
+  s.pressure_mmhg = std::numeric_limits<double>::infinity();
+  s.tolerance_mm = std::nan("");
+  s.material.youngs_modulus_mpa = -std::numeric_limits<double>::infinity();
+  const auto problems = settingsProblems(s);
+  EXPECT_EQ(problems.size(), 3u);
+  EXPECT_TRUE(hasProblem(problems, "pressure_mmhg"));
+  EXPECT_TRUE(hasProblem(problems, "tolerance_mm"));
+  EXPECT_TRUE(hasProblem(problems, "youngs_modulus_mpa"));
+  for (const SettingsProblem& p : problems) EXPECT_NE(p.what.find("finite"), std::string::npos);
+}
+
+TEST(SimulatorSettingsRanges, ZeroNegativeAndAbsurdValuesAreRejected) {
+  SimulationSettings s;
+  s.pressure_mmhg = 1e300;
+  s.material.thickness_mm = 0.0;
+  s.material.poisson_ratio = 0.5;
+  s.drag_time_ms = -1.0;
+  s.iterations = 0;
+  s.max_steps = 0;
+  const auto problems = settingsProblems(s);
+  for (const char* key : {"pressure_mmhg", "thickness_mm", "poisson_ratio", "drag_time_ms",
+                          "iterations", "max_steps"})
+    EXPECT_TRUE(hasProblem(problems, key)) << key;
+  EXPECT_EQ(problems.size(), 6u);
+}
+
+TEST(SimulatorSettingsRanges, JsonOutOfRangeValuesAreDiagnosedWithFileKeyAndProblem) {
+  Diagnostics diagnostics;
+  settingsFromJson(R"({"pressure_mmhg": 1e300, "ramp_ms": 2.0})", diagnostics, {},
+                   "cases/x/case.json");
+  ASSERT_EQ(diagnostics.problems().size(), 1u);
+  const Problem& p = diagnostics.problems()[0];
+  EXPECT_EQ(p.file, "cases/x/case.json");
+  EXPECT_EQ(p.where, "simulation.pressure_mmhg");
+  EXPECT_NE(p.what.find("out of range"), std::string::npos) << p.what;
+}
+
+TEST(SimulatorSettingsRanges, SimulateRefusesOutOfRangeSettingsWithoutRunning) {
+  SimulationModel model;
+  model.V_rest = Eigen::MatrixXd::Identity(3, 3);
+  model.F = Eigen::RowVector3i(0, 1, 2);
+  SimulationSettings s;
+  s.pressure_mmhg = 1e300;
+  const SimulationResult r = simulate(model, s);
+  EXPECT_FALSE(r.ok());
+  EXPECT_NE(r.error.find("pressure_mmhg"), std::string::npos) << r.error;
+  EXPECT_EQ(r.steps, 0);
+  EXPECT_EQ(r.V.size(), 0);
+}
+
+}  // namespace
+}  // namespace chordfit

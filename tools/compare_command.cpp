@@ -1,0 +1,193 @@
+// chordfit compare: "manual vs optimised" (issue 5 item 6). Closes the case once per cord set
+// and lays the results side by side in the paper's Table 1 format (Markdown) plus a CSV with
+// the prolapse segments and the solver outcome. Every input is checked before the first
+// simulation, and nothing is written unless every simulation succeeded.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/atomic_file.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+struct ComparedSet {
+  std::string label;
+  std::string file;
+  CordSet cords;
+  ValveMetrics metrics;
+  bool converged = false;
+  int steps = 0;
+};
+
+std::vector<std::string> splitLabels(const std::string& text) {
+  std::vector<std::string> labels;
+  std::string label;
+  std::istringstream in(text);
+  while (std::getline(in, label, ',')) labels.push_back(label);
+  if (!text.empty() && text.back() == ',') labels.push_back("");
+  return labels;
+}
+
+// Labels name table rows: one per cord file, non-empty, unique, and free of the characters
+// that would break a Markdown or CSV row.
+bool checkLabels(const std::vector<std::string>& labels, std::size_t files) {
+  if (labels.size() != files) {
+    std::cerr << "error: --labels: " << labels.size() << " label(s) for " << files
+              << " cord file(s); give one label per file\n";
+    return false;
+  }
+  std::set<std::string> seen;
+  for (const std::string& label : labels) {
+    if (label.empty() || label.find_first_of("|\"\n") != std::string::npos) {
+      std::cerr << "error: --labels: \"" << label
+                << "\": labels must be non-empty and contain no '|', '\"' or newline\n";
+      return false;
+    }
+    if (!seen.insert(label).second) {
+      std::cerr << "error: --labels: \"" << label << "\" appears twice\n";
+      return false;
+    }
+  }
+  return true;
+}
+
+std::string csvNumber(double value, const char* format = "%.6f") {
+  if (!std::isfinite(value)) return "";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, format, value);
+  return buffer;
+}
+
+// Segments joined by spaces ("A2 P2"), empty when none: one CSV cell without quoting.
+std::string segmentCell(const std::vector<std::string>& segments) {
+  std::string cell;
+  for (const std::string& s : segments) cell += (cell.empty() ? "" : " ") + s;
+  return cell;
+}
+
+std::string csvQuoted(const std::string& text) {
+  std::string quoted = "\"";
+  for (char c : text) quoted += (c == '"') ? std::string("\"\"") : std::string(1, c);
+  return quoted + "\"";
+}
+
+std::string compareCsv(const std::vector<ComparedSet>& sets) {
+  std::string csv =
+      "label,cords_file,area_mm2,min_mm,median_mm,max_mm,mean_mm,sd_mm,prolapse_reconstructed,"
+      "prolapse_segments,tracing_prolapse_segments,converged,steps\n";
+  for (const ComparedSet& s : sets) {
+    const ValveMetrics& m = s.metrics;
+    const DeviationStats& d = m.deviation;
+    const bool t = m.has_tracings;
+    csv += csvQuoted(s.label) + "," + csvQuoted(s.file) + "," + csvNumber(m.area_mm2, "%.3f") +
+           "," + (t ? csvNumber(d.min) : "") + "," + (t ? csvNumber(d.median) : "") + "," +
+           (t ? csvNumber(d.max) : "") + "," + (t ? csvNumber(d.mean) : "") + "," +
+           (t ? csvNumber(d.sd) : "") + "," + (t ? (m.prolapse_reconstructed ? "yes" : "no") : "") +
+           "," + segmentCell(m.mesh_prolapse.segments) + "," +
+           (t ? segmentCell(m.tracing_prolapse.segments) : "") + "," +
+           (s.converged ? "yes" : "no") + "," + std::to_string(s.steps) + "\n";
+  }
+  return csv;
+}
+
+std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& sets) {
+  std::string md = "# Cord sets compared on case " + c.name + "\n\n";
+  md +=
+      "Each cord set closed with the case's solver settings (`chordfit compare`); deviations "
+      "from the tracings in mm.\n\n";
+  md += table1Header();
+  for (const ComparedSet& s : sets) md += table1Row(s.label, s.metrics);
+  md +=
+      "\n| Cord set | File | Prolapse (simulated) | Prolapse (tracings) | Converged (steps) "
+      "|\n|---|---|---|---|---|\n";
+  for (const ComparedSet& s : sets) {
+    const ValveMetrics& m = s.metrics;
+    md += "| " + s.label + " | `" + s.file + "` | " + joinSegments(m.mesh_prolapse.segments) +
+          " | " + (m.has_tracings ? joinSegments(m.tracing_prolapse.segments) : "– (no tracings)") +
+          " | " + (s.converged ? "yes" : "no") + " (" + std::to_string(s.steps) + ") |\n";
+  }
+  return md;
+}
+
+}  // namespace
+
+int runCompare(const CompareOptions& options) {
+  if (options.cords_files.empty()) {
+    std::cerr << "error: compare: give at least one cord set file after CASE_DIR\n";
+    return kExitBadInput;
+  }
+  std::vector<std::string> labels =
+      options.labels.empty() ? options.cords_files : splitLabels(options.labels);
+  if (!checkLabels(labels, options.cords_files.size())) return kExitBadInput;
+
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  Diagnostics diagnostics;
+  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  if (!diagnostics.ok()) return reportProblems(diagnostics);
+  settings.phase = ClosurePhase::kClose;
+
+  // Read every cord file first: a typo in the last one must not cost the earlier closures.
+  std::vector<ComparedSet> sets;
+  for (std::size_t i = 0; i < options.cords_files.size(); ++i) {
+    const auto cords = resolveCords(*valve_case, options.cords_files[i]);
+    if (!cords) return kExitBadInput;
+    sets.push_back({labels[i], options.cords_files[i], *cords, {}, false, 0});
+  }
+
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    ComparedSet& s = sets[i];
+    if (!options.quiet) {
+      std::fprintf(stderr, "compare: [%zu/%zu] %s: closing with %zu cords\n", i + 1, sets.size(),
+                   s.label.c_str(), s.cords.cords.size());
+    }
+    const SimulationResult closed = simulateClosure(*valve_case, s.cords, settings);
+    if (!closed.ok()) {
+      std::cerr << "error: " << s.file << ": simulation failed: " << closed.error
+                << " (nothing written)\n";
+      return kExitSimulationFailed;
+    }
+    s.metrics = computeMetrics(*valve_case, closed.V);
+    s.converged = closed.converged;
+    s.steps = closed.steps;
+    if (!options.quiet) {
+      std::fprintf(stderr, "compare: [%zu/%zu] %s: %s after %d steps, %.1f s, AvgD %.2f mm\n",
+                   i + 1, sets.size(), s.label.c_str(),
+                   closed.converged ? "converged" : "NOT converged (step cap)", closed.steps,
+                   closed.seconds, s.metrics.deviation.mean);
+    }
+  }
+
+  std::cout << table1Header();
+  for (const ComparedSet& s : sets) std::cout << table1Row(s.label, s.metrics);
+  if (valve_case->tracings.empty()) {
+    std::cout << "(the case has no tracings: no deviation and no prolapse comparison)\n";
+  } else {
+    std::cout << "prolapse (tracings): "
+              << joinSegments(sets.front().metrics.tracing_prolapse.segments) << "\n";
+  }
+  for (const ComparedSet& s : sets) {
+    std::cout << "prolapse (" << s.label << "): " << joinSegments(s.metrics.mesh_prolapse.segments)
+              << (s.converged ? "" : "  [closure NOT converged]") << "\n";
+  }
+  if (!options.out_dir.empty()) {
+    const std::filesystem::path out(options.out_dir);
+    writeFileAtomically(out / "compare.md", compareMarkdown(*valve_case, sets));
+    writeFileAtomically(out / "compare.csv", compareCsv(sets));
+    std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv\n";
+  }
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli

@@ -1,0 +1,213 @@
+// chordfit fit: fit the cord rest lengths (and optionally the PM tips) of a case to its
+// tracings (issue 5). Thin: parse and check the options, call inverse::fitCords, write the
+// outputs. The closed mesh and its metrics are written by the simulate command's code path
+// (runSimulate on the fitted cords: a full closure from the open state, the same files and
+// scalars as `chordfit simulate`), then metrics.json is extended with the fit's keys.
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+#include "core/cordset_io.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "core/svg_line_plot.h"
+#include "inverse/fit_cords.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+using inverse::IterationRecord;
+
+std::string joinNames(const std::vector<std::string>& names) {
+  std::string joined;
+  for (const std::string& n : names) joined += (joined.empty() ? "" : "|") + n;
+  return joined;
+}
+
+std::string convergenceCsv(const std::vector<IterationRecord>& history) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "stage,iteration,cost,best_cost,mean_deviation_mm,forward_sims,elapsed_s\n";
+  for (const IterationRecord& r : history) {
+    csv << r.stage << "," << r.iteration << "," << r.cost << "," << r.best_cost << ","
+        << r.mean_deviation_mm << "," << r.forward_sims << "," << r.elapsed_s << "\n";
+  }
+  return csv.str();
+}
+
+std::string convergenceSvg(const std::vector<IterationRecord>& history, const std::string& name) {
+  PlotSeries cost{"cost at the current point", {}, {}, true, true};
+  PlotSeries best{"best cost", {}, {}, false, true};
+  PlotSeries mean{"mean deviation (AvgD)", {}, {}, true, true};
+  for (const IterationRecord& r : history) {
+    cost.x.push_back(r.forward_sims), cost.y.push_back(r.cost);
+    best.x.push_back(r.forward_sims), best.y.push_back(r.best_cost);
+    mean.x.push_back(r.forward_sims), mean.y.push_back(r.mean_deviation_mm);
+  }
+  const std::vector<PlotPanel> panels = {
+      {"Fit cost (" + name + ")", "forward simulations", "cost", {cost, best}, true},
+      {"Mean deviation to the tracings",
+       "forward simulations",
+       "mean deviation (mm)",
+       {mean},
+       false}};
+  return svgLinePlots(panels, 1, 720, 320);
+}
+
+std::string cordTable(const ValveCase& c, const CordSet& seed, const CordSet& fitted) {
+  const std::vector<std::string> groups = inverse::cordGroups(c, seed);
+  std::ostringstream md;
+  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Provenance |"
+        " Locked |\n|---:|---|---|---:|---:|---:|---|---|\n";
+  char line[256];
+  for (std::size_t i = 0; i < fitted.cords.size(); ++i) {
+    const Cord& s = seed.cords[i];
+    const Cord& f = fitted.cords[i];
+    std::snprintf(line, sizeof line, "| %zu | %s | %s | %.3f | %.3f | %.4f | %s | %s |\n", i,
+                  groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
+                  toString(f.provenance), f.locked ? "yes" : "no");
+    md << line;
+  }
+  return md.str();
+}
+
+std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse::FitOutcome& fit,
+                   const ValveMetrics& seed_metrics, const ValveMetrics& fit_metrics) {
+  std::ostringstream md;
+  md << "# Cord fit: " << c.name << "\n\n";
+  md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
+     << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
+  md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)") << "\n";
+  md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
+     << " s, threads: " << o.threads << "\n";
+  md << "- termination: " << fit.termination << "\n";
+  md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
+     << "\n\n";
+  md << "## Table 1: seed vs fit\n\n"
+     << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics) << "\n";
+  md << "Prolapse segments: tracings " << joinSegments(fit_metrics.tracing_prolapse.segments)
+     << "; seed " << joinSegments(seed_metrics.mesh_prolapse.segments) << "; fit "
+     << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
+  md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic).\n\n"
+     << cordTable(c, fit.seed, fit.fitted);
+  return md.str();
+}
+
+}  // namespace
+
+int runFit(const FitCommandOptions& o) {
+  const auto mode = inverse::parseParameterMode(o.params);
+  if (!mode) {
+    std::cerr << "error: fit: --params: expected scales, groups or scales+tips, got \"" << o.params
+              << "\"\n";
+    return kExitBadInput;
+  }
+  if (!inverse::makeOptimizer(o.optimizer)) {
+    std::cerr << "error: fit: --optimizer: expected " << joinNames(inverse::optimizerNames())
+              << ", got \"" << o.optimizer << "\"\n";
+    return kExitBadInput;
+  }
+  if (o.scale_bounds.size() != 2 || !(o.scale_bounds[0] > 0.0) ||
+      !(o.scale_bounds[0] < o.scale_bounds[1])) {
+    std::cerr << "error: fit: --scale-bounds: need two numbers 0 < lower < upper\n";
+    return kExitBadInput;
+  }
+  if (o.max_sims < 1 || o.threads < 1 || !(o.tip_box_mm > 0.0) || !(o.fd_scale_step > 0.0) ||
+      !(o.fd_tip_step_mm > 0.0)) {
+    std::cerr << "error: fit: --max-sims, --threads, --tip-box and the finite-difference steps "
+                 "must be positive\n";
+    return kExitBadInput;
+  }
+  const auto valve_case = loadCaseOrReport(o.case_dir);
+  if (!valve_case) return kExitBadInput;
+  if (valve_case->tracings.empty()) {
+    std::cerr << "error: " << o.case_dir << ": case.json: tracings: the fit needs tracings\n";
+    return kExitBadInput;
+  }
+  const auto seed = resolveCords(*valve_case, o.seed_cords_file);
+  if (!seed) return kExitBadInput;
+  Diagnostics diagnostics;
+  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
+  if (!diagnostics.ok()) return reportProblems(diagnostics);
+  settings.phase = ClosurePhase::kClose;
+
+  inverse::FitOptions options;
+  options.mode = *mode;
+  options.bounds.scale_lower = o.scale_bounds[0];
+  options.bounds.scale_upper = o.scale_bounds[1];
+  options.bounds.tip_box_mm = o.tip_box_mm;
+  options.prefit.enabled = o.prefit;
+  options.optimizer = o.optimizer;
+  options.max_sims = o.max_sims;
+  options.finite_difference.threads = o.threads;
+  options.finite_difference.scale_step = o.fd_scale_step;
+  options.finite_difference.tip_step_mm = o.fd_tip_step_mm;
+  options.finite_difference.warm_start = o.fd_warm_start;
+  if (!o.quiet) {
+    std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
+                valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
+                o.max_sims, o.threads);
+    options.on_iteration = [](const IterationRecord& r) {
+      std::printf("%-7s iter %4d  cost %10.4f  best %10.4f  mean %7.4f mm  sims %4d  %7.1f s\n",
+                  r.stage.c_str(), r.iteration, r.cost, r.best_cost, r.mean_deviation_mm,
+                  r.forward_sims, r.elapsed_s);
+      std::fflush(stdout);
+    };
+  }
+  const inverse::FitOutcome fit = inverse::fitCords(*valve_case, *seed, settings, options);
+  if (!fit.ok()) {
+    std::cerr << "error: " << o.case_dir << ": " << fit.error << "\n";
+    return kExitSimulationFailed;
+  }
+
+  const std::filesystem::path out(o.out_dir);
+  writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
+  // closed.ply, closed.vtk and metrics.json exactly as `chordfit simulate` writes them.
+  SimulateOptions simulate;
+  simulate.case_dir = o.case_dir;
+  simulate.cords_file = (out / "cords.json").string();
+  simulate.out_dir = o.out_dir;
+  simulate.quiet = true;
+  std::printf("fitted cords: full closure from the open state\n");
+  const int simulated = runSimulate(simulate);
+  if (simulated != kExitOk) return simulated;
+
+  const ValveMetrics seed_metrics = computeMetrics(*valve_case, fit.seed_evaluation.closed_V);
+  const ValveMetrics fit_metrics = computeMetrics(*valve_case, fit.final_evaluation.closed_V);
+  std::string metrics_text;
+  readWholeFile(out / "metrics.json", metrics_text);
+  nlohmann::json metrics = nlohmann::json::parse(metrics_text);
+  metrics["optimizer"] = o.optimizer;
+  metrics["params"] = o.params;
+  metrics["parameters"] = fit.x.size();
+  metrics["forward_sims"] = fit.forward_sims + 1;  // + the closure just written
+  metrics["fit_seconds"] = fit.seconds;
+  metrics["initial_mean_mm"] = fit.seed_evaluation.mean_deviation_mm;
+  metrics["initial_cost"] = fit.seed_evaluation.cost;
+  metrics["final_cost"] = fit.final_evaluation.cost;
+  metrics["prefit_factor"] = fit.prefit_factor;
+  metrics["scale_bounds"] = o.scale_bounds;
+  metrics["termination"] = fit.termination;
+  metrics["threads"] = o.threads;
+  writeFileAtomically(out / "metrics.json", metrics.dump(2) + "\n");
+  writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
+  writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
+  writeFileAtomically(out / "report.md", report(*valve_case, o, fit, seed_metrics, fit_metrics));
+
+  std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
+              fit.seconds, fit.termination.c_str());
+  std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
+  std::cout << "wrote " << (out / "cords.json").string()
+            << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
+               "report.md\n";
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli
