@@ -39,6 +39,14 @@ std::optional<nlohmann::json> parseJson(const std::string& text, const std::stri
     return nlohmann::json::parse(text);
   } catch (const nlohmann::json::parse_error& e) {
     diagnostics.error(file, lineColumn(text, e.byte), "malformed JSON: " + parseReason(e.what()));
+  } catch (const nlohmann::json::exception& e) {
+    // Syntactically valid but unrepresentable, e.g. a number beyond double range (1e999):
+    // nlohmann reports it as out_of_range without a position.
+    const std::string message = e.what();
+    const std::size_t tag_end = message.find("] ");  // drop "[json.exception.<id>] "
+    diagnostics.error(file, "",
+                      "unreadable JSON: " +
+                          (tag_end == std::string::npos ? message : message.substr(tag_end + 2)));
   }
   return std::nullopt;
 }
