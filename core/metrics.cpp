@@ -145,13 +145,21 @@ ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::Matri
   ProlapseResult result;
   result.heights = heightAboveAnnulus(annulus.frame, annulus.ring, points);
   result.max_height_mm = points.rows() > 0 ? result.heights.maxCoeff() : kNaN;
-  std::map<int, int> above;  // segment id -> points above threshold
+  std::map<int, int> above;       // segment id -> points above threshold
+  std::map<int, double> highest;  // segment id -> highest point
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    if (result.heights(i) > options.threshold_mm) ++above[segment_ids(i)];
+    const int segment = segment_ids(i);
+    if (segment < 0) continue;
+    const auto [it, first] = highest.emplace(segment, result.heights(i));
+    if (!first) it->second = std::max(it->second, result.heights(i));
+    if (result.heights(i) > options.threshold_mm) ++above[segment];
+  }
+  for (const auto& [segment, height] : highest) {
+    result.segment_max_height_mm[segmentName(annulus.segments, segment)] = height;
   }
   std::set<std::string> names;
   for (const auto& [segment, count] : above) {
-    if (segment >= 0 && count >= options.min_points) {
+    if (count >= options.min_points) {
       names.insert(segmentName(annulus.segments, segment));
     }
   }

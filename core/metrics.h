@@ -7,6 +7,7 @@
 //              for the tracings. "Prolapse reconstructed" = same segment set (none <=> none).
 #pragma once
 
+#include <map>
 #include <string>
 #include <vector>
 
@@ -51,7 +52,10 @@ struct ProlapseOptions {
 struct ProlapseResult {
   std::vector<std::string> segments;  // sorted segment names, e.g. {"P2"}; empty when none
   double max_height_mm = 0.0;         // highest point above the annulus (may be negative)
-  Eigen::VectorXd heights;            // per input point
+  // Highest point of each segment that has points, by segment name (how far each segment is
+  // from the threshold).
+  std::map<std::string, double> segment_max_height_mm;
+  Eigen::VectorXd heights;  // per input point
 };
 
 // Closed-state geometry shared by the prolapse computations.

@@ -178,28 +178,6 @@ std::string crossSectionFigure(const SyntheticCase& s) {
   return crossSectionsSvg(panels, options);
 }
 
-// Highest point of each Carpentier segment above the closed annulus (the prolapse height of
-// metrics.h), over the non-ring vertices of the closed mesh, each in the segment of its
-// open-state position (openStateSegments, as prolapseOfMesh): how far each segment is from
-// the 2 mm criterion (calibration evidence).
-json segmentMaxHeights(const ValveCase& c, const Eigen::MatrixXd& V) {
-  const ClosedAnnulus closed = closedAnnulus(c);
-  const Eigen::VectorXd h = heightAboveAnnulus(closed.frame, closed.ring, V);
-  const Eigen::VectorXi segments = openStateSegments(c.mesh);
-  std::vector<bool> on_ring(V.rows(), false);
-  for (Eigen::Index i = 0; i < c.mesh.annulus.size(); ++i) on_ring[c.mesh.annulus(i)] = true;
-  std::map<std::string, double> highest;
-  for (Eigen::Index v = 0; v < V.rows(); ++v) {
-    if (on_ring[v] || segments(v) < 0) continue;
-    const std::string name = segmentName(closed.segments, segments(v));
-    const auto it = highest.find(name);
-    if (it == highest.end() || h(v) > it->second) highest[name] = h(v);
-  }
-  json out = json::object();
-  for (const auto& [name, height] : highest) out[name] = height;
-  return out;
-}
-
 }  // namespace
 
 SimulationSettings truthSimulationSettings() {
@@ -332,64 +310,64 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                     {"case_heuristic_position", {q.x(), q.y(), q.z()}}});
   }
   const ProlapseResult& prolapse = s.truth_metrics.mesh_prolapse;
-  json document = {
-      {"format", "chordfit-synthetic-truth"},
-      {"version", 1},
-      {"case", s.valve_case.name},
-      {"preset", s.preset.name},
-      {"summary", s.preset.summary},
-      {"seed", o.seed},
-      {"generation",
-       {{"case_edge_mm", o.edge_mm},
-        {"truth_edge_mm", o.edge_mm * o.truth_edge_ratio},
-        {"planes", o.tracing.planes},
-        {"spacing_mm", o.tracing.spacing_mm},
-        {"noise_mm", o.tracing.noise_mm},
-        {"dropout_fraction", o.tracing.dropout_fraction},
-        {"dropout_pieces", o.tracing.dropout_pieces},
-        {"tip_offset_sd_mm", o.tip_offset_sd_mm},
-        {"normal_cord_scale", s.preset.normal_cord_scale},
-        {"secondary_cord_factor", s.preset.secondary_cord_factor},
-        {"ruptured_cord_scale", kRupturedCordScale}}},
-      {"anatomy",
-       {{"ap_diameter_mm", a.ap_diameter_mm},
-        {"cc_diameter_mm", a.cc_diameter_mm},
-        {"saddle_height_mm", a.saddle_height_mm},
-        {"closed_saddle_height_mm", a.closed_saddle_height_mm},
-        {"closed_contraction", a.closed_contraction},
-        {"anterior_fraction", a.anterior_fraction},
-        {"anterior_height_mm", a.anterior_height_mm},
-        {"posterior_height_mm", a.posterior_height_mm},
-        {"posterior_side_height_mm", a.posterior_side_height_mm},
-        {"commissural_height_mm", a.commissural_height_mm},
-        {"indentation_depth", a.indentation_depth}}},
-      {"pathology",
-       {{"segment_peak_scale", segment_scale},
-        {"pathology_width", s.preset.pathology_width},
-        {"scale_spread", s.preset.scale_spread},
-        {"ruptured_segment", s.preset.ruptured_segment},
-        {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
-      {"intended_prolapse", s.preset.intended_prolapse},
-      {"truth_prolapse", prolapse.segments},
-      {"truth_prolapse_max_height_mm", prolapse.max_height_mm},
-      // What the tracings show (prolapseOfTracings): the benchmark's "prolapse reconstructed"
-      // compares a fitted mesh against this.
-      {"tracing_prolapse", s.truth_metrics.tracing_prolapse.segments},
-      {"truth_segment_max_height_mm", segmentMaxHeights(s.truth_case, s.truth_result.V)},
-      {"prolapse_as_intended", prolapse.segments == s.preset.intended_prolapse},
-      {"simulation",
-       {{"settings", settingsJson(s.truth_settings)},
-        {"converged", s.truth_result.converged},
-        {"steps", s.truth_result.steps},
-        {"vertices", s.truth_case.mesh.V.rows()}}},
-      {"tips", tips},
-      {"cords", cords},
-      {"files",
-       {{"case", "truth/case (fine mesh, true cords, tight solver settings)"},
-        {"cords", "truth/cords.json"},
-        {"closed", "truth/closed.ply, truth/closed.vtk"},
-        {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
-        {"figure", "truth/cross_sections.svg"}}}};
+  json document = {{"format", "chordfit-synthetic-truth"},
+                   {"version", 1},
+                   {"case", s.valve_case.name},
+                   {"preset", s.preset.name},
+                   {"summary", s.preset.summary},
+                   {"seed", o.seed},
+                   {"generation",
+                    {{"case_edge_mm", o.edge_mm},
+                     {"truth_edge_mm", o.edge_mm * o.truth_edge_ratio},
+                     {"planes", o.tracing.planes},
+                     {"spacing_mm", o.tracing.spacing_mm},
+                     {"noise_mm", o.tracing.noise_mm},
+                     {"dropout_fraction", o.tracing.dropout_fraction},
+                     {"dropout_pieces", o.tracing.dropout_pieces},
+                     {"tip_offset_sd_mm", o.tip_offset_sd_mm},
+                     {"normal_cord_scale", s.preset.normal_cord_scale},
+                     {"secondary_cord_factor", s.preset.secondary_cord_factor},
+                     {"ruptured_cord_scale", kRupturedCordScale}}},
+                   {"anatomy",
+                    {{"ap_diameter_mm", a.ap_diameter_mm},
+                     {"cc_diameter_mm", a.cc_diameter_mm},
+                     {"saddle_height_mm", a.saddle_height_mm},
+                     {"closed_saddle_height_mm", a.closed_saddle_height_mm},
+                     {"closed_contraction", a.closed_contraction},
+                     {"anterior_fraction", a.anterior_fraction},
+                     {"anterior_height_mm", a.anterior_height_mm},
+                     {"posterior_height_mm", a.posterior_height_mm},
+                     {"posterior_side_height_mm", a.posterior_side_height_mm},
+                     {"commissural_height_mm", a.commissural_height_mm},
+                     {"indentation_depth", a.indentation_depth}}},
+                   {"pathology",
+                    {{"segment_peak_scale", segment_scale},
+                     {"pathology_width", s.preset.pathology_width},
+                     {"scale_spread", s.preset.scale_spread},
+                     {"ruptured_segment", s.preset.ruptured_segment},
+                     {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},
+                   {"intended_prolapse", s.preset.intended_prolapse},
+                   {"truth_prolapse", prolapse.segments},
+                   {"truth_prolapse_max_height_mm", prolapse.max_height_mm},
+                   // What the tracings show (prolapseOfTracings): the benchmark's "prolapse
+                   // reconstructed" compares a fitted mesh against this.
+                   {"tracing_prolapse", s.truth_metrics.tracing_prolapse.segments},
+                   // How far each segment is from the 2 mm criterion (calibration evidence).
+                   {"truth_segment_max_height_mm", prolapse.segment_max_height_mm},
+                   {"prolapse_as_intended", prolapse.segments == s.preset.intended_prolapse},
+                   {"simulation",
+                    {{"settings", settingsJson(s.truth_settings)},
+                     {"converged", s.truth_result.converged},
+                     {"steps", s.truth_result.steps},
+                     {"vertices", s.truth_case.mesh.V.rows()}}},
+                   {"tips", tips},
+                   {"cords", cords},
+                   {"files",
+                    {{"case", "truth/case (fine mesh, true cords, tight solver settings)"},
+                     {"cords", "truth/cords.json"},
+                     {"closed", "truth/closed.ply, truth/closed.vtk"},
+                     {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
+                     {"figure", "truth/cross_sections.svg"}}}};
   return document.dump(2) + "\n";
 }
 

@@ -16,7 +16,7 @@ namespace {
 using testing::runChordfit;
 using testing::TempDir;
 
-std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
   TempDir dir;

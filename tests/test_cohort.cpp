@@ -34,7 +34,7 @@ using testing::TempDir;
 constexpr const char* kFastCase = " --edge 3.0 --planes 2";
 constexpr double kNoiseMm = 0.3;
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 // Every regular file under `root`, as paths relative to it.
 std::set<std::string> filesUnder(const fs::path& root) {

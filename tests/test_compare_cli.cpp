@@ -18,7 +18,7 @@ using testing::readText;
 using testing::runChordfit;
 using testing::TempDir;
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 std::vector<std::vector<std::string>> csvRows(const std::string& text) {
   return parseSimpleCsv(text);

@@ -27,7 +27,7 @@ fs::path runnerPath() {
   return fs::path(CHORDFIT_EXE).parent_path().parent_path() / "experiments" / "run_experiments";
 }
 
-std::string quoted(const fs::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 testing::CommandResult runRunner(const std::string& arguments) {
   TempDir capture;
@@ -72,7 +72,9 @@ TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
   int cases = 0;
   for (const std::string& line : lines(r.out)) {
     if (line.rfind("case ", 0) == 0) ++cases;
-    if (line.rfind("job  ", 0) == 0) EXPECT_TRUE(jobs.insert(line.substr(5)).second) << line;
+    if (line.rfind("job  ", 0) == 0) {
+      EXPECT_TRUE(jobs.insert(line.substr(5)).second) << line;
+    }
   }
   // 7 presets x 3 seeds, plus 3 noise and 2 plane-count variants of prolapse-P2 seed 1.
   EXPECT_EQ(cases, 21 + 5);

@@ -13,7 +13,7 @@ namespace {
 using testing::runChordfit;
 using testing::TempDir;
 
-std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 std::filesystem::path smallCase() {
   return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";

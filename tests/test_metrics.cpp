@@ -119,6 +119,10 @@ TEST(Prolapse, FindsTheSegmentOfPointsMoreThanTwoMillimetresAboveTheAnnulus) {
       prolapseOfLabelledPoints(annulus, points, leaflets, ProlapseOptions{});
   EXPECT_EQ(result.segments, std::vector<std::string>{"P2"});
   EXPECT_NEAR(result.max_height_mm, 3.0, 1e-6);
+  // Highest point per segment that has points: P2 and A2 (the commissural point, label -1,
+  // falls in whichever segment its angle gives and is below both).
+  EXPECT_NEAR(result.segment_max_height_mm.at("P2"), 3.0, 1e-6);
+  EXPECT_NEAR(result.segment_max_height_mm.at("A2"), 1.5, 1e-6);
   // Requiring three points per segment removes it.
   EXPECT_TRUE(prolapseOfLabelledPoints(annulus, points, leaflets, {2.0, 3}).segments.empty());
 }

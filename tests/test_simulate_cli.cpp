@@ -10,7 +10,7 @@ namespace {
 using testing::runChordfit;
 using testing::TempDir;
 
-std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+using testing::quoted;
 
 class SimulateCommand : public ::testing::Test {
  protected:

@@ -41,6 +41,9 @@ struct CommandResult {
   std::string err;
 };
 
+// A path in single quotes for a shell command line (test paths hold no single quote).
+inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+
 // Runs build/tools/chordfit with `arguments` (already shell-quoted where needed).
 CommandResult runChordfit(const std::string& arguments);
 

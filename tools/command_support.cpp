@@ -1,5 +1,6 @@
 #include "tools/command_support.h"
 
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -41,6 +42,20 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
     return std::nullopt;
   }
   return set;
+}
+
+std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
+                                                       const std::string& case_dir) {
+  Diagnostics diagnostics;
+  SimulationSettings settings =
+      settingsFromJson(valve_case.simulation_json, diagnostics, {},
+                       (std::filesystem::path(case_dir) / "case.json").string());
+  if (!diagnostics.ok()) {
+    reportProblems(diagnostics);
+    return std::nullopt;
+  }
+  settings.phase = ClosurePhase::kClose;
+  return settings;
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {

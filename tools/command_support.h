@@ -7,6 +7,7 @@
 
 #include "core/case_data.h"
 #include "core/diagnostics.h"
+#include "core/simulator.h"
 
 namespace chordfit::cli {
 
@@ -21,6 +22,12 @@ int reportProblems(const Diagnostics& diagnostics);
 // mesh), else the case's own cords, else the paper's heuristic. Prints problems and returns
 // nullopt on bad input.
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
+
+// The case's simulator settings (its "simulation" block over the defaults), phase kClose.
+// On unknown keys, wrong types or out-of-range values prints the problems, naming
+// CASE_DIR/case.json, and returns nullopt.
+std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
+                                                       const std::string& case_dir);
 
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);

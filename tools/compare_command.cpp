@@ -133,10 +133,9 @@ int runCompare(const CompareOptions& options) {
 
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
-  Diagnostics diagnostics;
-  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
-  if (!diagnostics.ok()) return reportProblems(diagnostics);
-  settings.phase = ClosurePhase::kClose;
+  const auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  if (!case_settings) return kExitBadInput;
+  const SimulationSettings& settings = *case_settings;
 
   // Read every cord file first: a typo in the last one must not cost the earlier closures.
   std::vector<ComparedSet> sets;

@@ -133,10 +133,9 @@ int runFit(const FitCommandOptions& o) {
   }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
-  Diagnostics diagnostics;
-  SimulationSettings settings = settingsFromJson(valve_case->simulation_json, diagnostics);
-  if (!diagnostics.ok()) return reportProblems(diagnostics);
-  settings.phase = ClosurePhase::kClose;
+  const auto case_settings = caseSettingsOrReport(*valve_case, o.case_dir);
+  if (!case_settings) return kExitBadInput;
+  const SimulationSettings& settings = *case_settings;
 
   inverse::FitOptions options;
   options.mode = *mode;

@@ -94,12 +94,9 @@ int runSimulate(const SimulateOptions& options) {
   if (!valve_case) return kExitBadInput;
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
-  Diagnostics diagnostics;
-  SimulationSettings settings =
-      settingsFromJson(valve_case->simulation_json, diagnostics, {},
-                       (std::filesystem::path(options.case_dir) / "case.json").string());
-  if (!diagnostics.ok()) return reportProblems(diagnostics);
-  settings.phase = ClosurePhase::kClose;
+  auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  if (!case_settings) return kExitBadInput;
+  SimulationSettings& settings = *case_settings;
 
   const SimulationResult closed =
       simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));

@@ -103,11 +103,9 @@ int runSweepCord(const SweepCordOptions& options) {
               << " cords" << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
     return kExitBadInput;
   }
-  Diagnostics diagnostics;
-  const SimulationSettings settings =
-      settingsFromJson(valve_case->simulation_json, diagnostics, {},
-                       (std::filesystem::path(options.case_dir) / "case.json").string());
-  if (!diagnostics.ok()) return reportProblems(diagnostics);
+  const auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  if (!case_settings) return kExitBadInput;
+  const SimulationSettings& settings = *case_settings;
 
   const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
   std::vector<SweepPoint> points(count);
