@@ -43,7 +43,9 @@ void BM_CloseParametricValve(benchmark::State& state) {
   const CordSet cords = heuristicCordSet(valve.valve_case);
   SimulationResult result;
   for (auto _ : state) {
-    result = simulateClosure(valve.valve_case, cords, SimulationSettings{});
+    SimulationSettings settings;
+    settings.max_steps = 20000;  // the finest valve needs more than the default cap
+    result = simulateClosure(valve.valve_case, cords, settings);
     benchmark::DoNotOptimize(result.V.data());
   }
   if (!result.ok()) {

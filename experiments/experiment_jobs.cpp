@@ -344,17 +344,21 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
     fs::path cords_file;
     if (job.method == Method::kFit) {
       const std::string max_sims = std::to_string(config.max_sims);
-      if (!runChordfit(paths,
-                       {"fit", case_dir.string(), "--params", job.params, "--optimizer",
-                        job.optimizer, "--max-sims", max_sims, "--threads",
-                        std::to_string(config.fit_threads), "--out", run_dir.string()},
-                       log, error, &command)) {
+      std::vector<std::string> fit_args = {"fit",         case_dir.string(),
+                                           "--params",    job.params,
+                                           "--optimizer", job.optimizer,
+                                           "--max-sims",  max_sims,
+                                           "--threads",   std::to_string(config.fit_threads)};
+      if (config.fd_warm) fit_args.push_back("--fd-warm");
+      fit_args.insert(fit_args.end(), {"--out", run_dir.string()});
+      if (!runChordfit(paths, fit_args, log, error, &command)) {
         return failure("job " + job.id + ": " + error);
       }
       cords_file = run_dir / "cords.json";
       result["params"] = job.params;
       result["optimizer"] = job.optimizer;
       result["max_sims"] = config.max_sims;
+      result["fd_warm"] = config.fd_warm;
     } else {
       cords_file = case_dir / "cords.json";
       if (job.method == Method::kTruth) {

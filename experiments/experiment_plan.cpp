@@ -64,6 +64,13 @@ ExperimentConfig fullConfig() {
   return c;
 }
 
+ExperimentConfig reducedConfig() {
+  ExperimentConfig c = fullConfig();
+  c.seeds = {1};
+  c.optimizer_presets = {"prolapse-P2"};
+  return c;
+}
+
 ExperimentConfig smokeConfig() {
   ExperimentConfig c;
   // The parameters of the bundled test case build/cases/small-normal (cases/CMakeLists.txt),

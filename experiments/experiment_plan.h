@@ -40,6 +40,9 @@ struct ExperimentConfig {
   double dropout = 0.1;
   int max_sims = 300;  // forward-simulation budget of every fit (equal for all optimisers)
   int fit_threads = 2;
+  // Finite-difference perturbations warm-start from the base closed state (`fit --fd-warm`):
+  // about 10x cheaper per Jacobian; the reported value is still a full closure.
+  bool fd_warm = true;
   // Optimiser comparison: these presets at the first seed, per-cord scales.
   std::vector<std::string> optimizer_presets;
   std::vector<std::string> optimizers;
@@ -51,6 +54,9 @@ struct ExperimentConfig {
 
 // Full run: every cohort preset, seeds 1-3, all optimisers, both sweeps.
 ExperimentConfig fullConfig();
+// Reduced run (what the committed results are): every preset at seed 1, the optimiser
+// comparison on prolapse-P2 only, both sweeps. About an hour on 2 cores.
+ExperimentConfig reducedConfig();
 // CI smoke run: one case (normal-1 seed 2, edge 3 mm, 3 planes: the bundled small-normal),
 // small fit budget, every method and table kind but no extra sweep cases.
 ExperimentConfig smokeConfig();

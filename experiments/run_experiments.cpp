@@ -40,15 +40,19 @@ commands:
   list     print the plan: cases and jobs with their shard under --shard i/N
 
 options:
-  --smoke            reduced plan for CI: one case, one seed, small budget (default
-                     directories under the build tree, BUILD/experiments/smoke/)
+  --plan NAME        full (every preset, seeds 1-3: about a day on 2 cores), reduced
+                     (seed 1, optimisers on prolapse-P2 only: about an hour; the committed
+                     results) or smoke (CI: one case, one seed, small budget; default
+                     directories under the build tree, BUILD/experiments/smoke/).
+                     Default: reduced
+  --smoke            the same as --plan smoke
   --shard i/N        run only items i, i+N, i+2N, ... of the plan (1 <= i <= N)
   --results DIR      tables, plots, jobs/*.json   (default: experiments/results)
   --work DIR         cases and run directories     (default: experiments/work)
   --chordfit PATH    chordfit executable           (default: the one built with this program)
   --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
                      options (e.g. the bundled build/cases) instead of generating it
-  --max-sims N       forward-simulation budget of every fit (full: 300, smoke: 12)
+  --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 12)
   --methods LIST     only jobs whose method starts with one of these comma-separated
                      names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
@@ -61,6 +65,7 @@ options:
 struct Arguments {
   std::string command;
   bool smoke = false;
+  std::string plan = "reduced";
   Shard shard;
   fs::path results, work, chordfit, case_source;
   int max_sims = -1;
@@ -93,6 +98,13 @@ int parseArguments(int argc, char** argv, Arguments& a) {
       std::exit(kExitOk);
     } else if (arg == "--smoke") {
       a.smoke = true;
+      a.plan = "smoke";
+    } else if (arg == "--plan") {
+      if (!value(text) || (text != "full" && text != "reduced" && text != "smoke")) {
+        return usageError("--plan: expected full, reduced or smoke, got \"" + text + "\"");
+      }
+      a.plan = text;
+      a.smoke = text == "smoke";
     } else if (arg == "--force") {
       a.force = true;
     } else if (arg == "--no-timing") {
@@ -351,7 +363,9 @@ int list(const ExperimentPlan& plan, const Arguments& a) {
 int main(int argc, char** argv) {
   Arguments a;
   if (const int code = parseArguments(argc, argv, a); code != kExitOk) return code;
-  ExperimentConfig config = a.smoke ? smokeConfig() : fullConfig();
+  ExperimentConfig config = a.plan == "smoke"  ? smokeConfig()
+                            : a.plan == "full" ? fullConfig()
+                                               : reducedConfig();
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   try {
     const ExperimentPlan plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets);

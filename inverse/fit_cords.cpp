@@ -42,7 +42,12 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
 
   CordSet start_set = seed;
   ForwardEvaluation start_evaluation = outcome.seed_evaluation;
-  if (options.prefit.enabled && seed_parameters.size() > 0) {
+  // The pre-fit stages run only when their closures fit in the budget, leaving the final one.
+  auto budget_allows = [&](int sims) {
+    return outcome.forward_sims + sims + 1 <= options.max_sims;
+  };
+  if (options.prefit.enabled && seed_parameters.size() > 0 &&
+      budget_allows(options.prefit.points + options.prefit.refine_points)) {
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
     const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
@@ -52,6 +57,18 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     start_set = result.start;
     start_evaluation = result.best;
     record("prefit", 1, start_evaluation, start_evaluation.cost);
+  }
+  if (options.segment_prefit.enabled && seed_parameters.size() > 0 &&
+      options.mode != ParameterMode::kGroups && budget_allows(6 * options.segment_prefit.points)) {
+    SegmentPrefitOptions segment = options.segment_prefit;
+    segment.threads = options.finite_difference.threads;
+    const SegmentPrefitResult result = segmentScalePrefit(valve_case, start_set, start_evaluation,
+                                                          options.bounds, seed_residual, segment);
+    outcome.forward_sims += result.forward_sims;
+    outcome.segment_prefit_changes = result.changed;
+    start_set = result.start;
+    start_evaluation = result.best;
+    record("segments", 2, start_evaluation, start_evaluation.cost);
   }
 
   const FitParameterization parameters(valve_case, start_set, options.mode, options.bounds);

@@ -21,6 +21,7 @@
 #include "inverse/forward_residual.h"
 #include "inverse/global_prefit.h"
 #include "inverse/optimizer.h"
+#include "inverse/segment_prefit.h"
 
 namespace chordfit::inverse {
 
@@ -30,6 +31,7 @@ struct FitOptions {
   ResidualOptions residual;
   FiniteDifferenceOptions finite_difference;  // .threads also used by the pre-fit
   PrefitOptions prefit;
+  SegmentPrefitOptions segment_prefit;  // runs after the global pre-fit
   std::string optimizer = "ceres";
   OptimizerSettings optimizer_settings;
   int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
@@ -43,6 +45,7 @@ struct FitOutcome {
   ForwardEvaluation seed_evaluation;   // full closure of the seed
   ForwardEvaluation final_evaluation;  // full closure of the fitted set
   double prefit_factor = 1.0;
+  std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
   std::vector<std::string> parameter_names;
   Eigen::VectorXd x;                     // fitted parameters
   std::vector<IterationRecord> history;  // seed, pre-fit and optimiser records

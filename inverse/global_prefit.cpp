@@ -17,6 +17,27 @@ CordSet scaleFreeCords(const CordSet& seed, double factor) {
   return set;
 }
 
+std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
+                                             const std::vector<CordSet>& sets,
+                                             const ForwardResidual& residual, int threads) {
+  const Eigen::VectorXd no_regularisation;
+  std::vector<ForwardEvaluation> out(sets.size());
+  parallelFor(static_cast<int>(sets.size()), threads, [&](int i) {
+    ForwardEvaluation& e = out[i];
+    const SimulationResult r = simulateClosure(valve_case, sets[i], residual.settings());
+    if (!r.ok()) {
+      e.error = r.error;
+      return;
+    }
+    e.converged = r.converged;
+    e.closed_V = r.V;
+    e.data = residual.dataResiduals(r.V);
+    e.cost = residual.cost(e.data, no_regularisation);
+    e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+  });
+  return out;
+}
+
 PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                                const ForwardEvaluation& seed_evaluation,
                                const ParameterBounds& bounds, const ForwardResidual& residual,
@@ -27,24 +48,12 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   const Eigen::VectorXd no_regularisation;
   const double seed_cost = residual.cost(seed_evaluation.data, no_regularisation);
 
-  // Evaluates a batch of factors in parallel; returns false on a failed closure.
   auto run = [&](const std::vector<double>& factors) {
-    std::vector<ForwardEvaluation> out(factors.size());
-    parallelFor(static_cast<int>(factors.size()), options.threads, [&](int i) {
-      ForwardEvaluation& e = out[i];
-      e.x = Eigen::VectorXd::Constant(1, factors[i]);
-      const SimulationResult r =
-          simulateClosure(valve_case, scaleFreeCords(seed, factors[i]), residual.settings());
-      if (!r.ok()) {
-        e.error = r.error;
-        return;
-      }
-      e.converged = r.converged;
-      e.closed_V = r.V;
-      e.data = residual.dataResiduals(r.V);
-      e.cost = residual.cost(e.data, no_regularisation);
-      e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
-    });
+    std::vector<CordSet> sets;
+    for (double factor : factors) sets.push_back(scaleFreeCords(seed, factor));
+    std::vector<ForwardEvaluation> out = closeCordSets(valve_case, sets, residual, options.threads);
+    for (std::size_t i = 0; i < factors.size(); ++i)
+      out[i].x = Eigen::VectorXd::Constant(1, factors[i]);
     result.forward_sims += static_cast<int>(factors.size());
     return out;
   };

@@ -49,6 +49,13 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                                const ParameterBounds& bounds, const ForwardResidual& residual,
                                const PrefitOptions& options);
 
+// Full closures of `sets` from the open state, run on `threads` threads (one result slot per
+// set: independent of the thread count); data residuals and the data-only cost. A failed
+// closure has error set. Shared by the pre-fit stages.
+std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
+                                             const std::vector<CordSet>& sets,
+                                             const ForwardResidual& residual, int threads);
+
 // The seed with every free non-manual cord's rest length multiplied by `factor`.
 CordSet scaleFreeCords(const CordSet& seed, double factor);
 

@@ -66,7 +66,7 @@ class ExperimentsPipeline : public ::testing::Test {
 };
 
 TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
-  const auto r = runRunner("list");
+  const auto r = runRunner("list --plan full");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::set<std::string> jobs;
   int cases = 0;
@@ -96,6 +96,23 @@ TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
   EXPECT_TRUE(jobs.count("prolapse-P2_s1_noise0__fit_scales_ceres"));
   EXPECT_TRUE(jobs.count("prolapse-P2_s1_noise1__truth"));
   EXPECT_TRUE(jobs.count("prolapse-P2_s1_planes12__heuristic"));
+}
+
+TEST_F(ExperimentsPipeline, ReducedPlanIsTheDefaultAndCoversEveryPresetAtSeedOne) {
+  const auto r = runRunner("list");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int cases = 0;
+  std::set<std::string> jobs;
+  for (const std::string& line : lines(r.out)) {
+    if (line.rfind("case ", 0) == 0) ++cases;
+    if (line.rfind("job  ", 0) == 0) jobs.insert(line.substr(5));
+  }
+  EXPECT_EQ(cases, 7 + 5);  // every preset at seed 1, plus the sweep variants
+  EXPECT_TRUE(jobs.count("bileaflet_s1__fit_scales-tips_ceres"));
+  EXPECT_TRUE(jobs.count("prolapse-P2_s1__fit_scales_crs2"));
+  EXPECT_FALSE(jobs.count("prolapse-A2_s1__fit_scales_crs2"));
+  EXPECT_FALSE(jobs.count("normal-1_s2__heuristic"));
+  EXPECT_EQ(runRunner("list --plan most").exit_code, 2);
 }
 
 TEST_F(ExperimentsPipeline, ShardsPartitionThePlan) {

@@ -132,6 +132,7 @@ inverse::FitOptions perCordOptions(const std::string& optimizer, int max_sims, i
   options.bounds.scale_lower = 0.4;  // the problem's scales (0.65 +- 15 %) lie below 0.7
   options.bounds.scale_upper = 1.5;
   options.prefit.enabled = false;  // the four free cords start at their unperturbed values
+  options.segment_prefit.enabled = false;
   options.optimizer = optimizer;
   options.max_sims = max_sims;
   options.finite_difference.threads = threads;

@@ -124,7 +124,7 @@ struct FitCommandOptions {
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
-  bool prefit = true;               // global scale pre-fit before the optimiser
+  bool prefit = true;               // global and segment pre-fits before the optimiser
   double fd_scale_step = 0.01;      // central-difference step on a scale
   double fd_tip_step_mm = 0.1;      // ... on a tip offset coordinate
   bool fd_warm_start = false;       // perturbed closures start from the base closed state

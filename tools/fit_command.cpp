@@ -85,6 +85,10 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
   md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
      << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
   md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)") << "\n";
+  md << "- segment pre-fit: "
+     << (fit.segment_prefit_changes.empty() ? std::string("no change")
+                                            : joinSegments(fit.segment_prefit_changes))
+     << "\n";
   md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
      << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";
@@ -143,6 +147,7 @@ int runFit(const FitCommandOptions& o) {
   options.bounds.scale_upper = o.scale_bounds[1];
   options.bounds.tip_box_mm = o.tip_box_mm;
   options.prefit.enabled = o.prefit;
+  options.segment_prefit.enabled = o.prefit;
   options.optimizer = o.optimizer;
   options.max_sims = o.max_sims;
   options.finite_difference.threads = o.threads;
@@ -192,6 +197,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["initial_cost"] = fit.seed_evaluation.cost;
   metrics["final_cost"] = fit.final_evaluation.cost;
   metrics["prefit_factor"] = fit.prefit_factor;
+  metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["scale_bounds"] = o.scale_bounds;
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;

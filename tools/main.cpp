@@ -128,7 +128,7 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--tip-box", o.tip_box_mm, "PM tip offset bound per axis, mm (scales+tips)")
       ->capture_default_str();
-  cmd->add_flag("!--no-prefit", o.prefit, "Skip the global scale pre-fit");
+  cmd->add_flag("!--no-prefit", o.prefit, "Skip both pre-fits (global scale factor, then per-segment scales)");
   cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
       ->capture_default_str();
   cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")

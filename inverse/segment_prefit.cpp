@@ -1,0 +1,79 @@
+#include "inverse/segment_prefit.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include "core/carpentier.h"
+#include "core/metrics.h"
+#include "inverse/global_prefit.h"
+
+namespace chordfit::inverse {
+
+namespace {
+
+bool isFree(const Cord& cord) { return !cord.locked && cord.provenance != Provenance::kManual; }
+
+// `set` with every free cord of segment `segment` at scale t (rest = seed rest * t).
+CordSet withSegmentScale(const CordSet& set, const Eigen::VectorXi& vertex_segment, int segment,
+                         double t) {
+  CordSet out = set;
+  for (Cord& cord : out.cords) {
+    if (isFree(cord) && vertex_segment(cord.vertex) == segment) {
+      cord.rest_length = cord.seed_rest_length * t;
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSet& start,
+                                       const ForwardEvaluation& start_evaluation,
+                                       const ParameterBounds& bounds,
+                                       const ForwardResidual& residual,
+                                       const SegmentPrefitOptions& options) {
+  SegmentPrefitResult result;
+  result.start = start;
+  result.best = start_evaluation;
+  if (!options.enabled) return result;
+  const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
+  const int points = std::max(2, options.points);
+  const double spacing = (bounds.scale_upper - bounds.scale_lower) / (points - 1);
+  int segment_count = 0;
+  for (Eigen::Index v = 0; v < vertex_segment.size(); ++v) {
+    segment_count = std::max(segment_count, vertex_segment(v) + 1);
+  }
+  for (int segment = 0; segment < segment_count; ++segment) {
+    bool has_free = false;
+    for (const Cord& cord : result.start.cords) {
+      if (isFree(cord) && vertex_segment(cord.vertex) == segment) has_free = true;
+    }
+    if (!has_free) continue;
+    std::vector<double> scales;
+    std::vector<CordSet> sets;
+    for (int i = 0; i < points; ++i) {
+      const double t = bounds.scale_lower + i * spacing;
+      scales.push_back(t);
+      sets.push_back(withSegmentScale(result.start, vertex_segment, segment, t));
+    }
+    std::vector<ForwardEvaluation> evaluations =
+        closeCordSets(valve_case, sets, residual, options.threads);
+    result.forward_sims += static_cast<int>(sets.size());
+    int best = -1;
+    for (std::size_t i = 0; i < evaluations.size(); ++i) {
+      const double best_cost = best < 0 ? result.best.cost : evaluations[best].cost;
+      if (evaluations[i].ok() && evaluations[i].cost < best_cost) best = static_cast<int>(i);
+    }
+    if (best < 0) continue;
+    result.start = std::move(sets[best]);
+    result.best = std::move(evaluations[best]);
+    SegmentMap names;
+    names.leaflet_names = valve_case.mesh.leaflet_names;
+    std::ostringstream change;
+    change << segmentName(names, segment) << " " << scales[best];
+    result.changed.push_back(change.str());
+  }
+  return result;
+}
+
+}  // namespace chordfit::inverse
