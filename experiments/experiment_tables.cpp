@@ -11,6 +11,8 @@
 
 #include "core/atomic_file.h"
 #include "core/svg_line_plot.h"
+#include "experiments/acceptance_table.h"
+#include "experiments/result_fields.h"
 
 namespace chordfit::experiments {
 
@@ -19,56 +21,10 @@ using nlohmann::json;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Attachment distance bins (mm) of the recovery table; 3 mm is issue 5's acceptance bound
 // ("cords attached within 3 mm of a tracing plane").
 const std::vector<double> kDistanceBinEdges = {0.0, 1.0, 3.0, 6.0};
 constexpr double kWithinOfBest = 0.10;  // optimiser comparison: within 10 % of the best AvgD
-
-std::string fixed(double value, int digits) {
-  if (!std::isfinite(value)) return "";
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
-std::string mdNumber(double value, int digits = 2) {
-  const std::string s = fixed(value, digits);
-  return s.empty() ? "–" : s;
-}
-
-double number(const json& j, const char* key) {
-  return j.contains(key) && j.at(key).is_number() ? j.at(key).get<double>() : kNaN;
-}
-
-std::string segments(const json& j, const char* key, const char* separator) {
-  if (!j.contains(key) || !j.at(key).is_array()) return "";
-  std::string text;
-  for (const json& s : j.at(key)) text += (text.empty() ? "" : separator) + s.get<std::string>();
-  return text;
-}
-
-std::string yesNo(const json& metrics) {
-  const json& r = metrics.at("prolapse_reconstructed");
-  return r.is_boolean() ? (r.get<bool>() ? "yes" : "no") : "";
-}
-
-// Linear-interpolation quantile (type 7) of a non-empty sample; NaN when empty.
-double quantile(std::vector<double> values, double q) {
-  if (values.empty()) return kNaN;
-  std::sort(values.begin(), values.end());
-  const double h = (values.size() - 1) * q;
-  const std::size_t lo = static_cast<std::size_t>(std::floor(h));
-  const std::size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (h - lo) * (values[hi] - values[lo]);
-}
-
-double mean(const std::vector<double>& values) {
-  if (values.empty()) return kNaN;
-  double sum = 0.0;
-  for (double v : values) sum += v;
-  return sum / values.size();
-}
 
 std::string binName(std::size_t bin) {
   if (bin + 1 < kDistanceBinEdges.size()) {
@@ -81,20 +37,6 @@ std::size_t binOf(double distance) {
   std::size_t bin = 0;
   while (bin + 1 < kDistanceBinEdges.size() && distance >= kDistanceBinEdges[bin + 1]) ++bin;
   return bin;
-}
-
-// |relative rest-length error| of the non-ruptured cords, optionally only those attached
-// within `max_distance` of a tracing plane.
-std::vector<double> cordErrors(const json& result, double max_distance = kNaN) {
-  std::vector<double> errors;
-  for (const json& c : result.at("cords")) {
-    if (c.at("ruptured").get<bool>()) continue;
-    if (std::isfinite(max_distance) && c.at("plane_distance_mm").get<double>() > max_distance) {
-      continue;
-    }
-    errors.push_back(std::abs(c.at("relative_error").get<double>()));
-  }
-  return errors;
 }
 
 class Merger {
@@ -115,6 +57,7 @@ class Merger {
 
   MergeSummary run() {
     table1();
+    acceptance();
     optimizers();
     recovery();
     sensitivity();
@@ -209,6 +152,16 @@ class Merger {
     }
     write("table1.md", md);
     write("table1.csv", csv);
+  }
+
+  // Issue 5's acceptance criteria per case (acceptance_table.h).
+  void acceptance() {
+    const AcceptanceTables tables = acceptanceTables(
+        config_,
+        [this](const std::string& case_id, const std::string& tag) { return result(case_id, tag); },
+        timing_);
+    write("acceptance.md", tables.markdown);
+    write("acceptance.csv", tables.csv);
   }
 
   static bool isTable1Method(const JobSpec& job) {
@@ -473,7 +426,8 @@ class Merger {
     for (const std::string& rev : revisions) md += "`" + rev + "` ";
     md += revisions.empty() ? "unknown\n" : "\n";
     md +=
-        "\nFiles: table1.md/.csv, optimizers.md/.csv/.svg, recovery.md/.csv/.svg, "
+        "\nFiles: table1.md/.csv, acceptance.md/.csv, optimizers.md/.csv/.svg, "
+        "recovery.md/.csv/.svg, "
         "recovery_cords.csv, sensitivity.md/.csv/.svg.\n";
     if (!summary_.missing_jobs.empty()) {
       md += "\n## Missing jobs (" + std::to_string(summary_.missing_jobs.size()) + ")\n\n";

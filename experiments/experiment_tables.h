@@ -2,6 +2,7 @@
 // (<results>/jobs/*.json) of the plan's jobs. Reads nothing else, so shards run anywhere can
 // be merged by copying their jobs/ directories together. Writes, atomically:
 //   table1.md/.csv       the paper's Table 1 per case and method, plus forward sims and wall s
+//   acceptance.md/.csv   issue 5's acceptance criteria per case (acceptance_table.h)
 //   optimizers.md/.csv   final AvgD, sims to within 10 % of the best, wall s; optimizers.svg
 //   recovery.md/.csv     rest-length error vs truth by attachment distance from the nearest
 //                        tracing plane; recovery_cords.csv (per cord), recovery.svg

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "core/csv_text.h"
+#include "experiments/acceptance_table.h"
 #include "experiments/experiment_jobs.h"
 #include "experiments/experiment_plan.h"
 #include "experiments/experiment_tables.h"
@@ -52,7 +53,9 @@ options:
   --chordfit PATH    chordfit executable           (default: the one built with this program)
   --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
                      options (e.g. the bundled build/cases) instead of generating it
-  --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 12)
+  --edge MM          case mesh edge length (default 2.5; the truth mesh is half of it).
+                     Case ids do not name the edge: use separate --work and --results
+  --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 16)
   --methods LIST     only jobs whose method starts with one of these comma-separated
                      names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
@@ -69,6 +72,7 @@ struct Arguments {
   Shard shard;
   fs::path results, work, chordfit, case_source;
   int max_sims = -1;
+  double edge_mm = -1.0;
   std::vector<std::string> methods;  // empty: all
   std::vector<int> seeds;            // empty: all
   std::vector<std::string> presets;  // empty: all
@@ -137,6 +141,12 @@ int parseArguments(int argc, char** argv, Arguments& a) {
         char* end = nullptr;
         a.seeds.push_back(static_cast<int>(std::strtol(seed.c_str(), &end, 10)));
         if (seed.empty() || *end != '\0') return usageError("--seeds: bad seed \"" + seed + "\"");
+      }
+    } else if (arg == "--edge") {
+      char* end = nullptr;
+      if (!value(text) || (a.edge_mm = std::strtod(text.c_str(), &end), *end != '\0') ||
+          !(a.edge_mm > 0.0)) {
+        return usageError("--edge: expected a positive length in mm, got \"" + text + "\"");
       }
     } else if (arg == "--max-sims") {
       char* end = nullptr;
@@ -296,6 +306,7 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
   bool has_fits = false;
   for (const JobSpec& job : plan.jobs) has_fits |= job.method == Method::kFit;
   const std::vector<Table> tables = {{"table1.csv", header(table1CsvHeader(timing))},
+                                     {"acceptance.csv", header(acceptanceCsvHeader(timing))},
                                      {"optimizers.csv", header(optimizersCsvHeader(timing))},
                                      {"recovery.csv", header(recoveryCsvHeader())},
                                      {"sensitivity.csv", header(sensitivityCsvHeader())}};
@@ -308,7 +319,9 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
     std::string got;
     for (const std::string& c : rows[0]) got += (got.empty() ? "" : ",") + c;
     if (got != t.header) problems.push_back(std::string(t.file) + ": header \"" + got + "\"");
-    const bool optional = std::string(t.file) == "optimizers.csv" && !has_fits;
+    const bool optional =
+        (std::string(t.file) == "optimizers.csv" || std::string(t.file) == "acceptance.csv") &&
+        !has_fits;
     if (rows.size() < 2 && !optional) problems.push_back(std::string(t.file) + ": no data rows");
     for (std::size_t r = 1; r < rows.size(); ++r) {
       if (rows[r].size() != rows[0].size()) {
@@ -319,8 +332,8 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
     }
   }
   for (const char* file :
-       {"table1.md", "optimizers.md", "optimizers.svg", "recovery.md", "recovery.svg",
-        "recovery_cords.csv", "sensitivity.md", "sensitivity.svg", "index.md"}) {
+       {"table1.md", "acceptance.md", "optimizers.md", "optimizers.svg", "recovery.md",
+        "recovery.svg", "recovery_cords.csv", "sensitivity.md", "sensitivity.svg", "index.md"}) {
     if (!fs::exists(a.results / file)) problems.push_back(std::string(file) + ": missing");
   }
   // One row per table-1 job of the preset x seed cases (with a mean deviation).
@@ -367,6 +380,7 @@ int main(int argc, char** argv) {
                             : a.plan == "full" ? fullConfig()
                                                : reducedConfig();
   if (a.max_sims > 0) config.max_sims = a.max_sims;
+  if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
   try {
     const ExperimentPlan plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets);
     if (a.command == "list") return list(plan, a);

@@ -1,0 +1,67 @@
+#include "experiments/result_fields.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+namespace chordfit::experiments {
+
+using nlohmann::json;
+
+std::string fixed(double value, int digits) {
+  if (!std::isfinite(value)) return "";
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
+std::string mdNumber(double value, int digits) {
+  const std::string s = fixed(value, digits);
+  return s.empty() ? "–" : s;
+}
+
+double number(const json& j, const char* key) {
+  return j.contains(key) && j.at(key).is_number() ? j.at(key).get<double>() : kNaN;
+}
+
+std::string segments(const json& j, const char* key, const char* separator) {
+  if (!j.contains(key) || !j.at(key).is_array()) return "";
+  std::string text;
+  for (const json& s : j.at(key)) text += (text.empty() ? "" : separator) + s.get<std::string>();
+  return text;
+}
+
+std::string yesNo(const json& metrics) {
+  const json& r = metrics.at("prolapse_reconstructed");
+  return r.is_boolean() ? (r.get<bool>() ? "yes" : "no") : "";
+}
+
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const double h = (values.size() - 1) * q;
+  const std::size_t lo = static_cast<std::size_t>(std::floor(h));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (h - lo) * (values[hi] - values[lo]);
+}
+
+double mean(const std::vector<double>& values) {
+  if (values.empty()) return kNaN;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  return sum / values.size();
+}
+
+std::vector<double> cordErrors(const json& result, double max_distance) {
+  std::vector<double> errors;
+  for (const json& c : result.at("cords")) {
+    if (c.at("ruptured").get<bool>()) continue;
+    if (std::isfinite(max_distance) && c.at("plane_distance_mm").get<double>() > max_distance) {
+      continue;
+    }
+    errors.push_back(std::abs(c.at("relative_error").get<double>()));
+  }
+  return errors;
+}
+
+}  // namespace chordfit::experiments
