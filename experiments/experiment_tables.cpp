@@ -350,7 +350,7 @@ class Merger {
       PlotSeries heuristic{"heuristic", {}, {}, true, true},
           fitted{"per-cord fit", {}, {}, true, true}, floor{"noise floor", {}, {}, true, true},
           rec_all{"all cords", {}, {}, true, true},
-          rec_near{"cords ≤ 3 mm from a plane", {}, {}, true, true};
+          rec_near{"≤ 3 mm from a plane", {}, {}, true, true};
       for (double value : values) {
         const std::string case_id = case_of(value);
         cases.insert(case_id);
