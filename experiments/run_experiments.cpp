@@ -60,6 +60,7 @@ options:
                      names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
   --presets LIST     only the cases of these presets (comma-separated)
+  --cases LIST       only these cases (comma-separated ids, e.g. prolapse-P2_s1)
   --force            rerun jobs whose result exists
   --no-timing        merge: leave out wall-time columns (to diff two runs)
   --allow-missing    merge/all: exit 0 even when some jobs have no result
@@ -76,6 +77,7 @@ struct Arguments {
   std::vector<std::string> methods;  // empty: all
   std::vector<int> seeds;            // empty: all
   std::vector<std::string> presets;  // empty: all
+  std::vector<std::string> cases;    // empty: all
   bool force = false;
   bool no_timing = false;
   bool allow_missing = false;
@@ -130,6 +132,10 @@ int parseArguments(int argc, char** argv, Arguments& a) {
       if (!value(text) || text.empty()) return usageError("--methods: expected a list");
       std::istringstream in(text);
       for (std::string m; std::getline(in, m, ',');) a.methods.push_back(m);
+    } else if (arg == "--cases") {
+      if (!value(text) || text.empty()) return usageError("--cases: expected a list");
+      std::istringstream in(text);
+      for (std::string c; std::getline(in, c, ',');) a.cases.push_back(c);
     } else if (arg == "--presets") {
       if (!value(text) || text.empty()) return usageError("--presets: expected a list");
       std::istringstream in(text);
@@ -193,9 +199,9 @@ std::string sourceRevision() {
 
 // The plan restricted to the jobs of the chosen methods and seeds, and the cases they use.
 ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::string>& methods,
-                            const std::vector<int>& seeds,
-                            const std::vector<std::string>& presets) {
-  if (methods.empty() && seeds.empty() && presets.empty()) return plan;
+                            const std::vector<int>& seeds, const std::vector<std::string>& presets,
+                            const std::vector<std::string>& cases) {
+  if (methods.empty() && seeds.empty() && presets.empty() && cases.empty()) return plan;
   ExperimentPlan kept;
   for (const JobSpec& job : plan.jobs) {
     const CaseSpec& c = findCase(plan, job.case_id);
@@ -203,6 +209,7 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
     if (!presets.empty() && std::find(presets.begin(), presets.end(), c.preset) == presets.end()) {
       continue;
     }
+    if (!cases.empty() && std::find(cases.begin(), cases.end(), c.id) == cases.end()) continue;
     bool method = methods.empty();
     for (const std::string& m : methods) method |= methodTag(job).rfind(m, 0) == 0;
     if (method) kept.jobs.push_back(job);
@@ -216,7 +223,8 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
     }
   }
   if (kept.jobs.empty()) {
-    throw std::invalid_argument("--methods / --seeds / --presets: no job of the plan matches");
+    throw std::invalid_argument(
+        "--methods / --seeds / --presets / --cases: no job of the plan matches");
   }
   return kept;
 }
@@ -382,7 +390,8 @@ int main(int argc, char** argv) {
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
   try {
-    const ExperimentPlan plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets);
+    const ExperimentPlan plan =
+        restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
     if (a.command == "list") return list(plan, a);
     if (a.command == "merge") return merge(plan, config, a);
     if (a.command == "check") return check(plan, a);
