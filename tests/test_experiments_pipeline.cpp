@@ -65,8 +65,8 @@ class ExperimentsPipeline : public ::testing::Test {
   }
 };
 
-TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
-  const auto r = runRunner("list --plan full");
+TEST_F(ExperimentsPipeline, FullPlanIsTheDefaultAndHasEveryPresetSeedAndMethod) {
+  const auto r = runRunner("list");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::set<std::string> jobs;
   int cases = 0;
@@ -98,8 +98,8 @@ TEST_F(ExperimentsPipeline, FullPlanHasEveryPresetSeedAndMethod) {
   EXPECT_TRUE(jobs.count("prolapse-P2_s1_planes12__heuristic"));
 }
 
-TEST_F(ExperimentsPipeline, ReducedPlanIsTheDefaultAndCoversEveryPresetAtSeedOne) {
-  const auto r = runRunner("list");
+TEST_F(ExperimentsPipeline, ReducedPlanCoversEveryPresetAtSeedOne) {
+  const auto r = runRunner("list --plan reduced");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   int cases = 0;
   std::set<std::string> jobs;
