@@ -142,6 +142,31 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   r = runRunner("list --methods nothing-like-this");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--methods"), std::string::npos) << r.err;
+  r = runRunner("list --edge 0");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--edge: expected a positive length"), std::string::npos) << r.err;
+  r = runRunner("list --plan most");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--plan: expected full, reduced or smoke"), std::string::npos) << r.err;
+  r = runRunner("list --cases no-such-case_s1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find("--cases"), std::string::npos) << r.err;
+}
+
+TEST_F(ExperimentsPipeline, CasesAndEdgeSelectWhatRuns) {
+  const auto r = runRunner("list --cases prolapse-P2_s2 --edge 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  int cases = 0, jobs = 0;
+  for (const std::string& line : lines(r.out)) {
+    if (line.rfind("case ", 0) == 0) {
+      ++cases;
+      EXPECT_NE(line.find("prolapse-P2_s2"), std::string::npos) << line;
+      EXPECT_NE(line.find("edge 2"), std::string::npos) << line;
+    }
+    jobs += line.rfind("job  prolapse-P2_s2__", 0) == 0;
+  }
+  EXPECT_EQ(cases, 1);
+  EXPECT_EQ(jobs, 5);  // the Table 1 methods of one case
 }
 
 // A job result as run_experiments writes it, with made-up numbers (test fixture).
@@ -212,6 +237,32 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   r = runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readText(dir / "table1.csv").find("wall_seconds"), std::string::npos);
+}
+
+TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
+  TempDir dir;
+  writeText(dir / "jobs" / "normal-1_s2__heuristic.json",
+            fixtureResult("heuristic", 1.25, {{0.5, 0.30}}).dump());
+  writeText(dir / "jobs" / "normal-1_s2__truth.json",
+            fixtureResult("truth", 0.40, {{0.5, 0.0}}).dump());
+  // Within 3 mm: |errors| 2 % and 4 % (median 3 %: met); the cord at 5 mm does not count.
+  nlohmann::json fit =
+      fixtureResult("fit_scales_ceres", 0.30, {{0.5, 0.02}, {2.0, -0.04}, {5.0, 0.5}});
+  fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {1.25, 0.30}}};
+  writeText(dir / "jobs" / "normal-1_s2__fit_scales_ceres.json", fit.dump());
+  const auto r =
+      runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = lines(readText(dir / "acceptance.csv"));
+  ASSERT_EQ(rows.size(), 2u) << readText(dir / "acceptance.csv");
+  EXPECT_EQ(rows[1],
+            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,A1,no,2,3.00,1");
+  const std::string md = readText(dir / "acceptance.md");
+  // normal-1 is not pathological: the reduction criterion does not apply to it.
+  EXPECT_NE(md.find("AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
+                    "prolapse reconstructed 0 of 1 cases; recovery 1 of 1 cases"),
+            std::string::npos)
+      << md;
 }
 
 // Real closures (chordfit make-case and simulate on the smoke case; a few seconds): results
