@@ -9,6 +9,7 @@
 #include <set>
 
 #include "core/cgal_backend.h"
+#include "core/tracing_sampler.h"
 
 namespace chordfit {
 
@@ -229,6 +230,39 @@ ProlapseResult prolapseOfTracings(const ValveCase& valve_case, const ProlapseOpt
   return prolapseOfTracings(valve_case, closedAnnulus(valve_case), options);
 }
 
+ProlapseResult prolapseOfSections(const ValveCase& valve_case, const ClosedAnnulus& annulus,
+                                  const Eigen::MatrixXd& closed_V, double spacing_mm,
+                                  const ProlapseOptions& options) {
+  const Eigen::VectorXi face_leaflet = faceLeaflets(valve_case.mesh.F, valve_case.mesh.leaflet);
+  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> planes;  // distinct (origin, normal)
+  for (const Tracing& t : valve_case.tracings) {
+    bool known = false;
+    for (const auto& [origin, normal] : planes) {
+      known |= origin == t.plane_origin && normal == t.plane_normal;
+    }
+    if (!known) planes.emplace_back(t.plane_origin, t.plane_normal);
+  }
+  std::vector<Eigen::Vector3d> points;
+  std::vector<int> leaflets;
+  for (const auto& [origin, normal] : planes) {
+    for (const SectionPolyline& section :
+         planeSection(closed_V, valve_case.mesh.F, face_leaflet, origin, normal)) {
+      const Eigen::MatrixXd sampled = resamplePolyline(section.points, spacing_mm);
+      for (Eigen::Index i = 0; i < sampled.rows(); ++i) {
+        points.push_back(sampled.row(i).transpose());
+        leaflets.push_back(section.leaflet);
+      }
+    }
+  }
+  Eigen::MatrixXd stacked(static_cast<Eigen::Index>(points.size()), 3);
+  Eigen::VectorXi labels(static_cast<Eigen::Index>(points.size()));
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    stacked.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
+    labels(static_cast<Eigen::Index>(i)) = leaflets[i];
+  }
+  return prolapseOfLabelledPoints(annulus, stacked, labels, options);
+}
+
 ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V) {
   ValveMetrics m;
   const Eigen::MatrixXd points = stackTracingPoints(valve_case.tracings);
@@ -241,6 +275,8 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   if (m.has_tracings) {
     m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});
     m.prolapse_reconstructed = m.mesh_prolapse.segments == m.tracing_prolapse.segments;
+    m.section_prolapse = prolapseOfSections(valve_case, annulus, closed_V);
+    m.section_prolapse_reconstructed = m.section_prolapse.segments == m.tracing_prolapse.segments;
   }
   return m;
 }

@@ -91,14 +91,26 @@ ProlapseResult prolapseOfMesh(const ValveCase& valve_case, const Eigen::MatrixXd
 ProlapseResult prolapseOfTracings(const ValveCase& valve_case,
                                   const ProlapseOptions& options = {2.0, 2});
 
+// The closed mesh as the tracings see it: cut by each distinct tracing plane, every section
+// resampled at `spacing_mm` and localised like a tracing point (closed position and the
+// leaflet of the cut triangles), same options as the tracings. This compares like with like:
+// the paper judges prolapse in the image planes, and a flap leaning over the valve centre
+// shows in the same segments in both.
+ProlapseResult prolapseOfSections(const ValveCase& valve_case, const ClosedAnnulus& annulus,
+                                  const Eigen::MatrixXd& closed_V, double spacing_mm = 0.5,
+                                  const ProlapseOptions& options = {2.0, 2});
+
 struct ValveMetrics {
   DeviationStats deviation;
   double area_mm2 = 0.0;
   ProlapseResult mesh_prolapse;
   ProlapseResult tracing_prolapse;
+  ProlapseResult section_prolapse;  // prolapseOfSections; meaningful only with tracings
   bool has_tracings = false;
   bool prolapse_reconstructed = false;  // meaningful only with tracings
-  Eigen::VectorXd tracing_distances;    // per stacked tracing point
+  // section_prolapse.segments == tracing_prolapse.segments (meaningful only with tracings)
+  bool section_prolapse_reconstructed = false;
+  Eigen::VectorXd tracing_distances;  // per stacked tracing point
 };
 
 // All metrics of a closed mesh `closed_V` (topology = valve_case.mesh.F).

@@ -24,9 +24,13 @@ nlohmann::json metricsJson(const ValveMetrics& m) {
   if (m.has_tracings) {
     j["tracing_prolapse_segments"] = m.tracing_prolapse.segments;
     j["prolapse_reconstructed"] = m.prolapse_reconstructed;
+    j["section_prolapse_segments"] = m.section_prolapse.segments;
+    j["section_prolapse_reconstructed"] = m.section_prolapse_reconstructed;
   } else {
     j["tracing_prolapse_segments"] = nullptr;
     j["prolapse_reconstructed"] = nullptr;
+    j["section_prolapse_segments"] = nullptr;
+    j["section_prolapse_reconstructed"] = nullptr;
   }
   return j;
 }

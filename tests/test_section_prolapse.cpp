@@ -1,0 +1,57 @@
+// prolapseOfSections (core/metrics.h): the closed mesh cut by the tracing planes and localised
+// like the tracing points. On noise-free, gap-free tracings of the same closed mesh it must
+// report exactly the tracings' segments, whatever the tissue-based measure says.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+#include "core/case_io.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "core/tracing_sampler.h"
+
+namespace chordfit {
+namespace {
+
+TEST(SectionProlapse, MatchesNoiseFreeTracingsOfTheSameMesh) {
+  Diagnostics diagnostics;
+  auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
+  ASSERT_TRUE(loaded && loaded->cords);
+  ValveCase valve_case = *loaded;
+  const SimulationSettings settings = settingsFromJson(valve_case.simulation_json, diagnostics);
+  // Every cord slack but the anterior ones: the posterior leaflet rises, so there is a
+  // prolapse to localise.
+  CordSet cords = *valve_case.cords;
+  for (Cord& cord : cords.cords) {
+    const bool anterior = valve_case.mesh.leaflet(cord.vertex) == 0;
+    cord.rest_length = cord.seed_rest_length * (anterior ? 0.8 : 1.5);
+  }
+  const SimulationResult closed = simulateClosure(valve_case, cords, settings);
+  ASSERT_TRUE(closed.ok()) << closed.error;
+
+  TracingSamplerOptions sampler;
+  sampler.planes = 6;
+  sampler.noise_mm = 0.0;
+  sampler.dropout_fraction = 0.0;
+  SeededRandom random(1);
+  valve_case.tracings = sampleTracings(closed.V, valve_case.mesh.F, valve_case.mesh.leaflet,
+                                       closedAnnulus(valve_case).frame, sampler, random);
+  const ValveMetrics metrics = computeMetrics(valve_case, closed.V);
+  EXPECT_FALSE(metrics.tracing_prolapse.segments.empty()) << "the case must prolapse somewhere";
+  EXPECT_EQ(metrics.section_prolapse.segments, metrics.tracing_prolapse.segments);
+  EXPECT_TRUE(metrics.section_prolapse_reconstructed);
+}
+
+TEST(SectionProlapse, NoTracingsNoSections) {
+  Diagnostics diagnostics;
+  auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
+  ASSERT_TRUE(loaded);
+  ValveCase valve_case = *loaded;
+  valve_case.tracings.clear();
+  const ProlapseResult result =
+      prolapseOfSections(valve_case, closedAnnulus(valve_case), valve_case.mesh.V);
+  EXPECT_TRUE(result.segments.empty());
+}
+
+}  // namespace
+}  // namespace chordfit
