@@ -43,7 +43,8 @@ std::string acceptanceCsvHeader(bool timing) {
              "case,preset,pathological,heuristic_mean_mm,fit_mean_mm,reduction_pct,"
              "noise_floor_mean_mm,fit_over_noise_floor,truth_on_case_mesh_mean_mm,"
              "tracing_prolapse_segments,fit_prolapse_segments,prolapse_reconstructed,"
-             "cords_within_3mm,recovery_median_pct_within_3mm,forward_sims") +
+             "fit_section_prolapse_segments,section_prolapse_reconstructed,cords_within_3mm,"
+             "recovery_median_pct_within_3mm,forward_sims") +
          (timing ? ",wall_seconds" : "") + "\n";
 }
 
@@ -52,7 +53,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   AcceptanceTables out;
   out.csv = acceptanceCsvHeader(timing);
   std::string rows;
-  Tally reduction, floor, prolapse, recovery;
+  Tally reduction, floor, prolapse, section, recovery;
   for (const std::string& preset : config.presets) {
     for (int seed : config.seeds) {
       const std::string case_id = preset + "_s" + std::to_string(seed);
@@ -71,6 +72,10 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       const double truth_case = truth != nullptr ? number(truth->at("metrics"), "mean_mm") : kNaN;
       const double over_floor = after / noise_floor;
       const std::string reconstructed = yesNo(m);
+      // Like-for-like criterion (core/metrics.h prolapseOfSections), when the job has it.
+      const bool has_section = m.contains("section_prolapse_reconstructed") &&
+                               m.at("section_prolapse_reconstructed").is_boolean();
+      const bool section_ok = has_section && m.at("section_prolapse_reconstructed").get<bool>();
       const std::vector<double> near = cordErrors(*fit, t.near_plane_mm);
       const double recovery_pct = 100.0 * quantile(near, 0.5);
       const double sims = number(*fit, "forward_sims");
@@ -80,10 +85,12 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                     reduction_pct >= t.min_reduction_pct);
       floor.add(true, std::isfinite(over_floor), over_floor <= t.max_over_noise_floor);
       prolapse.add(true, !reconstructed.empty(), reconstructed == "yes");
+      section.add(true, has_section, section_ok);
       recovery.add(true, std::isfinite(recovery_pct), recovery_pct <= t.max_recovery_median_pct);
 
       const std::string tracing_segments = segments(m, "tracing_prolapse_segments", ", ");
       const std::string fit_segments = segments(m, "prolapse_segments", ", ");
+      const std::string section_segments = segments(m, "section_prolapse_segments", ", ");
       rows +=
           "| " + case_id + " | " + mdNumber(before) + " → " + mdNumber(after) + " | " +
           mdNumber(reduction_pct, 0) + " % " +
@@ -94,7 +101,10 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
           (tracing_segments.empty() ? "none" : tracing_segments) + " / " +
           (fit_segments.empty() ? "none" : fit_segments) + " " +
           mark(true, !reconstructed.empty(), reconstructed == "yes") + " | " +
-          mdNumber(recovery_pct, 1) + " % (" + std::to_string(near.size()) + ") " +
+          (has_section ? (section_segments.empty() ? "none" : section_segments) + " " +
+                             mark(true, true, section_ok)
+                       : std::string("–")) +
+          " | " + mdNumber(recovery_pct, 1) + " % (" + std::to_string(near.size()) + ") " +
           mark(true, std::isfinite(recovery_pct), recovery_pct <= t.max_recovery_median_pct) +
           " | " + mdNumber(sims, 0) + (timing ? " | " + mdNumber(wall, 1) : "") + " |\n";
       out.csv += case_id + "," + preset + "," + (pathological ? "yes" : "no") + "," +
@@ -102,6 +112,8 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                  fixed(noise_floor, 4) + "," + fixed(over_floor, 3) + "," + fixed(truth_case, 4) +
                  "," + segments(m, "tracing_prolapse_segments", " ") + "," +
                  segments(m, "prolapse_segments", " ") + "," + reconstructed + "," +
+                 segments(m, "section_prolapse_segments", " ") + "," +
+                 (has_section ? (section_ok ? "yes" : "no") : "") + "," +
                  std::to_string(near.size()) + "," + fixed(recovery_pct, 2) + "," + fixed(sims, 0) +
                  (timing ? "," + fixed(wall, 2) : "") + "\n";
     }
@@ -121,12 +133,13 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       "rest lengths closed on the (coarser) case mesh, the best this mesh and parameterisation "
       "can do; its excess over the noise floor is discretisation, not fitting.\n\n"
       "| Case | AvgD heuristic → fit (mm) | Reduction | Noise floor (mm) | Fit / floor | True "
-      "cords on the case mesh (mm, / floor) | Prolapse: tracings / fit | Recovery ≤ 3 mm | "
-      "Sims |" +
-      std::string(timing ? " Wall (s) |" : "") + "\n|---|---|---|---:|---|---|---|---|---:|" +
+      "cords on the case mesh (mm, / floor) | Prolapse: tracings / fit | Sections | Recovery ≤ "
+      "3 mm | Sims |" +
+      std::string(timing ? " Wall (s) |" : "") + "\n|---|---|---|---:|---|---|---|---|---|---:|" +
       (timing ? "---:|" : "") + "\n" + rows + "\n**Met:** AvgD reduction " + reduction.text() +
       "; within " + fixed(t.max_over_noise_floor, 1) + "× the noise floor " + floor.text() +
-      "; prolapse reconstructed " + prolapse.text() + "; recovery " + recovery.text() + ".\n";
+      "; prolapse reconstructed " + prolapse.text() + " (sections: " + section.text() +
+      "); recovery " + recovery.text() + ".\n";
   return out;
 }
 

@@ -249,6 +249,8 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   nlohmann::json fit =
       fixtureResult("fit_scales_ceres", 0.30, {{0.5, 0.02}, {2.0, -0.04}, {5.0, 0.5}});
   fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {1.25, 0.30}}};
+  fit["metrics"]["section_prolapse_segments"] = nlohmann::json::array();
+  fit["metrics"]["section_prolapse_reconstructed"] = true;  // none in sections = none traced
   writeText(dir / "jobs" / "normal-1_s2__fit_scales_ceres.json", fit.dump());
   const auto r =
       runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
@@ -256,12 +258,15 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   const auto rows = lines(readText(dir / "acceptance.csv"));
   ASSERT_EQ(rows.size(), 2u) << readText(dir / "acceptance.csv");
   EXPECT_EQ(rows[1],
-            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,A1,no,2,3.00,1");
+            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,A1,no,,yes,2,3.00,1");
   const std::string md = readText(dir / "acceptance.md");
+  EXPECT_NE(md.find("| none / A1 ✗ | none ✓ | 3.0 % (2) ✓ |"), std::string::npos) << md;
   // normal-1 is not pathological: the reduction criterion does not apply to it.
-  EXPECT_NE(md.find("AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
-                    "prolapse reconstructed 0 of 1 cases; recovery 1 of 1 cases"),
-            std::string::npos)
+  EXPECT_NE(
+      md.find(
+          "AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
+          "prolapse reconstructed 0 of 1 cases (sections: 1 of 1 cases); recovery 1 of 1 cases"),
+      std::string::npos)
       << md;
 }
 
