@@ -242,24 +242,19 @@ ProlapseResult prolapseOfSections(const ValveCase& valve_case, const ClosedAnnul
     }
     if (!known) planes.emplace_back(t.plane_origin, t.plane_normal);
   }
-  std::vector<Eigen::Vector3d> points;
-  std::vector<int> leaflets;
+  // The sections as tracings (points resampled like the sampler's, leaflet of the cut).
+  std::vector<Tracing> sections;
   for (const auto& [origin, normal] : planes) {
     for (const SectionPolyline& section :
          planeSection(closed_V, valve_case.mesh.F, face_leaflet, origin, normal)) {
-      const Eigen::MatrixXd sampled = resamplePolyline(section.points, spacing_mm);
-      for (Eigen::Index i = 0; i < sampled.rows(); ++i) {
-        points.push_back(sampled.row(i).transpose());
-        leaflets.push_back(section.leaflet);
-      }
+      Tracing t;
+      t.points = resamplePolyline(section.points, spacing_mm);
+      t.leaflet = section.leaflet;
+      sections.push_back(std::move(t));
     }
   }
-  Eigen::MatrixXd stacked(static_cast<Eigen::Index>(points.size()), 3);
-  Eigen::VectorXi labels(static_cast<Eigen::Index>(points.size()));
-  for (std::size_t i = 0; i < points.size(); ++i) {
-    stacked.row(static_cast<Eigen::Index>(i)) = points[i].transpose();
-    labels(static_cast<Eigen::Index>(i)) = leaflets[i];
-  }
+  Eigen::VectorXi labels;
+  const Eigen::MatrixXd stacked = stackTracingPoints(sections, &labels);
   return prolapseOfLabelledPoints(annulus, stacked, labels, options);
 }
 

@@ -128,18 +128,13 @@ int parseArguments(int argc, char** argv, Arguments& a) {
        : arg == "--work"     ? a.work
        : arg == "--chordfit" ? a.chordfit
                              : a.case_source) = text;
-    } else if (arg == "--methods") {
-      if (!value(text) || text.empty()) return usageError("--methods: expected a list");
+    } else if (arg == "--methods" || arg == "--cases" || arg == "--presets") {
+      if (!value(text) || text.empty()) return usageError(arg + ": expected a list");
+      std::vector<std::string>& list = arg == "--methods" ? a.methods
+                                       : arg == "--cases" ? a.cases
+                                                          : a.presets;
       std::istringstream in(text);
-      for (std::string m; std::getline(in, m, ',');) a.methods.push_back(m);
-    } else if (arg == "--cases") {
-      if (!value(text) || text.empty()) return usageError("--cases: expected a list");
-      std::istringstream in(text);
-      for (std::string c; std::getline(in, c, ',');) a.cases.push_back(c);
-    } else if (arg == "--presets") {
-      if (!value(text) || text.empty()) return usageError("--presets: expected a list");
-      std::istringstream in(text);
-      for (std::string p; std::getline(in, p, ',');) a.presets.push_back(p);
+      for (std::string item; std::getline(in, item, ',');) list.push_back(item);
     } else if (arg == "--seeds") {
       if (!value(text) || text.empty()) return usageError("--seeds: expected a list");
       std::istringstream in(text);

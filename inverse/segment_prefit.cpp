@@ -39,6 +39,8 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
   const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
   const int points = std::max(2, options.points);
   const double spacing = (bounds.scale_upper - bounds.scale_lower) / (points - 1);
+  SegmentMap names;  // only for segmentName
+  names.leaflet_names = valve_case.mesh.leaflet_names;
   int segment_count = 0;
   for (Eigen::Index v = 0; v < vertex_segment.size(); ++v) {
     segment_count = std::max(segment_count, vertex_segment(v) + 1);
@@ -67,8 +69,6 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
     if (best < 0) continue;
     result.start = std::move(sets[best]);
     result.best = std::move(evaluations[best]);
-    SegmentMap names;
-    names.leaflet_names = valve_case.mesh.leaflet_names;
     std::ostringstream change;
     change << segmentName(names, segment) << " " << scales[best];
     result.changed.push_back(change.str());
