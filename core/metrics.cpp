@@ -269,9 +269,9 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   m.mesh_prolapse = prolapseOfMesh(valve_case, annulus, closed_V, ProlapseOptions{});
   if (m.has_tracings) {
     m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});
-    m.prolapse_reconstructed = m.mesh_prolapse.segments == m.tracing_prolapse.segments;
     m.section_prolapse = prolapseOfSections(valve_case, annulus, closed_V);
-    m.section_prolapse_reconstructed = m.section_prolapse.segments == m.tracing_prolapse.segments;
+    m.prolapse_reconstructed = m.section_prolapse.segments == m.tracing_prolapse.segments;
+    m.tissue_prolapse_reconstructed = m.mesh_prolapse.segments == m.tracing_prolapse.segments;
   }
   return m;
 }

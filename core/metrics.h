@@ -107,9 +107,14 @@ struct ValveMetrics {
   ProlapseResult tracing_prolapse;
   ProlapseResult section_prolapse;  // prolapseOfSections; meaningful only with tracings
   bool has_tracings = false;
-  bool prolapse_reconstructed = false;  // meaningful only with tracings
-  // section_prolapse.segments == tracing_prolapse.segments (meaningful only with tracings)
-  bool section_prolapse_reconstructed = false;
+  // Table 1's "Prolapse reconstructed": section_prolapse.segments == tracing_prolapse.segments,
+  // like with like (both read in the tracing planes, localised the same way). Meaningful only
+  // with tracings.
+  bool prolapse_reconstructed = false;
+  // The tissue judgement: mesh_prolapse.segments (every vertex, open-state localisation) ==
+  // tracing_prolapse.segments. A diagnostic: a flap leaning over the valve centre is P2 in
+  // the tissue and P1/P3 in the planes, so the truth itself can fail it.
+  bool tissue_prolapse_reconstructed = false;
   Eigen::VectorXd tracing_distances;  // per stacked tracing point
 };
 

@@ -23,14 +23,14 @@ nlohmann::json metricsJson(const ValveMetrics& m) {
   j["prolapse_max_height_mm"] = numberOrNull(m.mesh_prolapse.max_height_mm);
   if (m.has_tracings) {
     j["tracing_prolapse_segments"] = m.tracing_prolapse.segments;
-    j["prolapse_reconstructed"] = m.prolapse_reconstructed;
     j["section_prolapse_segments"] = m.section_prolapse.segments;
-    j["section_prolapse_reconstructed"] = m.section_prolapse_reconstructed;
+    j["prolapse_reconstructed"] = m.prolapse_reconstructed;
+    j["tissue_prolapse_reconstructed"] = m.tissue_prolapse_reconstructed;
   } else {
     j["tracing_prolapse_segments"] = nullptr;
-    j["prolapse_reconstructed"] = nullptr;
     j["section_prolapse_segments"] = nullptr;
-    j["section_prolapse_reconstructed"] = nullptr;
+    j["prolapse_reconstructed"] = nullptr;
+    j["tissue_prolapse_reconstructed"] = nullptr;
   }
   return j;
 }

@@ -42,8 +42,8 @@ std::string acceptanceCsvHeader(bool timing) {
   return std::string(
              "case,preset,pathological,heuristic_mean_mm,fit_mean_mm,reduction_pct,"
              "noise_floor_mean_mm,fit_over_noise_floor,truth_on_case_mesh_mean_mm,"
-             "tracing_prolapse_segments,fit_prolapse_segments,prolapse_reconstructed,"
-             "fit_section_prolapse_segments,section_prolapse_reconstructed,cords_within_3mm,"
+             "tracing_prolapse_segments,fit_section_prolapse_segments,prolapse_reconstructed,"
+             "fit_tissue_prolapse_segments,tissue_prolapse_reconstructed,cords_within_3mm,"
              "recovery_median_pct_within_3mm,forward_sims") +
          (timing ? ",wall_seconds" : "") + "\n";
 }
@@ -53,7 +53,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   AcceptanceTables out;
   out.csv = acceptanceCsvHeader(timing);
   std::string rows;
-  Tally reduction, floor, prolapse, section, recovery;
+  Tally reduction, floor, prolapse, tissue, recovery;
   for (const std::string& preset : config.presets) {
     for (int seed : config.seeds) {
       const std::string case_id = preset + "_s" + std::to_string(seed);
@@ -71,11 +71,12 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                                      : kNaN;
       const double truth_case = truth != nullptr ? number(truth->at("metrics"), "mean_mm") : kNaN;
       const double over_floor = after / noise_floor;
+      // Table 1's criterion: the closed mesh in the tracing planes against the tracings.
       const std::string reconstructed = yesNo(m);
-      // Like-for-like criterion (core/metrics.h prolapseOfSections), when the job has it.
-      const bool has_section = m.contains("section_prolapse_reconstructed") &&
-                               m.at("section_prolapse_reconstructed").is_boolean();
-      const bool section_ok = has_section && m.at("section_prolapse_reconstructed").get<bool>();
+      // The tissue judgement (core/metrics.h), a diagnostic; absent from older results.
+      const bool has_tissue = m.contains("tissue_prolapse_reconstructed") &&
+                              m.at("tissue_prolapse_reconstructed").is_boolean();
+      const bool tissue_ok = has_tissue && m.at("tissue_prolapse_reconstructed").get<bool>();
       const std::vector<double> near = cordErrors(*fit, t.near_plane_mm);
       const double recovery_pct = 100.0 * quantile(near, 0.5);
       const double sims = number(*fit, "forward_sims");
@@ -85,12 +86,9 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                     reduction_pct >= t.min_reduction_pct);
       floor.add(true, std::isfinite(over_floor), over_floor <= t.max_over_noise_floor);
       prolapse.add(true, !reconstructed.empty(), reconstructed == "yes");
-      section.add(true, has_section, section_ok);
+      tissue.add(true, has_tissue, tissue_ok);
       recovery.add(true, std::isfinite(recovery_pct), recovery_pct <= t.max_recovery_median_pct);
 
-      const std::string tracing_segments = segments(m, "tracing_prolapse_segments", ", ");
-      const std::string fit_segments = segments(m, "prolapse_segments", ", ");
-      const std::string section_segments = segments(m, "section_prolapse_segments", ", ");
       rows +=
           "| " + case_id + " | " + mdNumber(before) + " → " + mdNumber(after) + " | " +
           mdNumber(reduction_pct, 0) + " % " +
@@ -98,12 +96,11 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
           " | " + mdNumber(noise_floor) + " | " + mdNumber(over_floor, 1) + "× " +
           mark(true, std::isfinite(over_floor), over_floor <= t.max_over_noise_floor) + " | " +
           mdNumber(truth_case) + " (" + mdNumber(truth_case / noise_floor, 1) + "×) | " +
-          (tracing_segments.empty() ? "none" : tracing_segments) + " / " +
-          (fit_segments.empty() ? "none" : fit_segments) + " " +
+          segmentsOrNone(m, "tracing_prolapse_segments") + " / " +
+          segmentsOrNone(m, "section_prolapse_segments") + " " +
           mark(true, !reconstructed.empty(), reconstructed == "yes") + " | " +
-          (has_section ? (section_segments.empty() ? "none" : section_segments) + " " +
-                             mark(true, true, section_ok)
-                       : std::string("–")) +
+          segmentsOrNone(m, "prolapse_segments") + " " +
+          mark(true, has_tissue, tissue_ok) +
           " | " + mdNumber(recovery_pct, 1) + " % (" + std::to_string(near.size()) + ") " +
           mark(true, std::isfinite(recovery_pct), recovery_pct <= t.max_recovery_median_pct) +
           " | " + mdNumber(sims, 0) + (timing ? " | " + mdNumber(wall, 1) : "") + " |\n";
@@ -111,9 +108,9 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                  fixed(before, 4) + "," + fixed(after, 4) + "," + fixed(reduction_pct, 1) + "," +
                  fixed(noise_floor, 4) + "," + fixed(over_floor, 3) + "," + fixed(truth_case, 4) +
                  "," + segments(m, "tracing_prolapse_segments", " ") + "," +
-                 segments(m, "prolapse_segments", " ") + "," + reconstructed + "," +
-                 segments(m, "section_prolapse_segments", " ") + "," +
-                 (has_section ? (section_ok ? "yes" : "no") : "") + "," +
+                 segments(m, "section_prolapse_segments", " ") + "," + reconstructed + "," +
+                 segments(m, "prolapse_segments", " ") + "," +
+                 (has_tissue ? (tissue_ok ? "yes" : "no") : "") + "," +
                  std::to_string(near.size()) + "," + fixed(recovery_pct, 2) + "," + fixed(sims, 0) +
                  (timing ? "," + fixed(wall, 2) : "") + "\n";
     }
@@ -125,7 +122,9 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       fixed(t.min_reduction_pct, 0) + " % against the heuristic (pathological presets); AvgD ≤ " +
       fixed(t.max_over_noise_floor, 1) +
       "× the noise floor (the true closed state of the fine truth mesh against its own "
-      "tracings); prolapse reconstructed (simulated segments = the tracings' segments); median "
+      "tracings); prolapse reconstructed (the closed mesh cut by the tracing planes and read "
+      "like the tracings shows the tracings' segments; the tissue judgement, every vertex "
+      "localised by its open-state position, is shown as a diagnostic); median "
       "|rest-length error| ≤ " +
       fixed(t.max_recovery_median_pct, 0) + " % over the cords attached within " +
       fixed(t.near_plane_mm, 0) +
@@ -133,12 +132,13 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       "rest lengths closed on the (coarser) case mesh, the best this mesh and parameterisation "
       "can do; its excess over the noise floor is discretisation, not fitting.\n\n"
       "| Case | AvgD heuristic → fit (mm) | Reduction | Noise floor (mm) | Fit / floor | True "
-      "cords on the case mesh (mm, / floor) | Prolapse: tracings / fit | Sections | Recovery ≤ "
+      "cords on the case mesh (mm, / floor) | Prolapse: tracings / fit in their planes | Fit "
+      "tissue | Recovery ≤ "
       "3 mm | Sims |" +
       std::string(timing ? " Wall (s) |" : "") + "\n|---|---|---|---:|---|---|---|---|---|---:|" +
       (timing ? "---:|" : "") + "\n" + rows + "\n**Met:** AvgD reduction " + reduction.text() +
       "; within " + fixed(t.max_over_noise_floor, 1) + "× the noise floor " + floor.text() +
-      "; prolapse reconstructed " + prolapse.text() + " (sections: " + section.text() +
+      "; prolapse reconstructed " + prolapse.text() + " (tissue judgement: " + tissue.text() +
       "); recovery " + recovery.text() + ".\n";
   return out;
 }

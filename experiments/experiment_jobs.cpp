@@ -124,8 +124,8 @@ json tableMetrics(const json& m, const fs::path& file) {
     t[key] = requireKey(m, key, file);
   }
   t["tracing_prolapse_segments"] = m.value("tracing_prolapse_segments", json(nullptr));
-  // Like-for-like prolapse (core/metrics.h prolapseOfSections); absent from older results.
-  for (const char* key : {"section_prolapse_segments", "section_prolapse_reconstructed"}) {
+  // The mesh's prolapse in the tracing planes and the tissue judgement (core/metrics.h).
+  for (const char* key : {"section_prolapse_segments", "tissue_prolapse_reconstructed"}) {
     t[key] = m.value(key, json(nullptr));
   }
   return t;

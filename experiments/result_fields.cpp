@@ -31,6 +31,12 @@ std::string segments(const json& j, const char* key, const char* separator) {
   return text;
 }
 
+std::string segmentsOrNone(const json& j, const char* key) {
+  if (!j.contains(key) || !j.at(key).is_array()) return "–";
+  const std::string text = segments(j, key, ", ");
+  return text.empty() ? "none" : text;
+}
+
 std::string yesNo(const json& metrics) {
   const json& r = metrics.at("prolapse_reconstructed");
   return r.is_boolean() ? (r.get<bool>() ? "yes" : "no") : "";

@@ -20,6 +20,9 @@ std::string mdNumber(double value, int digits = 2);
 double number(const nlohmann::json& j, const char* key);
 // The string array j[key] joined by `separator` ("" when missing).
 std::string segments(const nlohmann::json& j, const char* key, const char* separator);
+// Markdown cell of the segment list j[key]: "P2, A2", "none" for an empty list, "–" when
+// missing or null.
+std::string segmentsOrNone(const nlohmann::json& j, const char* key);
 // metrics.prolapse_reconstructed as "yes" / "no" ("" when not a boolean).
 std::string yesNo(const nlohmann::json& metrics);
 // Linear-interpolation quantile (type 7); NaN for an empty sample.

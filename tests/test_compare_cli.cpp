@@ -75,12 +75,13 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
   ASSERT_EQ(rows.size(), 3u);
   EXPECT_EQ(rows[0], (std::vector<std::string>{"label", "cords_file", "area_mm2", "min_mm",
                                                "median_mm", "max_mm", "mean_mm", "sd_mm",
-                                               "prolapse_reconstructed", "prolapse_segments",
+                                               "prolapse_reconstructed",
+                                               "section_prolapse_segments", "prolapse_segments",
                                                "tracing_prolapse_segments", "converged", "steps"}));
   for (std::size_t r = 1; r < rows.size(); ++r) {
     ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
     EXPECT_TRUE(rows[r][8] == "yes" || rows[r][8] == "no") << rows[r][8];
-    EXPECT_GT(std::stoi(rows[r][12]), 0) << "steps";
+    EXPECT_GT(std::stoi(rows[r][13]), 0) << "steps";
     EXPECT_LE(std::stod(rows[r][3]), std::stod(rows[r][4]));  // min <= median
     EXPECT_LE(std::stod(rows[r][4]), std::stod(rows[r][5]));  // median <= max
   }

@@ -218,10 +218,12 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   ASSERT_EQ(table.size(), 4u) << readText(dir / "table1.csv");  // header, heuristic, truth, floor
   EXPECT_EQ(cells(table[1])[3], "heuristic");
   EXPECT_EQ(cells(table[1])[9], "1.2500");
-  EXPECT_EQ(cells(table[1])[12], "A1");
+  EXPECT_EQ(cells(table[1])[11], "no");
+  EXPECT_EQ(cells(table[1])[12], "") << "the fixture has no section list";
+  EXPECT_EQ(cells(table[1])[13], "A1");
   EXPECT_EQ(cells(table[2])[3], "truth");
   EXPECT_EQ(cells(table[3])[4], "noise floor");
-  EXPECT_EQ(cells(table[3])[14], "") << "the noise floor took no forward simulation of ours";
+  EXPECT_EQ(cells(table[3])[15], "") << "the noise floor took no forward simulation of ours";
   const std::string md = readText(dir / "table1.md");
   EXPECT_NE(md.find("**Missing**"), std::string::npos);
   EXPECT_NE(md.find("`normal-1_s2__fit_groups_ceres`"), std::string::npos);
@@ -249,8 +251,10 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   nlohmann::json fit =
       fixtureResult("fit_scales_ceres", 0.30, {{0.5, 0.02}, {2.0, -0.04}, {5.0, 0.5}});
   fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {1.25, 0.30}}};
+  // In the planes: none, as traced (reconstructed); the tissue judgement says A1 (not).
   fit["metrics"]["section_prolapse_segments"] = nlohmann::json::array();
-  fit["metrics"]["section_prolapse_reconstructed"] = true;  // none in sections = none traced
+  fit["metrics"]["prolapse_reconstructed"] = true;
+  fit["metrics"]["tissue_prolapse_reconstructed"] = false;
   writeText(dir / "jobs" / "normal-1_s2__fit_scales_ceres.json", fit.dump());
   const auto r =
       runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
@@ -258,14 +262,15 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   const auto rows = lines(readText(dir / "acceptance.csv"));
   ASSERT_EQ(rows.size(), 2u) << readText(dir / "acceptance.csv");
   EXPECT_EQ(rows[1],
-            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,A1,no,,yes,2,3.00,1");
+            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,2,3.00,1");
   const std::string md = readText(dir / "acceptance.md");
-  EXPECT_NE(md.find("| none / A1 ✗ | none ✓ | 3.0 % (2) ✓ |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | 3.0 % (2) ✓ |"), std::string::npos) << md;
   // normal-1 is not pathological: the reduction criterion does not apply to it.
   EXPECT_NE(
       md.find(
           "AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
-          "prolapse reconstructed 0 of 1 cases (sections: 1 of 1 cases); recovery 1 of 1 cases"),
+          "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); recovery 1 of "
+          "1 cases"),
       std::string::npos)
       << md;
 }

@@ -85,7 +85,7 @@ std::string csvQuoted(const std::string& text) {
 std::string compareCsv(const std::vector<ComparedSet>& sets) {
   std::string csv =
       "label,cords_file,area_mm2,min_mm,median_mm,max_mm,mean_mm,sd_mm,prolapse_reconstructed,"
-      "prolapse_segments,tracing_prolapse_segments,converged,steps\n";
+      "section_prolapse_segments,prolapse_segments,tracing_prolapse_segments,converged,steps\n";
   for (const ComparedSet& s : sets) {
     const ValveMetrics& m = s.metrics;
     const DeviationStats& d = m.deviation;
@@ -94,7 +94,8 @@ std::string compareCsv(const std::vector<ComparedSet>& sets) {
            "," + (t ? csvNumber(d.min) : "") + "," + (t ? csvNumber(d.median) : "") + "," +
            (t ? csvNumber(d.max) : "") + "," + (t ? csvNumber(d.mean) : "") + "," +
            (t ? csvNumber(d.sd) : "") + "," + (t ? (m.prolapse_reconstructed ? "yes" : "no") : "") +
-           "," + segmentCell(m.mesh_prolapse.segments) + "," +
+           "," + (t ? segmentCell(m.section_prolapse.segments) : "") + "," +
+           segmentCell(m.mesh_prolapse.segments) + "," +
            (t ? segmentCell(m.tracing_prolapse.segments) : "") + "," +
            (s.converged ? "yes" : "no") + "," + std::to_string(s.steps) + "\n";
   }
@@ -109,12 +110,15 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
   md += table1Header();
   for (const ComparedSet& s : sets) md += table1Row(s.label, s.metrics);
   md +=
-      "\n| Cord set | File | Prolapse (simulated) | Prolapse (tracings) | Converged (steps) "
-      "|\n|---|---|---|---|---|\n";
+      "\n| Cord set | File | Prolapse (tracings) | Prolapse (mesh, tracing planes) | Prolapse "
+      "(mesh tissue) | Converged (steps) |\n|---|---|---|---|---|---|\n";
   for (const ComparedSet& s : sets) {
     const ValveMetrics& m = s.metrics;
-    md += "| " + s.label + " | `" + s.file + "` | " + joinSegments(m.mesh_prolapse.segments) +
-          " | " + (m.has_tracings ? joinSegments(m.tracing_prolapse.segments) : "– (no tracings)") +
+    const std::string none = "– (no tracings)";
+    md += "| " + s.label + " | `" + s.file + "` | " +
+          (m.has_tracings ? joinSegments(m.tracing_prolapse.segments) : none) + " | " +
+          (m.has_tracings ? joinSegments(m.section_prolapse.segments) : none) + " | " +
+          joinSegments(m.mesh_prolapse.segments) +
           " | " + (s.converged ? "yes" : "no") + " (" + std::to_string(s.steps) + ") |\n";
   }
   return md;
@@ -177,8 +181,8 @@ int runCompare(const CompareOptions& options) {
               << joinSegments(sets.front().metrics.tracing_prolapse.segments) << "\n";
   }
   for (const ComparedSet& s : sets) {
-    std::cout << "prolapse (" << s.label << "): " << joinSegments(s.metrics.mesh_prolapse.segments)
-              << (s.converged ? "" : "  [closure NOT converged]") << "\n";
+    std::cout << s.label << (s.converged ? "" : "  [closure NOT converged]") << ":\n"
+              << prolapseSummary(s.metrics, "  ");
   }
   if (!options.out_dir.empty()) {
     const std::filesystem::path out(options.out_dir);

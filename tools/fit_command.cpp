@@ -97,7 +97,10 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
   md << "## Table 1: seed vs fit\n\n"
      << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics) << "\n";
   md << "Prolapse segments: tracings " << joinSegments(fit_metrics.tracing_prolapse.segments)
-     << "; seed " << joinSegments(seed_metrics.mesh_prolapse.segments) << "; fit "
+     << "; in the tracing planes: seed " << joinSegments(seed_metrics.section_prolapse.segments)
+     << ", fit " << joinSegments(fit_metrics.section_prolapse.segments)
+     << " (Table 1 compares these); tissue: seed "
+     << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
   md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic).\n\n"
      << cordTable(c, fit.seed, fit.fitted);

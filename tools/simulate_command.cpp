@@ -135,11 +135,7 @@ int runSimulate(const SimulateOptions& options) {
                 opened.converged ? "converged" : "NOT converged", opened.steps, opened.seconds);
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
-  std::cout << "prolapse (simulated): " << joinSegments(metrics.mesh_prolapse.segments) << "\n";
-  if (metrics.has_tracings) {
-    std::cout << "prolapse (tracings):  " << joinSegments(metrics.tracing_prolapse.segments)
-              << "\n";
-  }
+  std::cout << prolapseSummary(metrics);
   std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json\n";
   return kExitOk;
 }
