@@ -47,13 +47,16 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     return outcome.forward_sims + sims + 1 <= options.max_sims;
   };
   if (options.prefit.enabled && seed_parameters.size() > 0 &&
-      budget_allows(options.prefit.points + options.prefit.refine_points)) {
+      budget_allows(options.prefit.points + options.prefit.refine_points +
+                    2 * options.prefit.kind_points)) {
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
     const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
                                                   options.bounds, seed_residual, prefit);
     outcome.forward_sims += result.forward_sims;
     outcome.prefit_factor = result.factor;
+    outcome.prefit_primary_factor = result.primary_factor;
+    outcome.prefit_secondary_factor = result.secondary_factor;
     start_set = result.start;
     start_evaluation = result.best;
     record("prefit", 1, start_evaluation, start_evaluation.cost);

@@ -8,11 +8,15 @@
 namespace chordfit::inverse {
 
 CordSet scaleFreeCords(const CordSet& seed, double factor) {
+  return scaleFreeCords(seed, factor, factor);
+}
+
+CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor) {
   CordSet set = seed;
-  if (factor == 1.0) return set;
   for (Cord& cord : set.cords) {
     if (cord.locked || cord.provenance == Provenance::kManual) continue;
-    cord.rest_length *= factor;
+    const double factor = cord.kind == CordKind::kPrimary ? primary_factor : secondary_factor;
+    if (factor != 1.0) cord.rest_length *= factor;
   }
   return set;
 }
@@ -48,27 +52,34 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   const Eigen::VectorXd no_regularisation;
   const double seed_cost = residual.cost(seed_evaluation.data, no_regularisation);
 
-  auto run = [&](const std::vector<double>& factors) {
-    std::vector<CordSet> sets;
-    for (double factor : factors) sets.push_back(scaleFreeCords(seed, factor));
-    std::vector<ForwardEvaluation> out = closeCordSets(valve_case, sets, residual, options.threads);
-    for (std::size_t i = 0; i < factors.size(); ++i)
-      out[i].x = Eigen::VectorXd::Constant(1, factors[i]);
-    result.forward_sims += static_cast<int>(factors.size());
-    return out;
-  };
+  // Candidates (primary factor, secondary factor), closed in parallel; the best by data cost
+  // replaces result.best when it improves on it. Returns every candidate's evaluation.
   double best_cost = seed_cost;
+  auto consider_pairs = [&](const std::vector<std::pair<double, double>>& pairs) {
+    std::vector<CordSet> sets;
+    for (const auto& [p, s] : pairs) sets.push_back(scaleFreeCords(seed, p, s));
+    std::vector<ForwardEvaluation> evaluations =
+        closeCordSets(valve_case, sets, residual, options.threads);
+    result.forward_sims += static_cast<int>(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) {
+      evaluations[i].x = Eigen::Vector2d(pairs[i].first, pairs[i].second);
+      if (!evaluations[i].ok() || !(evaluations[i].cost < best_cost)) continue;
+      best_cost = evaluations[i].cost;
+      result.primary_factor = pairs[i].first;
+      result.secondary_factor = pairs[i].second;
+      result.best = evaluations[i];
+    }
+    return evaluations;
+  };
   auto consider = [&](const std::vector<double>& factors) {
-    std::vector<ForwardEvaluation> evaluations = run(factors);
+    std::vector<std::pair<double, double>> pairs;
+    for (double f : factors) pairs.emplace_back(f, f);
+    const std::vector<ForwardEvaluation> evaluations = consider_pairs(pairs);
     for (std::size_t i = 0; i < factors.size(); ++i) {
       result.factors.push_back(factors[i]);
       result.costs.push_back(evaluations[i].ok() ? evaluations[i].cost : NAN);
-      if (evaluations[i].ok() && evaluations[i].cost < best_cost) {
-        best_cost = evaluations[i].cost;
-        result.factor = factors[i];
-        result.best = std::move(evaluations[i]);
-      }
     }
+    result.factor = result.primary_factor;
   };
 
   const int points = std::max(2, options.points);
@@ -89,7 +100,28 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   }
   std::sort(refine.begin(), refine.end());
   consider(refine);
-  result.start = scaleFreeCords(seed, result.factor);
+
+  // Kind stage: secondaries, then primaries, each around the current factors.
+  const int kind_half = options.kind_points / 2;
+  const bool has_both = std::any_of(seed.cords.begin(), seed.cords.end(),
+                                    [](const Cord& c) { return c.kind == CordKind::kPrimary; }) &&
+                        std::any_of(seed.cords.begin(), seed.cords.end(), [](const Cord& c) {
+                          return c.kind == CordKind::kSecondary;
+                        });
+  for (int kind = 0; has_both && kind_half > 0 && kind < 2; ++kind) {
+    const bool secondaries = kind == 0;
+    std::vector<std::pair<double, double>> pairs;
+    for (int k = -kind_half; k <= kind_half; ++k) {
+      if (k == 0) continue;
+      const double p = result.primary_factor + (secondaries ? 0.0 : 0.5 * k * spacing);
+      const double s = result.secondary_factor + (secondaries ? 0.5 * k * spacing : 0.0);
+      const double moved = secondaries ? s : p;
+      if (moved >= bounds.scale_lower - 1e-12 && moved <= bounds.scale_upper + 1e-12)
+        pairs.emplace_back(p, s);
+    }
+    consider_pairs(pairs);
+  }
+  result.start = scaleFreeCords(seed, result.primary_factor, result.secondary_factor);
   return result;
 }
 

@@ -9,6 +9,12 @@
 // `refine_points` between the best grid point's neighbours. The closures are independent and
 // run on `threads` threads (results per slot: independent of the thread count). The choice is
 // by the data cost 1/2 sum rho(r^2) alone.
+//
+// Then per cord kind (secondaries first, then primaries), `kind_points` factors for that
+// kind's cords alone around the common one (steps of half a grid spacing). Why: the two kinds
+// hold different parts of the leaflet (free edge, belly), and one common factor is a
+// compromise between them: on the prolapse-P2 cohort case the best common factor leaves the
+// belly high and the free edge low (docs/fitting.md, "Pre-fit stages").
 // Manual (provenance manual) and locked cords keep their values: the user's edits are the
 // starting point and prior of the optimisation, not something to rescale.
 #pragma once
@@ -31,12 +37,15 @@ struct PrefitOptions {
   bool enabled = true;
   int points = 9;         // grid over [scale_lower, scale_upper], ends included
   int refine_points = 4;  // then evenly inside the best point's two grid intervals
+  int kind_points = 4;    // then per cord kind around the common factor (0: no kind stage)
   int threads = 2;
 };
 
 struct PrefitResult {
-  double factor = 1.0;     // best factor (1: no change)
-  CordSet start;           // the seed with the factor applied
+  double factor = 1.0;     // best common factor (1: no change)
+  // Per kind after the kind stage (= factor when the kind stage kept the common one).
+  double primary_factor = 1.0, secondary_factor = 1.0;
+  CordSet start;           // the seed with the factors applied
   ForwardEvaluation best;  // full closure at the best factor
   int forward_sims = 0;
   std::vector<double> factors, costs;  // every factor tried, in order, and its data cost
@@ -58,5 +67,7 @@ std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
 
 // The seed with every free non-manual cord's rest length multiplied by `factor`.
 CordSet scaleFreeCords(const CordSet& seed, double factor);
+// The same with one factor per cord kind.
+CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor);
 
 }  // namespace chordfit::inverse

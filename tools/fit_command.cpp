@@ -84,7 +84,9 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
   md << "# Cord fit: " << c.name << "\n\n";
   md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
      << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
-  md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)") << "\n";
+  md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)")
+     << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
+     << fit.prefit_secondary_factor << "\n";
   md << "- segment pre-fit: "
      << (fit.segment_prefit_changes.empty() ? std::string("no change")
                                             : joinSegments(fit.segment_prefit_changes))
@@ -200,6 +202,8 @@ int runFit(const FitCommandOptions& o) {
   metrics["initial_cost"] = fit.seed_evaluation.cost;
   metrics["final_cost"] = fit.final_evaluation.cost;
   metrics["prefit_factor"] = fit.prefit_factor;
+  metrics["prefit_primary_factor"] = fit.prefit_primary_factor;
+  metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["scale_bounds"] = o.scale_bounds;
   metrics["termination"] = fit.termination;
