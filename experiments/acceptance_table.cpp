@@ -99,9 +99,8 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
           segmentsOrNone(m, "tracing_prolapse_segments") + " / " +
           segmentsOrNone(m, "section_prolapse_segments") + " " +
           mark(true, !reconstructed.empty(), reconstructed == "yes") + " | " +
-          segmentsOrNone(m, "prolapse_segments") + " " +
-          mark(true, has_tissue, tissue_ok) +
-          " | " + mdNumber(recovery_pct, 1) + " % (" + std::to_string(near.size()) + ") " +
+          segmentsOrNone(m, "prolapse_segments") + " " + mark(true, has_tissue, tissue_ok) + " | " +
+          mdNumber(recovery_pct, 1) + " % (" + std::to_string(near.size()) + ") " +
           mark(true, std::isfinite(recovery_pct), recovery_pct <= t.max_recovery_median_pct) +
           " | " + mdNumber(sims, 0) + (timing ? " | " + mdNumber(wall, 1) : "") + " |\n";
       out.csv += case_id + "," + preset + "," + (pathological ? "yes" : "no") + "," +

@@ -174,14 +174,14 @@ class Merger {
   void addTable1Row(const std::string& case_id, const std::string& label, const std::string& tag,
                     const json& m, double sims, double wall, std::string& md,
                     std::string& csv) const {
-    md +=
-        "| " + case_id + " | " + label + " | " + mdNumber(number(m, "area_mm2"), 0) + " | " +
-        mdNumber(number(m, "min_mm")) + " | " + mdNumber(number(m, "median_mm")) + " | " +
-        mdNumber(number(m, "max_mm")) + " | " + mdNumber(number(m, "mean_mm")) + " ± " +
-        mdNumber(number(m, "sd_mm")) + " | " + yesNo(m) + " | " +
-        segmentsOrNone(m, "section_prolapse_segments") + " | " +
-        segmentsOrNone(m, "tracing_prolapse_segments") + " | " +
-        segmentsOrNone(m, "prolapse_segments") + " | " + mdNumber(sims, 0) + " |" + (timing_ ? " " + mdNumber(wall, 1) + " |" : "") + "\n";
+    md += "| " + case_id + " | " + label + " | " + mdNumber(number(m, "area_mm2"), 0) + " | " +
+          mdNumber(number(m, "min_mm")) + " | " + mdNumber(number(m, "median_mm")) + " | " +
+          mdNumber(number(m, "max_mm")) + " | " + mdNumber(number(m, "mean_mm")) + " ± " +
+          mdNumber(number(m, "sd_mm")) + " | " + yesNo(m) + " | " +
+          segmentsOrNone(m, "section_prolapse_segments") + " | " +
+          segmentsOrNone(m, "tracing_prolapse_segments") + " | " +
+          segmentsOrNone(m, "prolapse_segments") + " | " + mdNumber(sims, 0) + " |" +
+          (timing_ ? " " + mdNumber(wall, 1) + " |" : "") + "\n";
     const CaseSpec& c = findCase(plan_, case_id);
     csv += case_id + "," + c.preset + "," + std::to_string(c.seed) + "," + tag + "," + label + "," +
            fixed(number(m, "area_mm2"), 2) + "," + fixed(number(m, "min_mm"), 4) + "," +

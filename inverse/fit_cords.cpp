@@ -46,11 +46,12 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto budget_allows = [&](int sims) {
     return outcome.forward_sims + sims + 1 <= options.max_sims;
   };
-  if (options.prefit.enabled && seed_parameters.size() > 0 &&
-      budget_allows(options.prefit.points + options.prefit.refine_points +
-                    2 * options.prefit.kind_points)) {
+  const int common_sims = options.prefit.points + options.prefit.refine_points;
+  if (options.prefit.enabled && seed_parameters.size() > 0 && budget_allows(common_sims)) {
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
+    // The kind stage only when it fits as well (a small budget keeps the common factor).
+    if (!budget_allows(common_sims + 2 * prefit.kind_points)) prefit.kind_points = 0;
     const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
                                                   options.bounds, seed_residual, prefit);
     outcome.forward_sims += result.forward_sims;

@@ -105,9 +105,8 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   const int kind_half = options.kind_points / 2;
   const bool has_both = std::any_of(seed.cords.begin(), seed.cords.end(),
                                     [](const Cord& c) { return c.kind == CordKind::kPrimary; }) &&
-                        std::any_of(seed.cords.begin(), seed.cords.end(), [](const Cord& c) {
-                          return c.kind == CordKind::kSecondary;
-                        });
+                        std::any_of(seed.cords.begin(), seed.cords.end(),
+                                    [](const Cord& c) { return c.kind == CordKind::kSecondary; });
   for (int kind = 0; has_both && kind_half > 0 && kind < 2; ++kind) {
     const bool secondaries = kind == 0;
     std::vector<std::pair<double, double>> pairs;

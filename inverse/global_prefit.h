@@ -14,7 +14,7 @@
 // kind's cords alone around the common one (steps of half a grid spacing). Why: the two kinds
 // hold different parts of the leaflet (free edge, belly), and one common factor is a
 // compromise between them: on the prolapse-P2 cohort case the best common factor leaves the
-// belly high and the free edge low (docs/fitting.md, "Pre-fit stages").
+// belly high and the free edge low (docs/fitting.md, "Pre-fit stages: what was tried").
 // Manual (provenance manual) and locked cords keep their values: the user's edits are the
 // starting point and prior of the optimisation, not something to rescale.
 #pragma once
@@ -42,7 +42,7 @@ struct PrefitOptions {
 };
 
 struct PrefitResult {
-  double factor = 1.0;     // best common factor (1: no change)
+  double factor = 1.0;  // best common factor (1: no change)
   // Per kind after the kind stage (= factor when the kind stage kept the common one).
   double primary_factor = 1.0, secondary_factor = 1.0;
   CordSet start;           // the seed with the factors applied

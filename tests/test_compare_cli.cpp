@@ -73,11 +73,10 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
 
   const auto rows = csvRows(readText(out / "compare.csv"));
   ASSERT_EQ(rows.size(), 3u);
-  EXPECT_EQ(rows[0], (std::vector<std::string>{"label", "cords_file", "area_mm2", "min_mm",
-                                               "median_mm", "max_mm", "mean_mm", "sd_mm",
-                                               "prolapse_reconstructed",
-                                               "section_prolapse_segments", "prolapse_segments",
-                                               "tracing_prolapse_segments", "converged", "steps"}));
+  EXPECT_EQ(rows[0], (std::vector<std::string>{
+                         "label", "cords_file", "area_mm2", "min_mm", "median_mm", "max_mm",
+                         "mean_mm", "sd_mm", "prolapse_reconstructed", "section_prolapse_segments",
+                         "prolapse_segments", "tracing_prolapse_segments", "converged", "steps"}));
   for (std::size_t r = 1; r < rows.size(); ++r) {
     ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
     EXPECT_TRUE(rows[r][8] == "yes" || rows[r][8] == "no") << rows[r][8];

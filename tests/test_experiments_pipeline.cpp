@@ -267,10 +267,9 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | 3.0 % (2) ✓ |"), std::string::npos) << md;
   // normal-1 is not pathological: the reduction criterion does not apply to it.
   EXPECT_NE(
-      md.find(
-          "AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
-          "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); recovery 1 of "
-          "1 cases"),
+      md.find("AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
+              "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); recovery 1 of "
+              "1 cases"),
       std::string::npos)
       << md;
 }

@@ -94,5 +94,20 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   EXPECT_NE(report.find("Fitted length"), std::string::npos);
 }
 
+// A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
+// factor: 8 grid + 4 refinement closures fit in 16 runs, 8 more for the kinds do not.
+TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --max-sims 16 --threads 2 --quiet --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const double common = metrics["prefit_factor"].get<double>();
+  EXPECT_NE(common, 1.0) << "the heuristic's cords are too long: the common stage moves them";
+  EXPECT_EQ(metrics["prefit_primary_factor"].get<double>(), common);
+  EXPECT_EQ(metrics["prefit_secondary_factor"].get<double>(), common);
+  EXPECT_LE(metrics["forward_sims"].get<int>(), 17);  // budget 16 + the closure written
+}
+
 }  // namespace
 }  // namespace chordfit

@@ -75,8 +75,7 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   EXPECT_LT(std::abs(result.primary_factor - kPrimaryScale), 0.05);
   EXPECT_LT(std::abs(result.secondary_factor - kSecondaryScale), 0.05);
   EXPECT_LT(result.best.cost, 0.5 * best_common) << "better than any common factor";
-  EXPECT_EQ(result.forward_sims,
-            static_cast<int>(result.costs.size()) + 2 * options.kind_points);
+  EXPECT_EQ(result.forward_sims, static_cast<int>(result.costs.size()) + 2 * options.kind_points);
   // The start is the seed with the two factors on its free cords.
   for (std::size_t c = 0; c < p.seed.cords.size(); ++c) {
     const Cord& cord = result.start.cords[c];

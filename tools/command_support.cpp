@@ -68,14 +68,14 @@ std::string joinSegments(const std::vector<std::string>& segments) {
 std::string prolapseSummary(const ValveMetrics& m, const std::string& indent) {
   std::string text;
   if (m.has_tracings) {
-    text += indent + "prolapse (tracings):             " + joinSegments(m.tracing_prolapse.segments) +
-            "\n";
-    text += indent + "prolapse (mesh, tracing planes): " +
-            joinSegments(m.section_prolapse.segments) +
+    text += indent +
+            "prolapse (tracings):             " + joinSegments(m.tracing_prolapse.segments) + "\n";
+    text += indent +
+            "prolapse (mesh, tracing planes): " + joinSegments(m.section_prolapse.segments) +
             (m.prolapse_reconstructed ? "  -> reconstructed" : "  -> not reconstructed") + "\n";
   }
-  text += indent + "prolapse (mesh tissue):          " + joinSegments(m.mesh_prolapse.segments) +
-          "\n";
+  text +=
+      indent + "prolapse (mesh tissue):          " + joinSegments(m.mesh_prolapse.segments) + "\n";
   return text;
 }
 

@@ -118,8 +118,8 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
     md += "| " + s.label + " | `" + s.file + "` | " +
           (m.has_tracings ? joinSegments(m.tracing_prolapse.segments) : none) + " | " +
           (m.has_tracings ? joinSegments(m.section_prolapse.segments) : none) + " | " +
-          joinSegments(m.mesh_prolapse.segments) +
-          " | " + (s.converged ? "yes" : "no") + " (" + std::to_string(s.steps) + ") |\n";
+          joinSegments(m.mesh_prolapse.segments) + " | " + (s.converged ? "yes" : "no") + " (" +
+          std::to_string(s.steps) + ") |\n";
   }
   return md;
 }

@@ -32,7 +32,8 @@ int runMetrics(const MetricsOptions& options) {
   const ValveMetrics metrics = computeMetrics(*valve_case, V);
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << prolapseSummary(metrics)
-            << "highest point above the annulus: " << metrics.mesh_prolapse.max_height_mm << " mm\n";
+            << "highest point above the annulus: " << metrics.mesh_prolapse.max_height_mm
+            << " mm\n";
   if (!options.out_file.empty()) {
     writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");
     std::cout << "wrote " << options.out_file << "\n";
