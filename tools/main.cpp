@@ -118,7 +118,8 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--params", o.params, "scales | groups | scales+tips")->capture_default_str();
   cmd->add_option("--optimizer", o.optimizer, "ceres | bobyqa | cobyla | sbplx | crs2")
       ->capture_default_str();
-  cmd->add_option("--max-sims", o.max_sims, "Forward closures in all (budget)")
+  cmd->add_option("--max-sims", o.max_sims,
+                  "Forward closures of the fit (budget; the written result adds one)")
       ->capture_default_str();
   cmd->add_option("--threads", o.threads, "Parallel closures (finite differences, pre-fit)")
       ->capture_default_str();
@@ -128,7 +129,8 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--tip-box", o.tip_box_mm, "PM tip offset bound per axis, mm (scales+tips)")
       ->capture_default_str();
-  cmd->add_flag("!--no-prefit", o.prefit, "Skip both pre-fits (global scale factor, then per-segment scales)");
+  cmd->add_flag("!--no-prefit", o.prefit,
+                "Skip both pre-fits (global scale factor, then per-segment scales)");
   cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
       ->capture_default_str();
   cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")
