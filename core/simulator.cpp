@@ -324,6 +324,22 @@ class Stepper {
   // Kinetic damping (dynamic relaxation): all velocities to zero.
   void stop() { std::fill(v_.begin(), v_.end(), 0.0); }
 
+  // sum += positions of the free vertices (for the mean of an unsettled closure).
+  void addFreePositions(std::vector<double>& sum) const {
+    for (int i = 0; i < n_; ++i)
+      if (sys_.w[i] != 0.0)
+        for (int d = 0; d < 3; ++d) sum[3 * i + d] += x_[3 * i + d];
+  }
+
+  // The free vertices of result.V replaced by sum / count (Dirichlet vertices keep their
+  // exact final positions).
+  void setFreePositionsToMean(const std::vector<double>& sum, int count,
+                              SimulationResult& result) const {
+    for (int i = 0; i < n_; ++i)
+      if (sys_.w[i] != 0.0)
+        for (int d = 0; d < 3; ++d) result.V(i, d) = sum[3 * i + d] / count;
+  }
+
   // Copies the final state into `result`.
   void finish(SimulationResult& result) const {
     result.projections = projections_;
@@ -422,7 +438,15 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
                   start ? *start : model.V_rest);
   int quiet_steps = 0;
   double last_energy = 0.0;
-  for (int step = 1; step <= settings.max_steps; ++step) {
+  const bool warm_closure = start && settings.phase == ClosurePhase::kClose;
+  const int max_steps =
+      warm_closure ? std::min(settings.max_steps, settings.max_warm_steps) : settings.max_steps;
+  // Steps max_steps - average_unsettled_steps + 1 .. max_steps (those after the ramp) are
+  // summed; used only if the closure does not settle.
+  const int first_averaged = max_steps - settings.average_unsettled_steps + 1;
+  std::vector<double> position_sum;
+  int averaged = 0;
+  for (int step = 1; step <= max_steps; ++step) {
     const double t = step * dt;
     const double s = ramp(t, ramp_ms);
     stepper.setBoundary(s);
@@ -456,6 +480,12 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
       result.converged = true;
       break;
     }
+    if (settings.average_unsettled_steps > 0 && step >= first_averaged && t >= ramp_ms) {
+      if (position_sum.empty())
+        position_sum.assign(3 * static_cast<size_t>(model.V_rest.rows()), 0.0);
+      stepper.addFreePositions(position_sum);
+      ++averaged;
+    }
   }
   result.seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - clock_start).count();
@@ -468,6 +498,10 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
     return result;
   }
   stepper.finish(result);
+  if (!result.converged && averaged > 0) {
+    stepper.setFreePositionsToMean(position_sum, averaged, result);
+    result.averaged_steps = averaged;
+  }
   return result;
 }
 
@@ -605,6 +639,8 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"iterations", static_cast<double>(s.iterations), 1.0, false, 1000.0},
       {"window", static_cast<double>(s.window), 1.0, false, 1e6},
       {"max_steps", static_cast<double>(s.max_steps), 1.0, false, 1e8},
+      {"max_warm_steps", static_cast<double>(s.max_warm_steps), 1.0, false, 1e8},
+      {"average_unsettled_steps", static_cast<double>(s.average_unsettled_steps), 0.0, false, 1e8},
   };
   std::vector<SettingsProblem> problems;
   for (const Range& r : ranges) {
@@ -661,8 +697,11 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
     const char* key;
     int* target;
   };
-  const IntKey integers[] = {
-      {"iterations", &s.iterations}, {"window", &s.window}, {"max_steps", &s.max_steps}};
+  const IntKey integers[] = {{"iterations", &s.iterations},
+                             {"window", &s.window},
+                             {"max_steps", &s.max_steps},
+                             {"max_warm_steps", &s.max_warm_steps},
+                             {"average_unsettled_steps", &s.average_unsettled_steps}};
   for (const auto& [key, value] : parsed->items()) {
     const std::string where = "simulation." + key;
     bool known = false;

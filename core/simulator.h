@@ -109,6 +109,17 @@ struct SimulationSettings {
   // oscillation after a few thousand steps, and a fit runs hundreds of closures, so the cap
   // is 5,000 (it was 20,000: a non-settling closure then cost 5 s instead of 1.2 s).
   int max_steps = 5000;
+  // Step cap of a warm-started closure (phase close with a start state, as for the fit's finite
+  // differences). Warm starts that settle take 40-250 steps (cohort, edge 2.5 mm); a
+  // perturbation of a state that does not settle does not settle either, and running it to
+  // max_steps only costs time (bileaflet seed 3: 196 of 196 perturbations ran to the cap).
+  int max_warm_steps = 1500;
+  // When a closure reaches its cap without settling, its result is the mean position over
+  // its last `average_unsettled_steps` steps after the ramp (the centre of the residual
+  // oscillation) rather than the last step's snapshot; `converged` stays false. 0: the last
+  // state. The mean varies smoothly with the cords where the snapshot is a random phase of
+  // the oscillation (docs/performance.md, "Closures that do not settle").
+  int average_unsettled_steps = 1000;
   bool contact = true;
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
   double contact_margin_mm = 0.0;     // <= 0: 0.25 * contact thickness
@@ -123,9 +134,8 @@ struct SimulationSettings {
 //   pressure_mmhg, youngs_modulus_mpa, thickness_mm, poisson_ratio, density_g_per_cm3,
 //   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, dt_ms,
 //   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, max_step_mm, tolerance_mm,
-//   window, max_steps, contact, contact_thickness_mm, contact_margin_mm, contact_exclusion_mm,
-//   kinetic_damping,
-//   phase ("close" | "open").
+//   window, max_steps, max_warm_steps, average_unsettled_steps, contact, contact_thickness_mm,
+//   contact_margin_mm, contact_exclusion_mm, kinetic_damping, phase ("close" | "open").
 // Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
 // "simulation.<key>"); the remaining keys still apply.
 // Values are range-checked (settingsProblems) after parsing; out-of-range values are reported
@@ -182,6 +192,7 @@ struct SimulationResult {
   int contacts = 0;                  // active contact constraints (lambda > 0) at the end
   long long projections = 0;         // constraint projections performed (for ns/projection)
   int kinetic_stops = 0;             // velocity resets by kinetic damping
+  int averaged_steps = 0;            // > 0: not settled, V is the mean over this many final steps
   std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
   bool ok() const { return error.empty(); }
 };

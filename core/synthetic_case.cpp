@@ -185,6 +185,9 @@ SimulationSettings truthSimulationSettings() {
   s.tolerance_mm *= 0.25;
   s.window *= 2;
   s.max_steps = kTruthMaxSteps;
+  // The truth of a capped closure stays its last state, as when the cohort and its committed
+  // benchmark results were made (averaging unsettled closures came later).
+  s.average_unsettled_steps = 0;
   return s;
 }
 

@@ -113,6 +113,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
       cord.provenance = Provenance::kFitted;
     }
   }
+  outcome.unsettled_sims = seed_residual.unsettledClosures() + residual.unsettledClosures();
   outcome.seconds = seconds();
   return outcome;
 }

@@ -44,13 +44,14 @@ struct FitOutcome {
   CordSet fitted;     // provenance kFitted where the rest length differs from the seed
   ForwardEvaluation seed_evaluation;   // full closure of the seed
   ForwardEvaluation final_evaluation;  // full closure of the fitted set
-  double prefit_factor = 1.0;  // common factor of the global pre-fit, then per kind:
+  double prefit_factor = 1.0;          // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
   std::vector<std::string> parameter_names;
   Eigen::VectorXd x;                     // fitted parameters
   std::vector<IterationRecord> history;  // seed, pre-fit and optimiser records
   int forward_sims = 0;
+  int unsettled_sims = 0;  // of forward_sims: closures that reached their step cap
   double seconds = 0.0;
   std::string termination;
   bool ok() const { return error.empty(); }

@@ -97,6 +97,7 @@ ForwardEvaluation ForwardResidual::evaluate(const Eigen::VectorXd& x,
   e.warm_started = warm_start != nullptr;
   const CordSet cords = parameters_.apply(x);
   SimulationResult r = simulateClosure(case_, cords, settings_, warm_start);
+  countClosure(r);
   if (!r.ok()) {
     e.error = r.error;
     return e;

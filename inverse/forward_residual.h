@@ -21,6 +21,8 @@
 // rather than the seed.
 #pragma once
 
+#include <atomic>
+
 #include <string>
 #include <vector>
 
@@ -85,6 +87,14 @@ class ForwardResidual {
   // Neighbour pairs (cord indices) used by the regularisation.
   const std::vector<std::pair<int, int>>& neighbourPairs() const { return neighbours_; }
 
+  // Closures run for this residual (evaluate, and the pre-fit stages through
+  // countClosure) that reached their step cap without settling; their states are the mean
+  // over the final steps (simulator.h, average_unsettled_steps). Thread-safe.
+  void countClosure(const SimulationResult& result) const {
+    if (result.ok() && !result.converged) ++unsettled_closures_;
+  }
+  int unsettledClosures() const { return unsettled_closures_.load(); }
+
  private:
   const ValveCase& case_;
   const FitParameterization& parameters_;
@@ -94,6 +104,7 @@ class ForwardResidual {
   std::vector<std::pair<int, int>> neighbours_;
   Eigen::MatrixXd A_;
   Eigen::VectorXd b_;
+  mutable std::atomic<int> unsettled_closures_{0};
 };
 
 // Pairs of free cords adjacent along the annulus within the same group and kind, ordered by

@@ -29,6 +29,7 @@ std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
   parallelFor(static_cast<int>(sets.size()), threads, [&](int i) {
     ForwardEvaluation& e = out[i];
     const SimulationResult r = simulateClosure(valve_case, sets[i], residual.settings());
+    residual.countClosure(r);
     if (!r.ok()) {
       e.error = r.error;
       return;

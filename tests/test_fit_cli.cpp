@@ -74,11 +74,13 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   }
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   for (const char* key : {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims",
-                          "fit_seconds", "initial_mean_mm"}) {
+                          "fit_seconds", "initial_mean_mm", "unsettled_sims", "averaged_steps"}) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_EQ(metrics["optimizer"], "ceres");
   EXPECT_LE(metrics["forward_sims"].get<int>(), 5);  // budget 4 + the closure written
+  EXPECT_GE(metrics["unsettled_sims"].get<int>(), 0);
+  EXPECT_LT(metrics["unsettled_sims"].get<int>(), metrics["forward_sims"].get<int>());
   EXPECT_LE(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>());
   const auto fitted = nlohmann::json::parse(testing::readText(dir / "fit" / "cords.json"));
   ASSERT_EQ(fitted["cords"].size(), seed["cords"].size());

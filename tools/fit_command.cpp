@@ -197,6 +197,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["params"] = o.params;
   metrics["parameters"] = fit.x.size();
   metrics["forward_sims"] = fit.forward_sims + 1;  // + the closure just written
+  metrics["unsettled_sims"] = fit.unsettled_sims;  // of the fit's runs (not the one written)
   metrics["fit_seconds"] = fit.seconds;
   metrics["initial_mean_mm"] = fit.seed_evaluation.mean_deviation_mm;
   metrics["initial_cost"] = fit.seed_evaluation.cost;
@@ -215,6 +216,12 @@ int runFit(const FitCommandOptions& o) {
 
   std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
               fit.seconds, fit.termination.c_str());
+  if (fit.unsettled_sims > 0) {
+    std::printf(
+        "note: %d of the %d forward runs reached the step cap without settling (their state is "
+        "the mean over the last steps; docs/performance.md)\n",
+        fit.unsettled_sims, fit.forward_sims);
+  }
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
   std::cout << "wrote " << (out / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "

@@ -113,6 +113,7 @@ int runSimulate(const SimulateOptions& options) {
   nlohmann::json j = metricsJson(metrics);
   j["converged"] = closed.converged;
   j["steps"] = closed.steps;
+  j["averaged_steps"] = closed.averaged_steps;
   j["sim_seconds"] = closed.seconds;
   j["cords"] = cords->cords.size();
   if (options.phase == "open") {
@@ -127,9 +128,13 @@ int runSimulate(const SimulateOptions& options) {
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
   writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
 
-  std::printf("closure: %s after %d steps, %.2f s\n",
+  std::printf("closure: %s after %d steps, %.2f s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
-              closed.seconds);
+              closed.seconds,
+              closed.averaged_steps > 0 ? (": result = mean of the last " +
+                                           std::to_string(closed.averaged_steps) + " steps")
+                                              .c_str()
+                                        : "");
   if (options.phase == "open") {
     std::printf("opening: %s after %d steps, %.2f s\n",
                 opened.converged ? "converged" : "NOT converged", opened.steps, opened.seconds);
