@@ -396,6 +396,7 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
     result["wall_seconds"] = wall;
     result["command"] = command;
     result["revision"] = paths.revision;
+    if (!paths.machine.empty()) result["machine"] = paths.machine;
     result["cords"] = cordRecovery(case_dir, cords_file);
   } catch (const std::exception& e) {
     return failure("job " + job.id + ": " + e.what());

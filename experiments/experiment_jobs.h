@@ -20,6 +20,7 @@ struct RunPaths {
   std::filesystem::path results;   // tables, plots, jobs/*.json (committed)
   std::filesystem::path work;      // cases and run directories (not committed)
   std::string revision;            // source revision, recorded in every job result
+  std::string machine;             // CPU model and logical CPUs, recorded in every job result
   // Optional: directory of already generated cases (e.g. build/cases). A case whose
   // truth/truth.json records the same preset, seed, edge, planes, noise and dropout is copied
   // instead of generated: make-case is deterministic, so the copy equals a fresh case as long

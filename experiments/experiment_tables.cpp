@@ -429,6 +429,16 @@ class Merger {
     md += "Revision(s) of the chordfit that made the results: ";
     for (const std::string& rev : revisions) md += "`" + rev + "` ";
     md += revisions.empty() ? "unknown\n" : "\n";
+    // Wall times compare only within one machine (docs/performance.md); results made before
+    // jobs recorded their machine have none.
+    std::set<std::string> machines;
+    for (const auto& [id, r] : results_by_job_) {
+      machines.insert(r.contains("machine") ? r.at("machine").get<std::string>()
+                                            : std::string("not recorded"));
+    }
+    md += "Machine(s) the jobs ran on: ";
+    for (const std::string& m : machines) md += "`" + m + "` ";
+    md += machines.empty() ? "unknown\n" : "\n";
     md +=
         "\nFiles: table1.md/.csv, acceptance.md/.csv, optimizers.md/.csv/.svg, "
         "recovery.md/.csv/.svg, "

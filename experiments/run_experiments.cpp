@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/csv_text.h"
@@ -192,6 +193,22 @@ std::string sourceRevision() {
   return revision.empty() ? "unknown" : revision;
 }
 
+// The machine the jobs run on, for reading their wall times: the CPU model of /proc/cpuinfo
+// (Linux; "unknown CPU" elsewhere) and the number of logical CPUs.
+std::string machineDescription() {
+  std::string model;
+  std::ifstream cpuinfo("/proc/cpuinfo");
+  for (std::string line; model.empty() && std::getline(cpuinfo, line);) {
+    const auto colon = line.find(':');
+    if (line.rfind("model name", 0) == 0 && colon != std::string::npos) {
+      model = line.substr(colon + 1);
+      model.erase(0, model.find_first_not_of(" \t"));
+    }
+  }
+  return (model.empty() ? std::string("unknown CPU") : model) + ", " +
+         std::to_string(std::thread::hardware_concurrency()) + " logical CPUs";
+}
+
 // The plan restricted to the jobs of the chosen methods and seeds, and the cases they use.
 ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::string>& methods,
                             const std::vector<int>& seeds, const std::vector<std::string>& presets,
@@ -225,7 +242,8 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
 }
 
 int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
-  const RunPaths paths{a.chordfit, a.results, a.work, sourceRevision(), a.case_source};
+  const RunPaths paths{a.chordfit,           a.results,    a.work, sourceRevision(),
+                       machineDescription(), a.case_source};
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   std::vector<std::string> failures;

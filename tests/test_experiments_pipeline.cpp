@@ -307,6 +307,15 @@ TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
   const double floor = std::stod(cells(table[3])[9]);
   EXPECT_LT(truth, heuristic);
   EXPECT_LT(floor, heuristic);
+  // Every job records where it ran (wall times compare only within one machine).
+  const auto job =
+      nlohmann::json::parse(readText(dir / "whole" / "jobs" / "normal-1_s2__truth.json"));
+  ASSERT_TRUE(job.contains("machine"));
+  EXPECT_NE(job.at("machine").get<std::string>().find("logical CPUs"), std::string::npos);
+  const std::string index = readText(dir / "whole" / "index.md");
+  EXPECT_NE(index.find("Machine(s) the jobs ran on: `" + job.at("machine").get<std::string>()),
+            std::string::npos)
+      << index;
 }
 
 }  // namespace
