@@ -200,17 +200,25 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
     double ba, bb, bc;
     closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
     if ((xp - (ba * a + bb * b + bc * c)).squaredNorm() >= reach2) continue;
-    // Side: of the start-of-step plane of the triangle (non-penetrating by induction); if the
-    // vertex lies in that plane, of the predicted one.
-    const CMap3 a0(x_start + 3 * ia), b0(x_start + 3 * ib), c0(x_start + 3 * ic);
-    double side = (b0 - a0).cross(c0 - a0).dot(CMap3(x_start + 3 * p) - a0);
-    if (side == 0.0) side = (b - a).cross(c - a).dot(xp - a);
-    ContactConstraint k;
-    k.p = p, k.a = ia, k.b = ib, k.c = ic;
-    k.side = side >= 0.0 ? 1.0 : -1.0;
-    k.thickness = options_.thickness_mm;
-    out.push_back(k);
+    out.push_back(contactConstraint(p, ia, ib, ic, x_start, x_pred, options_.thickness_mm));
   }
+}
+
+ContactConstraint contactConstraint(int p, int a, int b, int c, const double* x_start,
+                                    const double* x_pred, double thickness) {
+  // Side: of the start-of-step plane of the triangle (non-penetrating by induction); if the
+  // vertex lies in that plane, of the predicted one.
+  const CMap3 a0(x_start + 3 * a), b0(x_start + 3 * b), c0(x_start + 3 * c);
+  double side = (b0 - a0).cross(c0 - a0).dot(CMap3(x_start + 3 * p) - a0);
+  if (side == 0.0) {
+    const CMap3 xa(x_pred + 3 * a), xb(x_pred + 3 * b), xc(x_pred + 3 * c);
+    side = (xb - xa).cross(xc - xa).dot(CMap3(x_pred + 3 * p) - xa);
+  }
+  ContactConstraint k;
+  k.p = p, k.a = a, k.b = b, k.c = c;
+  k.side = side >= 0.0 ? 1.0 : -1.0;
+  k.thickness = thickness;
+  return k;
 }
 
 }  // namespace chordfit

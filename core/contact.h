@@ -45,6 +45,12 @@ struct ContactOptions {
   double skin_mm = 1.0;              // Verlet-list skin (see above)
 };
 
+// The constraint of vertex p against triangle (a, b, c) for one step: its side is that of the
+// start-of-step plane of the triangle (the predicted plane if p lies in it), see above.
+// x_start, x_pred flat positions (3 #V).
+ContactConstraint contactConstraint(int p, int a, int b, int c, const double* x_start,
+                                    const double* x_pred, double thickness);
+
 class ContactDetector {
  public:
   // V_rest  #V by 3 rest (open) state, used for the exclusion test and the cell size

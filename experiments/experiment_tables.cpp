@@ -415,6 +415,22 @@ class Merger {
     write("sensitivity.svg", svgLinePlots(panels, 2));
   }
 
+  // The distinct values of a job-result key, each in backticks and followed by a space, then a
+  // newline ("unknown" when there are none); a result without the key counts as `missing`, or
+  // is left out when `missing` is empty.
+  std::string recordedValues(const char* key, const std::string& missing) const {
+    std::set<std::string> values;
+    for (const auto& [id, r] : results_by_job_) {
+      if (r.contains(key))
+        values.insert(r.at(key).get<std::string>());
+      else if (!missing.empty())
+        values.insert(missing);
+    }
+    std::string md;
+    for (const std::string& v : values) md += "`" + v + "` ";
+    return md + (values.empty() ? "unknown\n" : "\n");
+  }
+
   void index() {
     std::string md = "# Benchmark experiment results\n\nMade by `run_experiments merge` from " +
                      std::to_string(summary_.jobs_found) + " of " +
@@ -422,23 +438,10 @@ class Merger {
                      std::to_string(plan_.cases.size()) +
                      " cases. See experiments/README.md, "
                      "\"Benchmark experiments\".\n\n";
-    std::set<std::string> revisions;
-    for (const auto& [id, r] : results_by_job_) {
-      if (r.contains("revision")) revisions.insert(r.at("revision").get<std::string>());
-    }
-    md += "Revision(s) of the chordfit that made the results: ";
-    for (const std::string& rev : revisions) md += "`" + rev + "` ";
-    md += revisions.empty() ? "unknown\n" : "\n";
+    md += "Revision(s) of the chordfit that made the results: " + recordedValues("revision", "");
     // Wall times compare only within one machine (docs/performance.md); results made before
     // jobs recorded their machine have none.
-    std::set<std::string> machines;
-    for (const auto& [id, r] : results_by_job_) {
-      machines.insert(r.contains("machine") ? r.at("machine").get<std::string>()
-                                            : std::string("not recorded"));
-    }
-    md += "Machine(s) the jobs ran on: ";
-    for (const std::string& m : machines) md += "`" + m + "` ";
-    md += machines.empty() ? "unknown\n" : "\n";
+    md += "Machine(s) the jobs ran on: " + recordedValues("machine", "not recorded");
     md +=
         "\nFiles: table1.md/.csv, acceptance.md/.csv, optimizers.md/.csv/.svg, "
         "recovery.md/.csv/.svg, "

@@ -35,7 +35,8 @@ void makeTwoSheets(int n, double spacing, double gap, Eigen::MatrixXd& V, Eigen:
 }
 
 // Every (triangle, vertex) pair within thickness + margin at x_pred that the detector's
-// rules admit (contact.h), in its order (triangle, then vertex), with its side.
+// rules admit (contact.h), in its order (triangle, then vertex); the side rule is the
+// detector's own (contactConstraint), the pair selection is what is checked.
 std::vector<ContactConstraint> exhaustiveContacts(const Eigen::MatrixXd& V_rest,
                                                   const Eigen::MatrixXi& F,
                                                   const ContactOptions& options,
@@ -60,14 +61,8 @@ std::vector<ContactConstraint> exhaustiveContacts(const Eigen::MatrixXd& V_rest,
       double ba, bb, bc;
       closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
       if ((xp - (ba * a + bb * b + bc * c)).squaredNorm() >= reach * reach) continue;
-      const Vec3 a0 = at(x_start, ia), b0 = at(x_start, ib), c0 = at(x_start, ic);
-      double side = (b0 - a0).cross(c0 - a0).dot(at(x_start, p) - a0);
-      if (side == 0.0) side = (b - a).cross(c - a).dot(xp - a);
-      ContactConstraint k;
-      k.p = p, k.a = ia, k.b = ib, k.c = ic;
-      k.side = side >= 0.0 ? 1.0 : -1.0;
-      k.thickness = options.thickness_mm;
-      out.push_back(k);
+      out.push_back(
+          contactConstraint(p, ia, ib, ic, x_start.data(), x_pred.data(), options.thickness_mm));
     }
   }
   return out;
