@@ -69,6 +69,7 @@ struct System {
   std::vector<double> w;  // inverse masses, 0 for Dirichlet vertices
   std::vector<DistanceConstraint> edges;
   std::vector<AreaConstraint> areas;
+  std::vector<AreaConstraint> area_floors;  // rest_area = the floor (xpbd_constraints.h)
   std::vector<BendingConstraint> bends;
   std::vector<CordConstraint> cords;
   // Per-vertex stiffness k_i = sum over the material constraints of |grad_i C|^2 / alpha at
@@ -128,6 +129,15 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
       sys.areas.push_back(c);
     }
   }
+  if (s.area_floor_fraction > 0.0) {
+    for (int f = 0; f < m.F.rows(); ++f) {
+      if (face_area(f) <= 0.0) continue;
+      AreaConstraint c;
+      c.a = m.F(f, 0), c.b = m.F(f, 1), c.c = m.F(f, 2);
+      c.rest_area = s.area_floor_fraction * face_area(f);
+      sys.area_floors.push_back(c);
+    }
+  }
   const Eigen::MatrixXi Q = bendingQuads(m.F);
   for (int b = 0; b < Q.rows(); ++b) {
     BendingConstraint c;
@@ -155,6 +165,9 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
     return std::array<int, 2>{c.i, c.j};
   });
   orderByColour(sys.areas, [](const AreaConstraint& c) {
+    return std::array<int, 3>{c.a, c.b, c.c};
+  });
+  orderByColour(sys.area_floors, [](const AreaConstraint& c) {
     return std::array<int, 3>{c.a, c.b, c.c};
   });
   orderByColour(sys.bends, [](const BendingConstraint& c) {
@@ -211,7 +224,8 @@ class Stepper {
         lambda_edges_(sys_.edges.size()),
         lambda_areas_(sys_.areas.size()),
         lambda_bends_(sys_.bends.size()),
-        lambda_cords_(sys_.cords.size()) {
+        lambda_cords_(sys_.cords.size()),
+        lambda_floors_(sys_.area_floors.size(), 0.0) {
     for (int i = 0; i < n_; ++i)
       for (int d = 0; d < 3; ++d) x_[3 * i + d] = start(i, d);
     if (settings.contact) {
@@ -270,6 +284,7 @@ class Stepper {
   void solve() {
     if (detector_) detector_->detect(x_prev_.data(), x_.data(), sys_.w.data(), contacts_);
     lambda_contacts_.assign(contacts_.size(), 0.0);
+    std::fill(lambda_floors_.begin(), lambda_floors_.end(), 0.0);
     if (!warm_) {
       for (auto* l : {&lambda_edges_, &lambda_areas_, &lambda_bends_, &lambda_cords_})
         std::fill(l->begin(), l->end(), 0.0);
@@ -285,13 +300,14 @@ class Stepper {
       projectDistances(sys_.edges, inv_dt2_, x, w, lambda_edges_.data(), acc);
       projectAreas(sys_.areas, inv_dt2_, x, w, lambda_areas_.data(), acc);
       projectBending(sys_.bends, inv_dt2_, x, w, lambda_bends_.data(), acc);
+      projectAreaFloors(sys_.area_floors, x, w, lambda_floors_.data(), acc);
       projectContacts(contacts_, x, w, lambda_contacts_.data(), acc);
       projectCords(sys_.cords, inv_dt2_, tips_.data(), x, w, lambda_cords_.data(), acc);
     }
     projections_ +=
         static_cast<long long>(settings_.iterations) *
-        static_cast<long long>(sys_.edges.size() + sys_.areas.size() + sys_.bends.size() +
-                               sys_.cords.size() + contacts_.size());
+        static_cast<long long>(sys_.edges.size() + sys_.areas.size() + sys_.area_floors.size() +
+                               sys_.bends.size() + sys_.cords.size() + contacts_.size());
   }
 
   // v = (x - x_prev) / dt. Returns the largest vertex displacement of the step, or -1 when a
@@ -374,6 +390,7 @@ class Stepper {
   std::vector<double> impulse_;  // sum_j grad C_j lambda_j per vertex (warm start)
   std::vector<double> tips_;     // 3 #tips
   std::vector<double> lambda_edges_, lambda_areas_, lambda_bends_, lambda_cords_, lambda_contacts_;
+  std::vector<double> lambda_floors_;  // area floors: from 0 every step, like the contacts
   std::vector<ContactConstraint> contacts_;
   std::unique_ptr<ContactDetector> detector_;
   long long projections_ = 0;
@@ -636,6 +653,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"contact_thickness_mm", s.contact_thickness_mm, 0.0, false, 10.0},  // 0: automatic
       {"contact_margin_mm", s.contact_margin_mm, 0.0, false, 10.0},
       {"contact_exclusion_mm", s.contact_exclusion_mm, 0.0, false, 100.0},
+      {"area_floor_fraction", s.area_floor_fraction, 0.0, false, 0.99},
       {"iterations", static_cast<double>(s.iterations), 1.0, false, 1000.0},
       {"window", static_cast<double>(s.window), 1.0, false, 1e6},
       {"max_steps", static_cast<double>(s.max_steps), 1.0, false, 1e8},
@@ -692,6 +710,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"contact_thickness_mm", &s.contact_thickness_mm},
       {"contact_margin_mm", &s.contact_margin_mm},
       {"contact_exclusion_mm", &s.contact_exclusion_mm},
+      {"area_floor_fraction", &s.area_floor_fraction},
   };
   struct IntKey {
     const char* key;

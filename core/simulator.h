@@ -124,6 +124,13 @@ struct SimulationSettings {
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
   double contact_margin_mm = 0.0;     // <= 0: 0.25 * contact thickness
   double contact_exclusion_mm = 0.0;  // <= 0: 2.5 * contact thickness (the list radius)
+  // Area floor: no triangle's area may drop below this fraction of its rest area (a hard
+  // unilateral constraint, xpbd_constraints.h); 0 disables it. The compliant area term
+  // (area_bulk_fraction 0.1) lets free-edge triangles between two cords be squeezed to ~20 %
+  // of their area, where they flutter and the closure never settles; the floor only acts on
+  // such triangles, so closures that never squeeze a triangle below half its area are
+  // bit-identical with or without it (docs/performance.md, "Area floor").
+  double area_floor_fraction = 0.5;
   ClosurePhase phase = ClosurePhase::kClose;
   // Called every `progress_every` steps (0: never) and once at the end.
   int progress_every = 0;
@@ -135,7 +142,8 @@ struct SimulationSettings {
 //   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, dt_ms,
 //   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, max_step_mm, tolerance_mm,
 //   window, max_steps, max_warm_steps, average_unsettled_steps, contact, contact_thickness_mm,
-//   contact_margin_mm, contact_exclusion_mm, kinetic_damping, phase ("close" | "open").
+//   contact_margin_mm, contact_exclusion_mm, area_floor_fraction, kinetic_damping, phase
+//   ("close" | "open").
 // Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
 // "simulation.<key>"); the remaining keys still apply.
 // Values are range-checked (settingsProblems) after parsing; out-of-range values are reported

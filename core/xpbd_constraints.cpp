@@ -221,6 +221,40 @@ void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, d
 }
 
 template <bool kAcc>
+void areaFloorSweep(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+                    double* lambda, double* acc) {
+  const int n = static_cast<int>(constraints.size());
+  for (int c = 0; c < n; ++c) {
+    const AreaConstraint& k = constraints[c];
+    const double wa = w[k.a], wb = w[k.b], wc = w[k.c];
+    if (wa + wb + wc == 0.0) continue;
+    Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
+    const Vec3 eab = xb - xa, ebc = xc - xb, eca = xa - xc;
+    const Vec3 N = eab.cross(-eca);
+    const double len = N.norm();
+    if (len < 1e-24) continue;
+    const double C = 0.5 * len - k.rest_area;
+    if (C > 0.0 && lambda[c] == 0.0) continue;
+    // Gradients as in areaSweep; hard constraint: dlambda = -C / sum_i w_i |grad_i A|^2.
+    const double denom_w =
+        0.25 * (wa * ebc.squaredNorm() + wb * eca.squaredNorm() + wc * eab.squaredNorm());
+    const double total = std::max(lambda[c] - C / denom_w, 0.0);  // a floor only pushes out
+    const double dl = total - lambda[c];
+    lambda[c] = total;
+    const Vec3 nh = (0.5 / len) * N;
+    const Vec3 g[3] = {nh.cross(ebc), nh.cross(eca), nh.cross(eab)};
+    xa += (wa * dl) * g[0];
+    xb += (wb * dl) * g[1];
+    xc += (wc * dl) * g[2];
+    if (kAcc) {
+      accumulate(acc, k.a, g[0], total);
+      accumulate(acc, k.b, g[1], total);
+      accumulate(acc, k.c, g[2], total);
+    }
+  }
+}
+
+template <bool kAcc>
 void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, const double* tips,
                double* x, const double* w, double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
@@ -324,6 +358,14 @@ void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2
     cordSweep<true>(constraints, inv_dt2, tips, x, w, lambda, acc);
   else
     cordSweep<false>(constraints, inv_dt2, tips, x, w, lambda, acc);
+}
+
+void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+                       double* lambda, double* acc) {
+  if (acc)
+    areaFloorSweep<true>(constraints, x, w, lambda, acc);
+  else
+    areaFloorSweep<false>(constraints, x, w, lambda, acc);
 }
 
 void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,

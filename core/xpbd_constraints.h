@@ -58,6 +58,12 @@ struct AreaConstraint {
   double compliance = 0.0;
 };
 
+// Area floor, a hard unilateral constraint C = A(x_a, x_b, x_c) - min_area >= 0 (compliance
+// 0), min_area a fraction of the rest area (SimulationSettings::area_floor_fraction). The
+// compliant area term above stores an energy; this one only keeps a triangle from being
+// squeezed flat, which the weak area term (K_a = 0.1 E h) allows (docs/performance.md, "Area
+// floor"). Stored as an AreaConstraint with rest_area = min_area.
+//
 // Paper eq. 1: C = |x_v - tip| - rest, active only when C >= 0 (the cord pulls, never
 // pushes). The tip is Dirichlet: its position is read from a separate array, never moved.
 struct CordConstraint {
@@ -91,6 +97,10 @@ void projectBending(const std::vector<BendingConstraint>& constraints, double in
                     const double* w, double* lambda, double* acc = nullptr);
 void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
                   const double* w, double* lambda, double* acc = nullptr);
+// Area floors (rest_area = the floor, compliance ignored): like the contacts, lambda starts
+// at 0 each step and stays >= 0; a floor that is not violated is skipped.
+void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+                       double* lambda, double* acc = nullptr);
 // tips: flat tip positions tips[3 * t + d].
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
                   const double* tips, double* x, const double* w, double* lambda,

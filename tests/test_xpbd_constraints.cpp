@@ -113,6 +113,49 @@ TEST(ProjectContacts, PushesAVertexOutToTheThicknessOnItsOwnSide) {
   EXPECT_EQ(x[2], -1.5);
 }
 
+TEST(ProjectAreaFloors, PushesASqueezedTriangleBackToItsFloorAndLeavesOthersAlone) {
+  // Rest triangle (0,0,0), (2,0,0), (0,2,0): area 2, floor 1. Vertex 2 squeezed to y = 0.4
+  // (area 0.4); vertices 0 and 1 are Dirichlet, so only vertex 2 moves, along grad A = +y.
+  std::vector<double> x{0, 0, 0, 2, 0, 0, 0, 0.4, 0};
+  const std::vector<double> w{0.0, 0.0, 1.0};
+  AreaConstraint floor;
+  floor.a = 0, floor.b = 1, floor.c = 2, floor.rest_area = 1.0;
+  std::vector<double> lambda{0.0};
+  projectAreaFloors({floor}, x.data(), w.data(), lambda.data());
+  EXPECT_NEAR(0.5 * 2.0 * x[7], 1.0, 1e-12);  // A is linear in y here: exact in one step
+  EXPECT_EQ(x[6], 0.0);
+  EXPECT_EQ(x[8], 0.0);
+  EXPECT_GT(lambda[0], 0.0);
+  // Above its floor a triangle is not touched, bit for bit, and lambda stays 0.
+  const std::vector<double> above{0, 0, 0, 2, 0, 0, 0.3, 1.7, 0.2};
+  x = above;
+  lambda[0] = 0.0;
+  projectAreaFloors({floor}, x.data(), w.data(), lambda.data());
+  EXPECT_EQ(x, above);
+  EXPECT_EQ(lambda[0], 0.0);
+}
+
+TEST(ProjectAreaFloors, ReachesTheFloorWithFreeVerticesAndNeverPulls) {
+  // All three vertices free; a needle triangle (area 0.05) under a floor of 0.5: repeated
+  // projections (one per Gauss-Seidel sweep) converge to the floor from below, and the
+  // accumulated lambda, a push, never turns negative.
+  std::vector<double> x{0, 0, 0, 2, 0, 0, 1, 0.05, 0};
+  const std::vector<double> w{1.0, 1.0, 1.0};
+  AreaConstraint floor;
+  floor.a = 0, floor.b = 1, floor.c = 2, floor.rest_area = 0.5;
+  std::vector<double> lambda{0.0};
+  auto area = [&] {
+    return 0.5 * (Vec3(x[3], x[4], x[5]) - Vec3(x[0], x[1], x[2]))
+                     .cross(Vec3(x[6], x[7], x[8]) - Vec3(x[0], x[1], x[2]))
+                     .norm();
+  };
+  for (int sweep = 0; sweep < 5; ++sweep) {
+    projectAreaFloors({floor}, x.data(), w.data(), lambda.data());
+    EXPECT_GE(lambda[0], 0.0);
+  }
+  EXPECT_NEAR(area(), 0.5, 1e-9);
+}
+
 TEST(ProjectDistances, AccumulatesTheConstraintImpulse) {
   std::vector<double> x{0, 0, 0, 2, 0, 0}, acc(6, 0.0);
   const std::vector<double> w{1.0, 1.0};
