@@ -104,10 +104,11 @@ struct SimulationSettings {
   double tolerance_mm = 1e-4;
   int window = 10;
   // Step cap. Closures that settle take 300-1,700 steps up to ~2,000 vertices (measured on
-  // the cohort and bench-sim valves); those that do not settle (a contact cycle: the largest
-  // step stays at 0.03-0.06 mm, experiments/README.md) change by less than their own
-  // oscillation after a few thousand steps, and a fit runs hundreds of closures, so the cap
-  // is 5,000 (it was 20,000: a non-settling closure then cost 5 s instead of 1.2 s).
+  // the cohort and bench-sim valves); those that do not settle (a cycle at a cord pulled
+  // into a tent, or a contact pair toggling; the largest step stays at 0.003-0.1 mm,
+  // docs/performance.md) change by less than their own oscillation after a few thousand
+  // steps, and a fit runs hundreds of closures, so the cap is 5,000 (it was 20,000: a
+  // non-settling closure then cost 5 s instead of 1.2 s).
   int max_steps = 5000;
   // Step cap of a warm-started closure (phase close with a start state, as for the fit's finite
   // differences). Warm starts that settle take 40-250 steps (cohort, edge 2.5 mm); a

@@ -41,11 +41,21 @@ TEST(SimulatorSettingsRanges, ZeroNegativeAndAbsurdValuesAreRejected) {
   s.drag_time_ms = -1.0;
   s.iterations = 0;
   s.max_steps = 0;
+  s.area_floor_fraction = 1.0;  // a floor at the rest area would forbid any compression
   const auto problems = settingsProblems(s);
   for (const char* key : {"pressure_mmhg", "thickness_mm", "poisson_ratio", "drag_time_ms",
-                          "iterations", "max_steps"})
+                          "iterations", "max_steps", "area_floor_fraction"})
     EXPECT_TRUE(hasProblem(problems, key)) << key;
-  EXPECT_EQ(problems.size(), 6u);
+  EXPECT_EQ(problems.size(), 7u);
+}
+
+TEST(SimulatorSettingsRanges, AreaFloorIsReadFromJsonAndZeroDisablesIt) {
+  Diagnostics diagnostics;
+  const SimulationSettings s =
+      settingsFromJson(R"({"area_floor_fraction": 0})", diagnostics, {}, "case.json");
+  EXPECT_TRUE(diagnostics.problems().empty());
+  EXPECT_EQ(s.area_floor_fraction, 0.0);
+  EXPECT_EQ(SimulationSettings{}.area_floor_fraction, 0.5);
 }
 
 TEST(SimulatorSettingsRanges, JsonOutOfRangeValuesAreDiagnosedWithFileKeyAndProblem) {
