@@ -187,36 +187,60 @@ void bendingSweep(const std::vector<BendingConstraint>& constraints, double inv_
   }
 }
 
+// One triangle of an area constraint (or floor) at the current positions: edges and
+// N = (x_b - x_a) x (x_c - x_a), so A = |N| / 2. Shared by the area and area-floor sweeps.
+struct AreaTriangle {
+  Vec3 eab, ebc, eca, N;
+  double len = 0.0;  // |N| = 2 A
+};
+
+inline AreaTriangle areaTriangle(const AreaConstraint& k, const double* x) {
+  const CMap3 xa(x + 3 * static_cast<long>(k.a)), xb(x + 3 * static_cast<long>(k.b)),
+      xc(x + 3 * static_cast<long>(k.c));
+  AreaTriangle t;
+  t.eab = xb - xa, t.ebc = xc - xb, t.eca = xa - xc;
+  t.N = t.eab.cross(-t.eca);
+  t.len = t.N.norm();
+  return t;
+}
+
+// grad_a A = n x (x_c - x_b) / 2 (and cyclic), n the unit normal; since n is orthogonal to
+// the edges, |grad_a A|^2 = |x_c - x_b|^2 / 4. Returns sum_m w_m |grad_m A|^2.
+inline double areaDenominator(const AreaConstraint& k, const AreaTriangle& t, const double* w) {
+  return 0.25 * (w[k.a] * t.ebc.squaredNorm() + w[k.b] * t.eca.squaredNorm() +
+                 w[k.c] * t.eab.squaredNorm());
+}
+
+// x_m += w_m dlambda grad_m A, and (kAcc) the impulse grad_m A lambda into acc.
+template <bool kAcc>
+inline void applyAreaCorrection(const AreaConstraint& k, const AreaTriangle& t, double dl,
+                                double lambda, double* x, const double* w, double* acc) {
+  const Vec3 nh = (0.5 / t.len) * t.N;
+  const Vec3 g[3] = {nh.cross(t.ebc), nh.cross(t.eca), nh.cross(t.eab)};
+  at(x, k.a) += (w[k.a] * dl) * g[0];
+  at(x, k.b) += (w[k.b] * dl) * g[1];
+  at(x, k.c) += (w[k.c] * dl) * g[2];
+  if (kAcc) {
+    accumulate(acc, k.a, g[0], lambda);
+    accumulate(acc, k.b, g[1], lambda);
+    accumulate(acc, k.c, g[2], lambda);
+  }
+}
+
 template <bool kAcc>
 void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
                const double* w, double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const AreaConstraint& k = constraints[c];
-    const double wa = w[k.a], wb = w[k.b], wc = w[k.c];
-    if (wa + wb + wc == 0.0) continue;
-    Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
-    // grad_a A = n x (x_c - x_b) / 2 (and cyclic), n the unit normal; since n is orthogonal
-    // to the edges, |grad_a A|^2 = |x_c - x_b|^2 / 4.
-    const Vec3 eab = xb - xa, ebc = xc - xb, eca = xa - xc;
-    const Vec3 N = eab.cross(-eca);
-    const double len = N.norm();
-    if (len < 1e-24) continue;
-    const double denom_w =
-        0.25 * (wa * ebc.squaredNorm() + wb * eca.squaredNorm() + wc * eab.squaredNorm());
+    if (w[k.a] + w[k.b] + w[k.c] == 0.0) continue;
+    const AreaTriangle t = areaTriangle(k, x);
+    if (t.len < 1e-24) continue;
     const double alpha = k.compliance * inv_dt2;
-    const double dl = (-(0.5 * len - k.rest_area) - alpha * lambda[c]) / (denom_w + alpha);
+    const double dl =
+        (-(0.5 * t.len - k.rest_area) - alpha * lambda[c]) / (areaDenominator(k, t, w) + alpha);
     lambda[c] += dl;
-    const Vec3 nh = (0.5 / len) * N;
-    const Vec3 g[3] = {nh.cross(ebc), nh.cross(eca), nh.cross(eab)};
-    xa += (wa * dl) * g[0];
-    xb += (wb * dl) * g[1];
-    xc += (wc * dl) * g[2];
-    if (kAcc) {
-      accumulate(acc, k.a, g[0], lambda[c]);
-      accumulate(acc, k.b, g[1], lambda[c]);
-      accumulate(acc, k.c, g[2], lambda[c]);
-    }
+    applyAreaCorrection<kAcc>(k, t, dl, lambda[c], x, w, acc);
   }
 }
 
@@ -226,31 +250,16 @@ void areaFloorSweep(const std::vector<AreaConstraint>& constraints, double* x, c
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const AreaConstraint& k = constraints[c];
-    const double wa = w[k.a], wb = w[k.b], wc = w[k.c];
-    if (wa + wb + wc == 0.0) continue;
-    Map3 xa = at(x, k.a), xb = at(x, k.b), xc = at(x, k.c);
-    const Vec3 eab = xb - xa, ebc = xc - xb, eca = xa - xc;
-    const Vec3 N = eab.cross(-eca);
-    const double len = N.norm();
-    if (len < 1e-24) continue;
-    const double C = 0.5 * len - k.rest_area;
+    if (w[k.a] + w[k.b] + w[k.c] == 0.0) continue;
+    const AreaTriangle t = areaTriangle(k, x);
+    if (t.len < 1e-24) continue;
+    const double C = 0.5 * t.len - k.rest_area;
     if (C > 0.0 && lambda[c] == 0.0) continue;
-    // Gradients as in areaSweep; hard constraint: dlambda = -C / sum_i w_i |grad_i A|^2.
-    const double denom_w =
-        0.25 * (wa * ebc.squaredNorm() + wb * eca.squaredNorm() + wc * eab.squaredNorm());
-    const double total = std::max(lambda[c] - C / denom_w, 0.0);  // a floor only pushes out
+    // Hard constraint: dlambda = -C / sum_m w_m |grad_m A|^2; a floor only pushes out.
+    const double total = std::max(lambda[c] - C / areaDenominator(k, t, w), 0.0);
     const double dl = total - lambda[c];
     lambda[c] = total;
-    const Vec3 nh = (0.5 / len) * N;
-    const Vec3 g[3] = {nh.cross(ebc), nh.cross(eca), nh.cross(eab)};
-    xa += (wa * dl) * g[0];
-    xb += (wb * dl) * g[1];
-    xc += (wc * dl) * g[2];
-    if (kAcc) {
-      accumulate(acc, k.a, g[0], total);
-      accumulate(acc, k.b, g[1], total);
-      accumulate(acc, k.c, g[2], total);
-    }
+    applyAreaCorrection<kAcc>(k, t, dl, total, x, w, acc);
   }
 }
 

@@ -145,9 +145,7 @@ TEST(ProjectAreaFloors, ReachesTheFloorWithFreeVerticesAndNeverPulls) {
   floor.a = 0, floor.b = 1, floor.c = 2, floor.rest_area = 0.5;
   std::vector<double> lambda{0.0};
   auto area = [&] {
-    return 0.5 * (Vec3(x[3], x[4], x[5]) - Vec3(x[0], x[1], x[2]))
-                     .cross(Vec3(x[6], x[7], x[8]) - Vec3(x[0], x[1], x[2]))
-                     .norm();
+    return triangleArea(Vec3(x[0], x[1], x[2]), Vec3(x[3], x[4], x[5]), Vec3(x[6], x[7], x[8]));
   };
   for (int sweep = 0; sweep < 5; ++sweep) {
     projectAreaFloors({floor}, x.data(), w.data(), lambda.data());
