@@ -120,17 +120,22 @@ constexpr double kCrossedCentreRad = M_PI / 4.0;
 
 }  // namespace
 
-int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
+ArcPosition arcPositionOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
   const double theta = annulusAngle(map.frame, p);
   ArcHit hit = nearestArc(map, theta, leaflet);
-  if (hit.arc == nullptr) return -1;
+  if (hit.arc == nullptr) return {};
   if (leaflet >= 0 && hit.outside > kCrossedCentreRad) {
     const ArcHit opposite = nearestArc(map, theta + M_PI, leaflet);
     if (opposite.outside == 0.0) hit = opposite;
   }
-  const double clamped = std::min(std::max(hit.fraction, 0.0), 1.0);
-  const int index = std::min(2, static_cast<int>(clamped * 3.0));
-  return hit.arc->leaflet * 3 + index;
+  return {hit.arc->leaflet, std::min(std::max(hit.fraction, 0.0), 1.0)};
+}
+
+int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
+  const ArcPosition position = arcPositionOf(map, p, leaflet);
+  if (position.leaflet < 0) return -1;
+  const int index = std::min(2, static_cast<int>(position.fraction * 3.0));
+  return position.leaflet * 3 + index;
 }
 
 std::string segmentName(const SegmentMap& map, int segment_id) {

@@ -37,6 +37,17 @@ SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMes
 // Angle of p around the annulus centre in the frame's plane: atan2(l.(p-c), a.(p-c)).
 double annulusAngle(const AnnulusFrame& frame, const Eigen::Vector3d& p);
 
+// Where p lies along its leaflet's arc: `fraction` in [0, 1] from the anterolateral end
+// (clamped to the arc), on leaflet `leaflet`, or on the leaflet whose arc contains the point's
+// angle if leaflet < 0. A labelled point more than 45 degrees beyond its own arc but inside it
+// seen from the opposite side has crossed the valve centre and is placed on that side.
+// leaflet = -1 when the leaflet has no arc.
+struct ArcPosition {
+  int leaflet = -1;
+  double fraction = 0.0;
+};
+ArcPosition arcPositionOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet);
+
 // Segment index 0..2 of point p on leaflet `leaflet` (clamped to the leaflet's ends).
 // If leaflet < 0 the leaflet whose arc contains the point's angle is used.
 // Returns a global segment id = leaflet * 3 + index, or -1 if the leaflet has no arc.

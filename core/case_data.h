@@ -30,6 +30,10 @@ struct ValveCase {
   std::optional<std::vector<PmTip>> tips;  // optional PM tips (else heuristic)
   std::optional<CordSet> cords;            // optional cords (else automatic + heuristic)
   std::string simulation_json = "{}";      // optional simulator overrides, raw JSON object
+  // Optional regional tissue: one stiffness factor > 0 per mesh vertex on the case's leaflet
+  // material (empty = uniform; SimulationModel::tissue_stiffness). Synthetic truths use it for
+  // the softer tissue of a myxomatous lesion (cohort_presets.h).
+  Eigen::VectorXd tissue_stiffness;
 };
 
 }  // namespace chordfit

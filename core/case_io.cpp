@@ -1,5 +1,7 @@
 #include "core/case_io.h"
 
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -71,6 +73,33 @@ bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
 bool readLabels(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
   return readSideArray(file, "labels", diagnostics, [&](const json& labels, JsonFields& fields) {
     return readLabelArray(labels, fields, c);
+  });
+}
+
+// Regional tissue: one stiffness factor per mesh vertex, each positive and finite (a factor of
+// 0 would be a hole in the leaflet, not a tissue).
+bool readTissue(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
+  return readSideArray(file, "stiffness", diagnostics, [&](const json& array, JsonFields& fields) {
+    if (!array.is_array()) {
+      fields.typeError("stiffness", "an array of numbers", array);
+      return false;
+    }
+    if (static_cast<Eigen::Index>(array.size()) != c.mesh.V.rows()) {
+      fields.error("stiffness", std::to_string(array.size()) + " stiffness factors for a mesh of " +
+                                    std::to_string(c.mesh.V.rows()) + " vertices");
+      return false;
+    }
+    Eigen::VectorXd factors(array.size());
+    for (std::size_t v = 0; v < array.size(); ++v) {
+      const std::string where = indexPath("stiffness", v);
+      if (!fields.number(array[v], where, factors(v))) return false;
+      if (!(factors(v) > 0.0) || !std::isfinite(factors(v)) || factors(v) > 1e3) {
+        fields.error(where, "stiffness factor must be in (0, 1000], got " + array[v].dump());
+        return false;
+      }
+    }
+    c.tissue_stiffness = factors;
+    return true;
   });
 }
 
@@ -290,6 +319,9 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
       ok = false;
     }
   }
+  if (const auto tissue = sideFile(document, "", "tissue_stiffness", false, dir, fields)) {
+    ok &= mesh_ok && readTissue(*tissue, c, diagnostics);
+  }
   if (const json* simulation = fields.member(document, "", "simulation", false)) {
     if (!simulation->is_object()) {
       fields.typeError("simulation", "an object", *simulation);
@@ -368,6 +400,12 @@ void writeCase(const fs::path& directory, const ValveCase& c) {
   if (c.cords) {
     writeCordSet(directory / "cords.json", *c.cords, &c.mesh);
     document["cords"] = "cords.json";
+  }
+  if (c.tissue_stiffness.size() > 0) {
+    const std::vector<double> factors(c.tissue_stiffness.data(),
+                                      c.tissue_stiffness.data() + c.tissue_stiffness.size());
+    writeFileAtomically(directory / "tissue.json", json{{"stiffness", factors}}.dump() + "\n");
+    document["tissue_stiffness"] = "tissue.json";
   }
   if (c.simulation_json != "{}") document["simulation"] = json::parse(c.simulation_json);
   writeFileAtomically(directory / kCaseFile, document.dump(2) + "\n");

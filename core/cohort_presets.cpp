@@ -8,6 +8,9 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/annulus_plane.h"
+#include "core/carpentier.h"
+
 namespace chordfit {
 
 namespace {
@@ -24,6 +27,18 @@ constexpr double kElongatedFlail = 1.4;  // the flail scallop's remaining cords
 constexpr double kElongatedBarlow = 2.5;
 constexpr double kElongatedA2 = 2.5;
 constexpr double kElongatedP3 = 2.5;
+// Stiffness factor of the myxomatous lesion tissue of prolapse-A2 and prolapse-P3 at the
+// centre of the segment (CohortPreset::lesion_stiffness). Without it neither prolapses, even
+// with every cord of the segment inert: the anterior leaflet has no clefts, so A2 cannot rise
+// without A1 and A3, and P3 is held by the commissure next to it (experiments/README.md,
+// "Calibration"); a softer valve as a whole spreads the prolapse to the commissures. Myxomatous
+// leaflets are more extensible than normal ones (Barber et al., J Heart Valve Dis 2001);
+// the factors (0.15 and 0.3 MPa against 3) are calibrated, not measured (2026-11-24, edge 3
+// mm, seeds 1-3, experiments/README.md "Calibration"): A2 at 0.1, or at 0.05 with the lesion
+// only 1/3 of the leaflet wide, left seed 1 below 2 mm; P3 at 0.2 lifted A3 instead of P3 on
+// seed 1, and softer than 0.1 changed nothing but the convergence.
+constexpr double kLesionStiffnessA2 = 0.05;
+constexpr double kLesionStiffnessP3 = 0.1;
 // Degenerative (myxomatous) anatomy: deep indentations between the posterior scallops
 // (fraction of the scallop height, normal 0.5) and an enlarged prolapsing scallop.
 constexpr double kMyxomatousIndentation = 0.8;
@@ -110,18 +125,23 @@ std::vector<CohortPreset> buildPresets() {
   {
     CohortPreset p;
     p.name = "prolapse-A2";
-    p.summary = "isolated A2 prolapse: elongated A2 cords";
+    p.summary = "isolated A2 prolapse: elongated A2 cords, soft (myxomatous) A2 tissue";
     p.anatomy = normalAnatomy();
     p.segment_scale = {0, kElongatedA2, 0, 0, 0, 0};
+    p.pathology_width = 0.5;  // the lesion must reach the A2 border to free the free edge
+    p.lesion_stiffness = kLesionStiffnessA2;
     p.intended_prolapse = {"A2"};
     presets.push_back(p);
   }
   {
     CohortPreset p;
     p.name = "prolapse-P3";
-    p.summary = "commissural prolapse: elongated P3 cords (posteromedial side), deep clefts";
+    p.summary =
+        "commissural prolapse: elongated P3 cords (posteromedial side), soft (myxomatous) P3 "
+        "tissue, deep clefts";
     p.anatomy = myxomatousAnatomy(false);
     p.segment_scale = {0, 0, 0, 0, 0, kElongatedP3};
+    p.lesion_stiffness = kLesionStiffnessP3;
     p.intended_prolapse = {"P3"};
     presets.push_back(p);
   }
@@ -151,6 +171,16 @@ std::vector<CohortPreset> buildPresets() {
     presets.push_back(p);
   }
   return presets;
+}
+
+// Weight of the pathology of `segment` at arc fraction f of its leaflet: the raised cosine
+// cos^2(pi (f - c) / w) for |f - c| < w / 2 (c the segment's centre, w the pathology width),
+// else 0.
+double lesionProfile(const CohortPreset& preset, int segment, double fraction) {
+  const double offset = fraction - ((segment % 3) + 0.5) / 3.0;
+  if (std::abs(offset) >= 0.5 * preset.pathology_width) return 0.0;
+  const double bump = std::cos(kTwoPi * 0.5 * offset / preset.pathology_width);
+  return bump * bump;
 }
 
 double vary(double value, double sd, SeededRandom& random) {
@@ -278,10 +308,7 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
                    (att.kind == CordKind::kSecondary ? preset.secondary_cord_factor : 1.0);
     for (int segment = 0; segment < 6; ++segment) {
       if (peak[segment] <= 0.0 || segment / 3 != att.leaflet) continue;
-      const double offset = att.fraction - ((segment % 3) + 0.5) / 3.0;
-      if (std::abs(offset) >= 0.5 * preset.pathology_width) continue;
-      const double bump = std::cos(kTwoPi * 0.5 * offset / preset.pathology_width);
-      scale += (peak[segment] - scale) * bump * bump;
+      scale += (peak[segment] - scale) * lesionProfile(preset, segment, att.fraction);
     }
     scales.push_back(scale * (1.0 + v));
   }
@@ -307,6 +334,26 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
   }
   if (ruptured) *ruptured = flags;
   return scales;
+}
+
+Eigen::VectorXd lesionTissueStiffness(const CohortPreset& preset, const ValveMesh& mesh) {
+  if (preset.lesion_stiffness == 1.0) return {};
+  const AnnulusFrame frame = openAnnulusFrame(mesh);
+  Eigen::MatrixXd ring(mesh.annulus.size(), 3);
+  for (Eigen::Index k = 0; k < mesh.annulus.size(); ++k) ring.row(k) = mesh.V.row(mesh.annulus(k));
+  const SegmentMap map = buildSegmentMap(ring, mesh, frame);
+  Eigen::VectorXd factors = Eigen::VectorXd::Ones(mesh.V.rows());
+  for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
+    const ArcPosition at = arcPositionOf(map, mesh.V.row(v).transpose(), mesh.leaflet(v));
+    if (at.leaflet < 0 || at.leaflet > 1) continue;  // mitral presets: two leaflets
+    double weight = 0.0;                             // the strongest lesion reaching this vertex
+    for (int segment = at.leaflet * 3; segment < at.leaflet * 3 + 3; ++segment) {
+      if (preset.segment_scale[segment] > 0.0)
+        weight = std::max(weight, lesionProfile(preset, segment, at.fraction));
+    }
+    factors(v) = std::pow(preset.lesion_stiffness, weight);
+  }
+  return factors;
 }
 
 }  // namespace chordfit

@@ -84,6 +84,12 @@ struct CohortPreset {
   double pathology_width = 1.0 / 3.0;  // w, as a fraction of the leaflet's arc
   // Half-width of the seed-to-seed uniform variation of every peak scale.
   double scale_spread = 0.05;
+  // Myxomatous lesion tissue of the true valve: the leaflet's stiffness factor at the centre
+  // of every pathological segment (1 = healthy tissue everywhere). It fades with the cords'
+  // profile, geometrically: a vertex at arc fraction f gets lesion_stiffness^(cos^2(pi (f - c)
+  // / w)) inside the profile and 1 outside. Only the truth has it; the case and the fit assume
+  // uniform tissue (a model error the fitter must live with, as with a patient).
+  double lesion_stiffness = 1.0;
   // Flail: this many of the primary cords nearest the middle of `ruptured_segment` rupture
   // (the seed picks a number in [min, max]).
   std::string ruptured_segment;
@@ -103,6 +109,11 @@ std::string cohortPresetNames();
 
 // Segment id (leaflet * 3 + 0..2) of "A1".."P3"; -1 when not a mitral segment name.
 int mitralSegmentId(const std::string& name);
+
+// Per-vertex tissue stiffness factors of a valve mesh for the preset's lesion (see
+// lesion_stiffness; vertices localised by their open-state arc position on their leaflet, as
+// the Carpentier segments). Empty when the preset has no lesion tissue.
+Eigen::VectorXd lesionTissueStiffness(const CohortPreset& preset, const ValveMesh& mesh);
 
 // One patient's anatomy: every dimension of the preset times (1 + anatomy_sd * z), z a
 // clamped standard normal; the closed saddle keeps the preset's closed/open ratio.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <initializer_list>
 #include <limits>
 #include <memory>
 
@@ -58,6 +59,10 @@ std::string validate(const SimulationModel& m, const SimulationSettings& s) {
       return "model: cord rest length must be positive";
     if (!(c.compliance >= 0.0)) return "model: cord compliance must be >= 0";
   }
+  if (m.tissue_stiffness.size() != 0 && m.tissue_stiffness.size() != n)
+    return "model: tissue_stiffness must have one factor per vertex";
+  if (!(m.tissue_stiffness.array() > 0.0).all() || !m.tissue_stiffness.allFinite())
+    return "model: tissue_stiffness factors must be positive and finite";
   const auto problems = settingsProblems(s);
   if (!problems.empty()) return "settings: " + problems[0].key + ": " + problems[0].what;
   return "";
@@ -98,6 +103,14 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
   }
   for (int k = 0; k < m.fixed.size(); ++k) sys.w[m.fixed(k)] = 0.0;
 
+  // Regional tissue factor of a constraint: the mean over its vertices (1 when uniform).
+  const bool regional = m.tissue_stiffness.size() == n;
+  auto tissue = [&](std::initializer_list<int> ids) {
+    if (!regional) return 1.0;
+    double sum = 0.0;
+    for (int i : ids) sum += m.tissue_stiffness(i);
+    return sum / static_cast<double>(ids.size());
+  };
   Eigen::MatrixXi E, EF, EI;
   edgeFlaps(m.F, E, EF, EI);
   std::vector<double> vertex_stiffness(n, 0.0);
@@ -109,7 +122,7 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
     double adjacent = face_area(EF(e, 0));
     if (EF(e, 1) >= 0) adjacent += face_area(EF(e, 1));
     if (c.rest <= 0.0 || adjacent <= 0.0) continue;  // degenerate: no stiffness to give
-    c.compliance = edgeCompliance(mat, adjacent, c.rest);
+    c.compliance = edgeCompliance(mat, adjacent, c.rest) / tissue({c.i, c.j});
     vertex_stiffness[c.i] += 1.0 / c.compliance;
     vertex_stiffness[c.j] += 1.0 / c.compliance;
     sys.edges.push_back(c);
@@ -120,7 +133,7 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
       AreaConstraint c;
       c.a = m.F(f, 0), c.b = m.F(f, 1), c.c = m.F(f, 2);
       c.rest_area = face_area(f);
-      c.compliance = areaCompliance(mat, face_area(f));
+      c.compliance = areaCompliance(mat, face_area(f)) / tissue({c.a, c.b, c.c});
       Vec3 g[3];
       triangleArea(pos(c.a), pos(c.b), pos(c.c), g);
       vertex_stiffness[c.a] += g[0].squaredNorm() / c.compliance;
@@ -148,7 +161,7 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
     if (len <= 0.0 || a1 <= 0.0 || a2 <= 0.0) continue;
     Vec3 g[4];
     c.rest_angle = dihedralAngle(pos(c.i), pos(c.j), pos(c.k), pos(c.l), g);
-    c.compliance = bendingCompliance(mat, a1 + a2, len);
+    c.compliance = bendingCompliance(mat, a1 + a2, len) / tissue({c.i, c.j, c.k, c.l});
     const int ids[4] = {c.i, c.j, c.k, c.l};
     for (int q = 0; q < 4; ++q) vertex_stiffness[ids[q]] += g[q].squaredNorm() / c.compliance;
     sys.bends.push_back(c);
@@ -609,6 +622,7 @@ bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhas
   model.tip_end = closing ? tips_closed : tips_open;
   for (const Cord& cord : cords.cords)
     model.cords.push_back({cord.tip, cord.vertex, cord.rest_length, cord.compliance});
+  model.tissue_stiffness = valve_case.tissue_stiffness;
   model.flow_direction = n_ap;  // simulate() reverses it (and the pressure) for kOpen
   return true;
 }

@@ -183,6 +183,11 @@ struct SimulationModel {
   };
   std::vector<Cord> cords;
   Eigen::Vector3d flow_direction = Eigen::Vector3d::UnitZ();  // unit; velocity field direction
+  // Regional tissue (optional; empty = uniform): one factor > 0 per vertex on the leaflet
+  // material's stiffness, e.g. myxomatous tissue softer than the rest. A constraint's
+  // stiffness (stretching, area, bending) is the uniform one times the mean factor of its
+  // vertices; masses do not change (ValveCase::tissue_stiffness).
+  Eigen::VectorXd tissue_stiffness;
 };
 
 struct SimulationResult {

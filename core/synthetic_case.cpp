@@ -237,6 +237,7 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
     for (int k = 0; k < 3; ++k) tip.position(k) += options.tip_offset_sd_mm * tip_random.gaussian();
   }
   s.truth_case.cords = truth_cords;
+  s.truth_case.tissue_stiffness = lesionTissueStiffness(s.preset, s.truth_case.mesh);
 
   // 4. Truth closure.
   s.truth_settings = options.truth_settings ? *options.truth_settings : truthSimulationSettings();
@@ -346,6 +347,7 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                    {"pathology",
                     {{"segment_peak_scale", segment_scale},
                      {"pathology_width", s.preset.pathology_width},
+                     {"lesion_stiffness", s.preset.lesion_stiffness},
                      {"scale_spread", s.preset.scale_spread},
                      {"ruptured_segment", s.preset.ruptured_segment},
                      {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},

@@ -188,6 +188,21 @@ TEST_F(ValidateCommand, ReportsSeveralProblemsInOneRun) {
   EXPECT_NE(r.err.find("error: annulus_closed.json"), std::string::npos) << r.err;
 }
 
+TEST_F(ValidateCommand, ReportsATissueStiffnessCountThatDoesNotMatchTheVertexCount) {
+  writeText(dir_ / "tissue.json", R"({"stiffness": [1, 0.5, 1]})");
+  editCaseJson([](nlohmann::json& j) { j["tissue_stiffness"] = "tissue.json"; });
+  expectError("tissue\\.json", "stiffness: 3 stiffness factors for a mesh of 16 vertices");
+}
+
+TEST_F(ValidateCommand, ReportsANonPositiveTissueStiffness) {
+  std::vector<double> factors(16, 1.0);
+  factors[4] = 0.0;
+  writeText(dir_ / "tissue.json", nlohmann::json{{"stiffness", factors}}.dump());
+  editCaseJson([](nlohmann::json& j) { j["tissue_stiffness"] = "tissue.json"; });
+  expectError("tissue\\.json",
+              "stiffness\\[4\\]: stiffness factor must be in \\(0, 1000\\], got 0");
+}
+
 TEST(CaseRoundTrip, WriteThenLoadGivesTheSameCase) {
   TempDir dir;
   ValveCase original = tinyConeCase();
@@ -212,6 +227,24 @@ TEST(CaseRoundTrip, WriteThenLoadGivesTheSameCase) {
   EXPECT_EQ(loaded->tracings[0].leaflet, 1);
   ASSERT_TRUE(loaded->tips.has_value());
   EXPECT_EQ((*loaded->tips)[0].position, Eigen::Vector3d(1, 2, -20));
+}
+
+TEST(CaseRoundTrip, RegionalTissueIsWrittenAndReadBack) {
+  TempDir dir;
+  ValveCase original = tinyConeCase();
+  original.tissue_stiffness = Eigen::VectorXd::LinSpaced(original.mesh.V.rows(), 0.05, 1.0);
+  writeCase(dir.path(), original);
+  Diagnostics diagnostics;
+  const auto loaded = loadCase(dir.path(), diagnostics);
+  ASSERT_TRUE(loaded.has_value()) << diagnostics.problems().front().what;
+  EXPECT_EQ(loaded->tissue_stiffness, original.tissue_stiffness);  // bit for bit
+  // A case without regional tissue writes no tissue file and reads back uniform.
+  TempDir plain;
+  writeCase(plain.path(), tinyConeCase());
+  EXPECT_FALSE(std::filesystem::exists(plain / "tissue.json"));
+  const auto uniform = loadCase(plain.path(), diagnostics);
+  ASSERT_TRUE(uniform.has_value());
+  EXPECT_EQ(uniform->tissue_stiffness.size(), 0);
 }
 
 }  // namespace

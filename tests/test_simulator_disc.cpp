@@ -117,6 +117,44 @@ TEST(SimulatorValidation, RejectsNonFiniteStartAndBadSettings) {
   EXPECT_FALSE(simulate(bad, discSettings()).ok());
 }
 
+// Regional tissue (SimulationModel::tissue_stiffness): a uniform factor k is the material with
+// E k (same compliances up to rounding, so the same equilibrium); a softer half bulges more.
+TEST(SimulatorTissue, UniformFactorEqualsScaledModulusAndASofterHalfBulgesMore) {
+  SimulationModel regional = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  regional.tissue_stiffness = Eigen::VectorXd::Constant(regional.V_rest.rows(), 0.5);
+  SimulationSettings settings = discSettings();
+  settings.tolerance_mm = 1e-6;
+  const SimulationResult half = simulate(regional, settings);
+  SimulationSettings softer = settings;
+  softer.material.youngs_modulus_mpa *= 0.5;
+  const SimulationResult reference =
+      simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), softer);
+  ASSERT_TRUE(half.ok() && reference.ok()) << half.error << reference.error;
+  EXPECT_NEAR(half.V(0, 2), reference.V(0, 2), 1e-6 * std::abs(reference.V(0, 2)));
+
+  // Soft (factor 0.2) where x > 0: the deflection at x = +a/2 exceeds the one at x = -a/2.
+  for (Eigen::Index v = 0; v < regional.V_rest.rows(); ++v)
+    regional.tissue_stiffness(v) = regional.V_rest(v, 0) > 0.0 ? 0.2 : 1.0;
+  const SimulationResult soft_half = simulate(regional, settings);
+  ASSERT_TRUE(soft_half.ok()) << soft_half.error;
+  const int mid = kDiscRings / 2;
+  const int plus = testing::discRingStart(mid);  // angle 0: x = +a/2
+  const int minus = plus + 3 * mid;              // angle pi: x = -a/2
+  ASSERT_NEAR(regional.V_rest(minus, 0), -0.5 * kDiscRadius, 1e-9);
+  EXPECT_GT(soft_half.V(plus, 2), 1.2 * soft_half.V(minus, 2));
+}
+
+TEST(SimulatorTissue, RejectsAWrongCountOrANonPositiveFactor) {
+  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  model.tissue_stiffness = Eigen::VectorXd::Ones(3);
+  SimulationResult result = simulate(model, discSettings());
+  EXPECT_NE(result.error.find("one factor per vertex"), std::string::npos) << result.error;
+  model.tissue_stiffness = Eigen::VectorXd::Ones(model.V_rest.rows());
+  model.tissue_stiffness(7) = 0.0;
+  result = simulate(model, discSettings());
+  EXPECT_NE(result.error.find("positive and finite"), std::string::npos) << result.error;
+}
+
 TEST(SimulatorSettings, JsonOverridesKnownKeysAndReportsUnknownOnes) {
   Diagnostics diagnostics;
   const SimulationSettings s = settingsFromJson(
