@@ -402,13 +402,21 @@ void writeCase(const fs::path& directory, const ValveCase& c) {
     document["cords"] = "cords.json";
   }
   if (c.tissue_stiffness.size() > 0) {
-    const std::vector<double> factors(c.tissue_stiffness.data(),
-                                      c.tissue_stiffness.data() + c.tissue_stiffness.size());
-    writeFileAtomically(directory / "tissue.json", json{{"stiffness", factors}}.dump() + "\n");
+    writeTissueFile(directory / "tissue.json", c.tissue_stiffness);
     document["tissue_stiffness"] = "tissue.json";
   }
   if (c.simulation_json != "{}") document["simulation"] = json::parse(c.simulation_json);
   writeFileAtomically(directory / kCaseFile, document.dump(2) + "\n");
+}
+
+bool loadTissueFile(const fs::path& path, const std::string& name, ValveCase& valve_case,
+                    Diagnostics& diagnostics) {
+  return readTissue(SideFile{path, name}, valve_case, diagnostics);
+}
+
+void writeTissueFile(const fs::path& path, const Eigen::VectorXd& factors) {
+  const std::vector<double> values(factors.data(), factors.data() + factors.size());
+  writeFileAtomically(path, json{{"stiffness", values}}.dump() + "\n");
 }
 
 }  // namespace chordfit

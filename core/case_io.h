@@ -21,4 +21,11 @@ std::optional<ValveCase> loadCase(const std::filesystem::path& directory, Diagno
 // interrupted write leaves no loadable half-case). Each file is written atomically.
 void writeCase(const std::filesystem::path& directory, const ValveCase& valve_case);
 
+// Regional tissue file (docs/case-format.md, `tissue.json`): reads `path` (named `name` in
+// messages) into valve_case.tissue_stiffness, checking one factor in (0, 1000] per mesh
+// vertex; false with the problems reported otherwise. writeTissueFile writes it atomically.
+bool loadTissueFile(const std::filesystem::path& path, const std::string& name,
+                    ValveCase& valve_case, Diagnostics& diagnostics);
+void writeTissueFile(const std::filesystem::path& path, const Eigen::VectorXd& factors);
+
 }  // namespace chordfit

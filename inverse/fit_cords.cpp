@@ -75,8 +75,27 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     record("segments", 2, start_evaluation, start_evaluation.cost);
   }
 
-  const FitParameterization parameters(valve_case, start_set, options.mode, options.bounds);
-  const ForwardResidual residual(valve_case, parameters, settings, options.residual);
+  // The optimiser's case: the input, or with the tissue the tissue pre-fit accepted.
+  ValveCase working_case = valve_case;
+  if (options.tissue_prefit.enabled && seed_parameters.size() > 0 &&
+      budget_allows(options.tissue_prefit.closures())) {
+    TissuePrefitOptions tissue = options.tissue_prefit;
+    tissue.threads = options.finite_difference.threads;
+    const TissuePrefitResult result = segmentTissuePrefit(valve_case, start_set, start_evaluation,
+                                                          options.bounds, seed_residual, tissue);
+    outcome.forward_sims += result.forward_sims;
+    outcome.tissue_prefit_changes = result.changed;
+    if (result.tissue.size() > 0) {
+      working_case.tissue_stiffness = result.tissue;
+      outcome.tissue = result.tissue;
+    }
+    start_set = result.start;
+    start_evaluation = result.best;
+    record("tissue", 3, start_evaluation, start_evaluation.cost);
+  }
+
+  const FitParameterization parameters(working_case, start_set, options.mode, options.bounds);
+  const ForwardResidual residual(working_case, parameters, settings, options.residual);
   FitObjective objective(residual, options.finite_difference, options.max_sims,
                          outcome.forward_sims, start, options.on_iteration);
   if (!parameters.startClamped()) {

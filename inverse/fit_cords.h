@@ -22,6 +22,7 @@
 #include "inverse/global_prefit.h"
 #include "inverse/optimizer.h"
 #include "inverse/segment_prefit.h"
+#include "inverse/tissue_prefit.h"
 
 namespace chordfit::inverse {
 
@@ -32,6 +33,7 @@ struct FitOptions {
   FiniteDifferenceOptions finite_difference;  // .threads also used by the pre-fit
   PrefitOptions prefit;
   SegmentPrefitOptions segment_prefit;  // runs after the global pre-fit
+  TissuePrefitOptions tissue_prefit;    // opt-in; runs after the segment pre-fit
   std::string optimizer = "ceres";
   OptimizerSettings optimizer_settings;
   int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
@@ -47,6 +49,9 @@ struct FitOutcome {
   double prefit_factor = 1.0;          // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
+  std::vector<std::string> tissue_prefit_changes;   // "A2 0.1", per accepted segment
+  // Per-vertex tissue the cords were fitted on (tissue pre-fit); empty = the case's own.
+  Eigen::VectorXd tissue;
   std::vector<std::string> parameter_names;
   Eigen::VectorXd x;                     // fitted parameters
   std::vector<IterationRecord> history;  // seed, pre-fit and optimiser records

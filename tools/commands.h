@@ -48,7 +48,8 @@ namespace chordfit::cli {
 
 struct SimulateOptions {
   std::string case_dir;
-  std::string cords_file;     // optional; else the case's cords, else the heuristic
+  std::string cords_file;       // optional; else the case's cords, else the heuristic
+  std::string tissue_file;      // optional; else the case's tissue (uniform when it has none)
   std::string phase = "close";  // close | open (open = close, then open from the closed state)
   std::string out_dir;
   bool quiet = false;
@@ -81,11 +82,11 @@ namespace chordfit::cli {
 
 struct SweepCordOptions {
   std::string case_dir;
-  std::string cords_file;    // optional; as for simulate
-  int cord = -1;             // cord index; -1: the P2 primary cord nearest the P2 centre
-  double range = 0.05;       // sweep scale over [1 - range, 1 + range]
-  double step = 0.001;       // scale step
-  int window = 5;            // half-width (points) of the local quadratic fit for the noise
+  std::string cords_file;  // optional; as for simulate
+  int cord = -1;           // cord index; -1: the P2 primary cord nearest the P2 centre
+  double range = 0.05;     // sweep scale over [1 - range, 1 + range]
+  double step = 0.001;     // scale step
+  int window = 5;          // half-width (points) of the local quadratic fit for the noise
   int threads = 2;
   std::string out_dir;
 };
@@ -117,17 +118,18 @@ namespace chordfit::cli {
 // (issue 5; inverse/fit_cords.h).
 struct FitCommandOptions {
   std::string case_dir;
-  std::string seed_cords_file;     // optional; else the case's cords, else the heuristic
-  std::string params = "scales";   // scales | groups | scales+tips
+  std::string seed_cords_file;      // optional; else the case's cords, else the heuristic
+  std::string params = "scales";    // scales | groups | scales+tips
   std::string optimizer = "ceres";  // ceres | bobyqa | cobyla | sbplx | crs2
   int max_sims = 400;               // forward closures in all
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
-  bool prefit = true;               // global and segment pre-fits before the optimiser
-  double fd_scale_step = 0.01;      // central-difference step on a scale
-  double fd_tip_step_mm = 0.1;      // ... on a tip offset coordinate
-  bool fd_warm_start = false;       // perturbed closures start from the base closed state
+  bool prefit = true;           // global and segment pre-fits before the optimiser
+  bool tissue_prefit = false;   // softer tissue per segment, after the cord pre-fits
+  double fd_scale_step = 0.01;  // central-difference step on a scale
+  double fd_tip_step_mm = 0.1;  // ... on a tip offset coordinate
+  bool fd_warm_start = false;   // perturbed closures start from the base closed state
   std::string out_dir;
   bool quiet = false;
 };

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
@@ -91,6 +92,14 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
      << (fit.segment_prefit_changes.empty() ? std::string("no change")
                                             : joinSegments(fit.segment_prefit_changes))
      << "\n";
+  if (o.tissue_prefit) {
+    md << "- tissue pre-fit (stiffness factor per segment): "
+       << (fit.tissue_prefit_changes.empty() ? std::string("no change (uniform tissue kept)")
+                                             : joinSegments(fit.tissue_prefit_changes) +
+                                                   "; the cords were fitted on this "
+                                                   "tissue (tissue.json)")
+       << "\n";
+  }
   md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
      << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";
@@ -153,6 +162,7 @@ int runFit(const FitCommandOptions& o) {
   options.bounds.tip_box_mm = o.tip_box_mm;
   options.prefit.enabled = o.prefit;
   options.segment_prefit.enabled = o.prefit;
+  options.tissue_prefit.enabled = o.tissue_prefit;
   options.optimizer = o.optimizer;
   options.max_sims = o.max_sims;
   options.finite_difference.threads = o.threads;
@@ -178,10 +188,14 @@ int runFit(const FitCommandOptions& o) {
 
   const std::filesystem::path out(o.out_dir);
   writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
+  // The tissue the cords were fitted on, when the tissue pre-fit changed it; the closure
+  // written below uses it too.
+  if (fit.tissue.size() > 0) writeTissueFile(out / "tissue.json", fit.tissue);
   // closed.ply, closed.vtk and metrics.json exactly as `chordfit simulate` writes them.
   SimulateOptions simulate;
   simulate.case_dir = o.case_dir;
   simulate.cords_file = (out / "cords.json").string();
+  if (fit.tissue.size() > 0) simulate.tissue_file = (out / "tissue.json").string();
   simulate.out_dir = o.out_dir;
   simulate.quiet = true;
   std::printf("fitted cords: full closure from the open state\n");
@@ -206,6 +220,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["prefit_primary_factor"] = fit.prefit_primary_factor;
   metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
   metrics["segment_prefit"] = fit.segment_prefit_changes;
+  metrics["tissue_prefit"] = fit.tissue_prefit_changes;
   metrics["scale_bounds"] = o.scale_bounds;
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;

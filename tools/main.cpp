@@ -58,6 +58,8 @@ void addSimulate(CLI::App& app, SimulateOptions& o) {
   cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
   cmd->add_option("--cords", o.cords_file,
                   "CordSet JSON (default: the case's cords, else the heuristic)");
+  cmd->add_option("--tissue", o.tissue_file,
+                  "Regional tissue JSON, one stiffness factor per vertex (default: the case's)");
   cmd->add_option("--phase", o.phase,
                   "close, or open (close, then reverse the fields and open again)")
       ->capture_default_str();
@@ -131,6 +133,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_flag("!--no-prefit", o.prefit,
                 "Skip both pre-fits (global scale factor, then per-segment scales)");
+  cmd->add_flag("--tissue-prefit", o.tissue_prefit,
+                "Also try softer tissue per segment (0.3, 0.1, 0.05 of the modulus) before the "
+                "optimiser; writes tissue.json");
   cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
       ->capture_default_str();
   cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")

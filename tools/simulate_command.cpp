@@ -6,6 +6,7 @@
 #include <memory>
 
 #include "core/atomic_file.h"
+#include "core/case_io.h"
 #include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "core/metrics_json.h"
@@ -90,8 +91,13 @@ int runSimulate(const SimulateOptions& options) {
     std::cerr << "error: --phase: expected close or open, got \"" << options.phase << "\"\n";
     return kExitBadInput;
   }
-  const auto valve_case = loadCaseOrReport(options.case_dir);
+  auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
+  if (!options.tissue_file.empty()) {
+    Diagnostics diagnostics;
+    if (!loadTissueFile(options.tissue_file, options.tissue_file, *valve_case, diagnostics))
+      return reportProblems(diagnostics);
+  }
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
   auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);

@@ -1,0 +1,113 @@
+#include "inverse/tissue_prefit.h"
+
+#include <algorithm>
+#include <sstream>
+
+#include "core/carpentier.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "inverse/finite_difference.h"
+
+namespace chordfit::inverse {
+
+namespace {
+
+bool isFree(const Cord& cord) { return !cord.locked && cord.provenance != Provenance::kManual; }
+
+struct Candidate {
+  double factor = 1.0;
+  bool long_cords = false;
+  CordSet cords;
+  Eigen::VectorXd tissue;
+};
+
+}  // namespace
+
+TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSet& start,
+                                       const ForwardEvaluation& start_evaluation,
+                                       const ParameterBounds& bounds,
+                                       const ForwardResidual& residual,
+                                       const TissuePrefitOptions& options) {
+  TissuePrefitResult result;
+  result.start = start;
+  result.best = start_evaluation;
+  if (!options.enabled || options.factors.empty()) return result;
+  const Eigen::Index n = valve_case.mesh.V.rows();
+  const Eigen::VectorXd own = valve_case.tissue_stiffness.size() == n ? valve_case.tissue_stiffness
+                                                                      : Eigen::VectorXd::Ones(n);
+  Eigen::VectorXd tissue = own;
+  const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
+  SegmentMap names;  // only for segmentName
+  names.leaflet_names = valve_case.mesh.leaflet_names;
+  const int segment_count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
+  const Eigen::VectorXd no_regularisation;
+
+  // Greedy, best first: every segment's candidates from the same start, the best accepted;
+  // then again for the segments not yet changed (a pass in a fixed order would let a
+  // neighbour's softening, tried first, take a lesion's place).
+  std::vector<bool> done(segment_count, false);
+  for (int round = 0; round < options.rounds; ++round) {
+    std::vector<Candidate> candidates;
+    std::vector<int> candidate_segment;
+    for (int segment = 0; segment < segment_count; ++segment) {
+      if (done[segment]) continue;
+      for (double f : options.factors) {
+        for (bool long_cords : {false, true}) {
+          Candidate c{f, long_cords, result.start, tissue};
+          for (Eigen::Index v = 0; v < n; ++v) {
+            if (vertex_segment(v) == segment) c.tissue(v) *= f;
+          }
+          bool changed_cords = false;
+          if (long_cords) {
+            for (Cord& cord : c.cords.cords) {
+              if (isFree(cord) && vertex_segment(cord.vertex) == segment) {
+                cord.rest_length = cord.seed_rest_length * bounds.scale_upper;
+                changed_cords = true;
+              }
+            }
+            if (!changed_cords) continue;  // the same candidate as with the cords as they are
+          }
+          candidates.push_back(std::move(c));
+          candidate_segment.push_back(segment);
+        }
+      }
+    }
+    std::vector<ForwardEvaluation> evaluations(candidates.size());
+    parallelFor(static_cast<int>(candidates.size()), options.threads, [&](int i) {
+      ValveCase softened = valve_case;
+      softened.tissue_stiffness = candidates[i].tissue;
+      ForwardEvaluation& e = evaluations[i];
+      const SimulationResult r =
+          simulateClosure(softened, candidates[i].cords, residual.settings());
+      residual.countClosure(r);
+      if (!r.ok()) {
+        e.error = r.error;
+        return;
+      }
+      e.converged = r.converged;
+      e.closed_V = r.V;
+      e.data = residual.dataResiduals(r.V);
+      e.cost = residual.cost(e.data, no_regularisation);
+      e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+    });
+    result.forward_sims += static_cast<int>(candidates.size());
+    int best = -1;
+    for (std::size_t i = 0; i < evaluations.size(); ++i) {
+      const double best_cost = best < 0 ? result.best.cost : evaluations[best].cost;
+      if (evaluations[i].ok() && evaluations[i].cost < best_cost) best = static_cast<int>(i);
+    }
+    if (best < 0) break;
+    done[candidate_segment[best]] = true;
+    tissue = candidates[best].tissue;
+    result.start = std::move(candidates[best].cords);
+    result.best = std::move(evaluations[best]);
+    std::ostringstream change;
+    change << segmentName(names, candidate_segment[best]) << " " << candidates[best].factor;
+    if (candidates[best].long_cords) change << ", cords " << bounds.scale_upper;
+    result.changed.push_back(change.str());
+  }
+  if (!result.changed.empty()) result.tissue = tissue;
+  return result;
+}
+
+}  // namespace chordfit::inverse

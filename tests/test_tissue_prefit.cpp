@@ -1,0 +1,158 @@
+// The tissue pre-fit (inverse/tissue_prefit.h): from uniform tissue it finds the segment whose
+// tissue is softer in the truth, keeps manual and locked cords, and does nothing when off.
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+
+#include "core/carpentier.h"
+#include "core/case_io.h"
+#include "core/metrics.h"
+#include "core/simulator.h"
+#include "core/tracing_sampler.h"
+#include "inverse/global_prefit.h"
+#include "inverse/tissue_prefit.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kBaseScale = 0.8;  // every cord taut, as the cohort's normal cords
+constexpr double kSoftP2 = 0.1;     // the truth's P2 tissue factor, on the pre-fit's grid
+
+struct TissueProblem {
+  ValveCase valve_case;  // uniform tissue, tracings of the soft-P2 truth
+  SimulationSettings settings;
+  CordSet base;  // all cords at kBaseScale, one locked manual cord in P2
+  Eigen::VectorXi vertex_segment;
+  int p2 = -1;
+};
+
+const TissueProblem& tissueProblem() {
+  static const TissueProblem problem = [] {
+    TissueProblem p;
+    Diagnostics diagnostics;
+    auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
+    if (!loaded || !loaded->cords) throw std::runtime_error("bundled case small-normal missing");
+    p.valve_case = *loaded;
+    p.settings = settingsFromJson(p.valve_case.simulation_json, diagnostics);
+    p.vertex_segment = openStateSegments(p.valve_case.mesh);
+    SegmentMap names;
+    names.leaflet_names = p.valve_case.mesh.leaflet_names;
+    for (int s = 0; s < 6; ++s) {
+      if (segmentName(names, s) == "P2") p.p2 = s;
+    }
+    p.base = *p.valve_case.cords;
+    for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kBaseScale;
+    for (Cord& cord : p.base.cords) {
+      if (p.vertex_segment(cord.vertex) == p.p2) {
+        cord.locked = true;
+        cord.provenance = Provenance::kManual;
+        break;
+      }
+    }
+    ValveCase truth = p.valve_case;
+    truth.tissue_stiffness = Eigen::VectorXd::Ones(truth.mesh.V.rows());
+    for (Eigen::Index v = 0; v < truth.tissue_stiffness.size(); ++v) {
+      if (p.vertex_segment(v) == p.p2) truth.tissue_stiffness(v) = kSoftP2;
+    }
+    const SimulationResult closed = simulateClosure(truth, p.base, p.settings);
+    if (!closed.ok()) throw std::runtime_error(closed.error);
+    TracingSamplerOptions sampler;
+    sampler.planes = 3;
+    sampler.noise_mm = 0.0;
+    sampler.dropout_fraction = 0.0;
+    SeededRandom random(1);
+    p.valve_case.tracings = sampleTracings(closed.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
+                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    return p;
+  }();
+  return problem;
+}
+
+TEST(TissuePrefit, FindsTheSofterP2AndKeepsManualCords) {
+  const TissueProblem& p = tissueProblem();
+  const inverse::ParameterBounds bounds;
+  const inverse::FitParameterization parameters(p.valve_case, p.base,
+                                                inverse::ParameterMode::kScales, bounds);
+  const inverse::ForwardResidual residual(p.valve_case, parameters, p.settings, {});
+  const std::vector<inverse::ForwardEvaluation> start =
+      inverse::closeCordSets(p.valve_case, {p.base}, residual, 2);
+  ASSERT_TRUE(start[0].ok()) << start[0].error;
+  inverse::TissuePrefitOptions options;
+  options.enabled = true;
+  const inverse::TissuePrefitResult result =
+      inverse::segmentTissuePrefit(p.valve_case, p.base, start[0], bounds, residual, options);
+
+  // Noise-free tracings of a grid point: the first accepted change is the truth itself.
+  ASSERT_FALSE(result.changed.empty());
+  EXPECT_EQ(result.changed.front(), "P2 0.1");
+  EXPECT_LT(result.best.cost, 1e-9 * start[0].cost);
+  ASSERT_EQ(result.tissue.size(), p.valve_case.mesh.V.rows());
+  for (Eigen::Index v = 0; v < result.tissue.size(); ++v) {
+    if (p.vertex_segment(v) == p.p2) {
+      EXPECT_EQ(result.tissue(v), kSoftP2) << "P2 vertex " << v;
+    }
+  }
+  for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
+    EXPECT_EQ(result.start.cords[c].rest_length, p.base.cords[c].rest_length) << "cord " << c;
+  }
+  EXPECT_LE(result.forward_sims, options.closures());
+}
+
+TEST(TissuePrefit, DisabledChangesNothing) {
+  const TissueProblem& p = tissueProblem();
+  inverse::ForwardEvaluation start;
+  start.cost = 1.0;
+  const inverse::FitParameterization parameters(p.valve_case, p.base,
+                                                inverse::ParameterMode::kScales, {});
+  const inverse::ForwardResidual residual(p.valve_case, parameters, p.settings, {});
+  const inverse::TissuePrefitResult result =
+      inverse::segmentTissuePrefit(p.valve_case, p.base, start, {}, residual, {});
+  EXPECT_EQ(result.forward_sims, 0);
+  EXPECT_TRUE(result.changed.empty());
+  EXPECT_EQ(result.tissue.size(), 0);
+}
+
+// End to end: `fit --tissue-prefit` writes the tissue it fitted the cords on, `simulate
+// --tissue` reproduces the fit's closure from it, and a bad tissue file exits 2.
+TEST(TissuePrefitCli, FitWritesTheTissueAndSimulateReproducesTheClosure) {
+  const TissueProblem& p = tissueProblem();
+  testing::TempDir dir;
+  ValveCase with_seed = p.valve_case;
+  with_seed.cords = p.base;
+  writeCase(dir / "case", with_seed);
+  const std::string case_dir = testing::quoted(dir / "case");
+  const auto fit = testing::runChordfit("fit " + case_dir +
+                                        " --no-prefit --tissue-prefit --max-sims 90 --threads 2 "
+                                        "--quiet --out " +
+                                        testing::quoted(dir / "fit"));
+  ASSERT_EQ(fit.exit_code, 0) << fit.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  ASSERT_FALSE(metrics["tissue_prefit"].empty());
+  EXPECT_EQ(metrics["tissue_prefit"][0], "P2 0.1");
+  ASSERT_TRUE(std::filesystem::exists(dir / "fit" / "tissue.json"));
+  const auto tissue = nlohmann::json::parse(testing::readText(dir / "fit" / "tissue.json"));
+  EXPECT_EQ(tissue["stiffness"].size(), static_cast<std::size_t>(p.valve_case.mesh.V.rows()));
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("tissue pre-fit"), std::string::npos);
+
+  const auto simulated = testing::runChordfit(
+      "simulate " + case_dir + " --cords " + testing::quoted(dir / "fit" / "cords.json") +
+      " --tissue " + testing::quoted(dir / "fit" / "tissue.json") + " --quiet --out " +
+      testing::quoted(dir / "sim"));
+  ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
+  const auto again = nlohmann::json::parse(testing::readText(dir / "sim" / "metrics.json"));
+  EXPECT_EQ(again["mean_mm"].get<double>(), metrics["mean_mm"].get<double>());
+
+  testing::writeText(dir / "bad.json", R"({"stiffness": [1, 0.5, 1]})");
+  const auto bad = testing::runChordfit("simulate " + case_dir + " --tissue " +
+                                        testing::quoted(dir / "bad.json") + " --quiet --out " +
+                                        testing::quoted(dir / "sim2"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("stiffness: 3 stiffness factors for a mesh of"), std::string::npos)
+      << bad.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "sim2" / "metrics.json"));
+}
+
+}  // namespace
+}  // namespace chordfit
