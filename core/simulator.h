@@ -3,10 +3,11 @@
 //
 // Model: leaflet membrane (edge distance, dihedral bending and triangle area constraints with
 // compliances from material.h, optionally scaled per region: tissue_stiffness), cords (paper
-// eq. 1: a distance constraint PM tip -> leaflet vertex, active only when stretched), Dirichlet annulus ring and PM tips (interpolated from
-// their start to their end positions during the ramp), systolic pressure along the area-
-// weighted vertex normals (ventricle -> atrium), a velocity field along the annulus-plane
-// normal n_AP with viscous drag toward it, and vertex-triangle contact (contact.h).
+// eq. 1: a distance constraint PM tip -> leaflet vertex, active only when stretched),
+// Dirichlet annulus ring and PM tips (interpolated from their start to their end positions
+// during the ramp), systolic pressure along the area-weighted vertex normals (ventricle ->
+// atrium), a velocity field along the annulus-plane normal n_AP with viscous drag toward it,
+// and vertex-triangle contact (contact.h).
 // Units: mm, g, ms, N, MPa (material.h).
 //
 // Time step (simulator.cpp, Stepper): predict (v += dt f/m, drag, x~ = x + dt v + w impulse),
