@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <filesystem>
 
 #include "core/carpentier.h"
@@ -143,6 +144,23 @@ TEST(TissuePrefitCli, FitWritesTheTissueAndSimulateReproducesTheClosure) {
   ASSERT_EQ(simulated.exit_code, 0) << simulated.err;
   const auto again = nlohmann::json::parse(testing::readText(dir / "sim" / "metrics.json"));
   EXPECT_EQ(again["mean_mm"].get<double>(), metrics["mean_mm"].get<double>());
+
+  // compare: the fit's cords on the fit's tissue reproduce the fit; the seed on the case's own.
+  const auto compared = testing::runChordfit(
+      "compare " + case_dir + " " + testing::quoted(dir / "case" / "cords.json") + " " +
+      testing::quoted(dir / "fit" / "cords.json") + " --labels seed,fit --tissues -," +
+      (dir / "fit" / "tissue.json").string() + " --quiet --out " + testing::quoted(dir / "cmp"));
+  ASSERT_EQ(compared.exit_code, 0) << compared.err;
+  const std::string csv = testing::readText(dir / "cmp" / "compare.csv");
+  char fit_mean[32];
+  std::snprintf(fit_mean, sizeof fit_mean, "%.6f", metrics["mean_mm"].get<double>());
+  EXPECT_NE(csv.find(std::string(",") + fit_mean), std::string::npos) << csv << fit_mean;
+  const auto miscounted =
+      testing::runChordfit("compare " + case_dir + " " +
+                           testing::quoted(dir / "fit" / "cords.json") + " --tissues -,- --quiet");
+  EXPECT_EQ(miscounted.exit_code, 2);
+  EXPECT_NE(miscounted.err.find("--tissues: 2 file(s) for 1 cord file(s)"), std::string::npos)
+      << miscounted.err;
 
   testing::writeText(dir / "bad.json", R"({"stiffness": [1, 0.5, 1]})");
   const auto bad = testing::runChordfit("simulate " + case_dir + " --tissue " +

@@ -103,7 +103,8 @@ struct CompareOptions {
   std::string case_dir;
   std::vector<std::string> cords_files;  // one or more CordSet JSON files
   std::string labels;                    // "a,b,...": one per file; default the file names
-  std::string out_dir;                   // optional: compare.md + compare.csv
+  std::string tissues;  // "t1,-,...": one regional tissue file per cord file, "-" = the case's
+  std::string out_dir;  // optional: compare.md + compare.csv
   bool quiet = false;
 };
 int runCompare(const CompareOptions& options);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/case_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
 #include "tools/command_support.h"
@@ -25,6 +26,7 @@ struct ComparedSet {
   std::string label;
   std::string file;
   CordSet cords;
+  ValveCase valve_case;  // the case, with this set's tissue
   ValveMetrics metrics;
   bool converged = false;
   int steps = 0;
@@ -141,12 +143,31 @@ int runCompare(const CompareOptions& options) {
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
-  // Read every cord file first: a typo in the last one must not cost the earlier closures.
+  // One tissue per cord file ("-" or none: the case's own).
+  std::vector<std::string> tissues(options.cords_files.size(), "-");
+  if (!options.tissues.empty()) {
+    tissues = splitLabels(options.tissues);
+    if (tissues.size() != options.cords_files.size()) {
+      std::cerr << "error: --tissues: " << tissues.size() << " file(s) for "
+                << options.cords_files.size() << " cord file(s); give one per cord file ('-' "
+                << "for the case's own tissue)\n";
+      return kExitBadInput;
+    }
+  }
+
+  // Read every cord and tissue file first: a typo in the last one must not cost the earlier
+  // closures.
   std::vector<ComparedSet> sets;
   for (std::size_t i = 0; i < options.cords_files.size(); ++i) {
     const auto cords = resolveCords(*valve_case, options.cords_files[i]);
     if (!cords) return kExitBadInput;
-    sets.push_back({labels[i], options.cords_files[i], *cords, {}, false, 0});
+    ComparedSet set{labels[i], options.cords_files[i], *cords, *valve_case, {}, false, 0};
+    if (tissues[i] != "-") {
+      Diagnostics diagnostics;
+      if (!loadTissueFile(tissues[i], tissues[i], set.valve_case, diagnostics))
+        return reportProblems(diagnostics);
+    }
+    sets.push_back(std::move(set));
   }
 
   for (std::size_t i = 0; i < sets.size(); ++i) {
@@ -155,7 +176,7 @@ int runCompare(const CompareOptions& options) {
       std::fprintf(stderr, "compare: [%zu/%zu] %s: closing with %zu cords\n", i + 1, sets.size(),
                    s.label.c_str(), s.cords.cords.size());
     }
-    const SimulationResult closed = simulateClosure(*valve_case, s.cords, settings);
+    const SimulationResult closed = simulateClosure(s.valve_case, s.cords, settings);
     if (!closed.ok()) {
       std::cerr << "error: " << s.file << ": simulation failed: " << closed.error
                 << " (nothing written)\n";

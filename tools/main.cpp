@@ -106,6 +106,9 @@ void addCompare(CLI::App& app, CompareOptions& o) {
   cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
   cmd->add_option("CORDS", o.cords_files, "CordSet JSON files (one or more)")->required();
   cmd->add_option("--labels", o.labels, "Row labels, comma-separated, one per file");
+  cmd->add_option("--tissues", o.tissues,
+                  "Regional tissue files, comma-separated, one per file ('-': the case's own), "
+                  "e.g. a tissue-prefit fit's tissue.json");
   cmd->add_option("--out", o.out_dir, "Write compare.md and compare.csv here");
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
