@@ -354,6 +354,7 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
                                            "--max-sims",  max_sims,
                                            "--threads",   std::to_string(config.fit_threads)};
       if (config.fd_warm) fit_args.push_back("--fd-warm");
+      if (job.tissue_prefit) fit_args.push_back("--tissue-prefit");
       fit_args.insert(fit_args.end(), {"--out", run_dir.string()});
       if (!runChordfit(paths, fit_args, log, error, &command)) {
         return failure("job " + job.id + ": " + error);
@@ -363,6 +364,7 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       result["optimizer"] = job.optimizer;
       result["max_sims"] = config.max_sims;
       result["fd_warm"] = config.fd_warm;
+      result["tissue_prefit"] = job.tissue_prefit;
     } else {
       cords_file = case_dir / "cords.json";
       if (job.method == Method::kTruth) {

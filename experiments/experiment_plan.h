@@ -26,9 +26,10 @@ struct JobSpec {
   std::string id;  // "<case id>__<method tag>", a file name
   std::string case_id;
   Method method = Method::kHeuristic;
-  std::string params;     // fit only: groups | scales | scales+tips
-  std::string optimizer;  // fit only: ceres | bobyqa | cobyla | sbplx | crs2
-  std::string label;      // Table 1 row label: heuristic, manual-like, per-cord, ...
+  std::string params;          // fit only: groups | scales | scales+tips
+  std::string optimizer;       // fit only: ceres | bobyqa | cobyla | sbplx | crs2
+  std::string label;           // Table 1 row label: heuristic, manual-like, per-cord, ...
+  bool tissue_prefit = false;  // fit only: `fit --tissue-prefit` (docs/fitting.md)
 };
 
 struct ExperimentConfig {

@@ -83,7 +83,7 @@ TEST_F(ExperimentsPipeline, FullPlanIsTheDefaultAndHasEveryPresetSeedAndMethod) 
     for (int seed = 1; seed <= 3; ++seed) {
       const std::string id = std::string(preset) + "_s" + std::to_string(seed);
       for (const char* method : {"heuristic", "fit_groups_ceres", "fit_scales_ceres",
-                                 "fit_scales-tips_ceres", "truth"}) {
+                                 "fit_scales-tips_ceres", "fit_scales-tissue_ceres", "truth"}) {
         EXPECT_TRUE(jobs.count(id + "__" + method)) << id << " " << method;
       }
     }
@@ -166,7 +166,7 @@ TEST_F(ExperimentsPipeline, CasesAndEdgeSelectWhatRuns) {
     jobs += line.rfind("job  prolapse-P2_s2__", 0) == 0;
   }
   EXPECT_EQ(cases, 1);
-  EXPECT_EQ(jobs, 5);  // the Table 1 methods of one case
+  EXPECT_EQ(jobs, 6);  // the Table 1 methods of one case, with the tissue pre-fit
 }
 
 // A job result as run_experiments writes it, with made-up numbers (test fixture).
