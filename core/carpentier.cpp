@@ -91,6 +91,12 @@ SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMes
   return map;
 }
 
+SegmentMap openStateSegmentMap(const ValveMesh& mesh) {
+  Eigen::MatrixXd ring(mesh.annulus.size(), 3);
+  for (Eigen::Index k = 0; k < mesh.annulus.size(); ++k) ring.row(k) = mesh.V.row(mesh.annulus(k));
+  return buildSegmentMap(ring, mesh, openAnnulusFrame(mesh));
+}
+
 namespace {
 
 // The arc of `leaflet` (or, when leaflet < 0, of any leaflet) nearest to angle theta, with the

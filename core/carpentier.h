@@ -34,6 +34,10 @@ struct SegmentMap {
 SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMesh& mesh,
                            const AnnulusFrame& frame);
 
+// The map of the open state: the ring at its open positions in the open annulus frame
+// (openAnnulusFrame), as the prolapse measure, the cord layout and the lesion tissue localise.
+SegmentMap openStateSegmentMap(const ValveMesh& mesh);
+
 // Angle of p around the annulus centre in the frame's plane: atan2(l.(p-c), a.(p-c)).
 double annulusAngle(const AnnulusFrame& frame, const Eigen::Vector3d& p);
 

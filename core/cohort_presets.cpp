@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 
-#include "core/annulus_plane.h"
 #include "core/carpentier.h"
 
 namespace chordfit {
@@ -338,10 +337,7 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
 
 Eigen::VectorXd lesionTissueStiffness(const CohortPreset& preset, const ValveMesh& mesh) {
   if (preset.lesion_stiffness == 1.0) return {};
-  const AnnulusFrame frame = openAnnulusFrame(mesh);
-  Eigen::MatrixXd ring(mesh.annulus.size(), 3);
-  for (Eigen::Index k = 0; k < mesh.annulus.size(); ++k) ring.row(k) = mesh.V.row(mesh.annulus(k));
-  const SegmentMap map = buildSegmentMap(ring, mesh, frame);
+  const SegmentMap map = openStateSegmentMap(mesh);
   Eigen::VectorXd factors = Eigen::VectorXd::Ones(mesh.V.rows());
   for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
     const ArcPosition at = arcPositionOf(map, mesh.V.row(v).transpose(), mesh.leaflet(v));

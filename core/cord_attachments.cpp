@@ -45,10 +45,7 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
   if (valve.free_edge.size() != count) {
     throw std::invalid_argument("parametric valve: free edge and annulus differ in size");
   }
-  Eigen::MatrixXd ring(count, 3);
-  for (Eigen::Index k = 0; k < count; ++k) ring.row(k) = mesh.V.row(mesh.annulus(k));
-  const AnnulusFrame frame = openAnnulusFrame(mesh);
-  const SegmentMap map = buildSegmentMap(ring, mesh, frame);
+  const SegmentMap map = openStateSegmentMap(mesh);
   const LeafletArc* arc = nullptr;
   for (const LeafletArc& a : map.arcs) {
     if (a.leaflet == leaflet) arc = &a;
@@ -60,7 +57,8 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
     Column column;
     column.first = mesh.annulus(k);
     column.last = valve.free_edge(k);
-    column.fraction = arcFraction(*arc, annulusAngle(frame, mesh.V.row(column.first).transpose()));
+    column.fraction =
+        arcFraction(*arc, annulusAngle(map.frame, mesh.V.row(column.first).transpose()));
     column.arc.push_back(0.0);
     for (int v = column.first + 1; v <= column.last; ++v) {
       column.arc.push_back(column.arc.back() + (mesh.V.row(v) - mesh.V.row(v - 1)).norm());

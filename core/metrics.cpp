@@ -179,11 +179,7 @@ ProlapseResult prolapseOfLabelledPoints(const ClosedAnnulus& annulus, const Eige
 }
 
 Eigen::VectorXi openStateSegments(const ValveMesh& mesh) {
-  const AnnulusFrame open_frame = openAnnulusFrame(mesh);
-  Eigen::MatrixXd open_ring(mesh.annulus.size(), 3);
-  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i)
-    open_ring.row(i) = mesh.V.row(mesh.annulus(i));
-  const SegmentMap open_map = buildSegmentMap(open_ring, mesh, open_frame);
+  const SegmentMap open_map = openStateSegmentMap(mesh);
   Eigen::VectorXi ids(mesh.V.rows());
   for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
     ids(v) = segmentOf(open_map, mesh.V.row(v).transpose(), mesh.leaflet(v));

@@ -14,32 +14,45 @@ CordSet scaleFreeCords(const CordSet& seed, double factor) {
 CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor) {
   CordSet set = seed;
   for (Cord& cord : set.cords) {
-    if (cord.locked || cord.provenance == Provenance::kManual) continue;
+    if (!isFreeNonManual(cord)) continue;
     const double factor = cord.kind == CordKind::kPrimary ? primary_factor : secondary_factor;
     if (factor != 1.0) cord.rest_length *= factor;
   }
   return set;
 }
 
+ForwardEvaluation closeForData(const ValveCase& valve_case, const CordSet& cords,
+                               const ForwardResidual& residual) {
+  ForwardEvaluation e;
+  const SimulationResult r = simulateClosure(valve_case, cords, residual.settings());
+  residual.countClosure(r);
+  if (!r.ok()) {
+    e.error = r.error;
+    return e;
+  }
+  e.converged = r.converged;
+  e.closed_V = r.V;
+  e.data = residual.dataResiduals(r.V);
+  e.cost = residual.cost(e.data, Eigen::VectorXd());
+  e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+  return e;
+}
+
+int cheapestBelow(const std::vector<ForwardEvaluation>& evaluations, double cost) {
+  int best = -1;
+  for (std::size_t i = 0; i < evaluations.size(); ++i) {
+    const double best_cost = best < 0 ? cost : evaluations[best].cost;
+    if (evaluations[i].ok() && evaluations[i].cost < best_cost) best = static_cast<int>(i);
+  }
+  return best;
+}
+
 std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
                                              const std::vector<CordSet>& sets,
                                              const ForwardResidual& residual, int threads) {
-  const Eigen::VectorXd no_regularisation;
   std::vector<ForwardEvaluation> out(sets.size());
-  parallelFor(static_cast<int>(sets.size()), threads, [&](int i) {
-    ForwardEvaluation& e = out[i];
-    const SimulationResult r = simulateClosure(valve_case, sets[i], residual.settings());
-    residual.countClosure(r);
-    if (!r.ok()) {
-      e.error = r.error;
-      return;
-    }
-    e.converged = r.converged;
-    e.closed_V = r.V;
-    e.data = residual.dataResiduals(r.V);
-    e.cost = residual.cost(e.data, no_regularisation);
-    e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
-  });
+  parallelFor(static_cast<int>(sets.size()), threads,
+              [&](int i) { out[i] = closeForData(valve_case, sets[i], residual); });
   return out;
 }
 

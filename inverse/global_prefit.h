@@ -58,12 +58,26 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                                const ParameterBounds& bounds, const ForwardResidual& residual,
                                const PrefitOptions& options);
 
+// One full closure of `cords` on `valve_case` (its tissue included) from the open state: data
+// residuals and the data-only cost; error set when the closure fails. Counted by `residual`.
+ForwardEvaluation closeForData(const ValveCase& valve_case, const CordSet& cords,
+                               const ForwardResidual& residual);
+
+// Index of the successful evaluation with the lowest cost below `cost` (the first of equal
+// costs), or -1 when none is below it.
+int cheapestBelow(const std::vector<ForwardEvaluation>& evaluations, double cost);
+
 // Full closures of `sets` from the open state, run on `threads` threads (one result slot per
 // set: independent of the thread count); data residuals and the data-only cost. A failed
 // closure has error set. Shared by the pre-fit stages.
 std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
                                              const std::vector<CordSet>& sets,
                                              const ForwardResidual& residual, int threads);
+
+// The cords every pre-fit stage may change: neither locked nor set by the user (manual).
+inline bool isFreeNonManual(const Cord& cord) {
+  return !cord.locked && cord.provenance != Provenance::kManual;
+}
 
 // The seed with every free non-manual cord's rest length multiplied by `factor`.
 CordSet scaleFreeCords(const CordSet& seed, double factor);

@@ -11,14 +11,12 @@ namespace chordfit::inverse {
 
 namespace {
 
-bool isFree(const Cord& cord) { return !cord.locked && cord.provenance != Provenance::kManual; }
-
 // `set` with every free cord of segment `segment` at scale t (rest = seed rest * t).
 CordSet withSegmentScale(const CordSet& set, const Eigen::VectorXi& vertex_segment, int segment,
                          double t) {
   CordSet out = set;
   for (Cord& cord : out.cords) {
-    if (isFree(cord) && vertex_segment(cord.vertex) == segment) {
+    if (isFreeNonManual(cord) && vertex_segment(cord.vertex) == segment) {
       cord.rest_length = cord.seed_rest_length * t;
     }
   }
@@ -48,7 +46,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
   for (int segment = 0; segment < segment_count; ++segment) {
     bool has_free = false;
     for (const Cord& cord : result.start.cords) {
-      if (isFree(cord) && vertex_segment(cord.vertex) == segment) has_free = true;
+      if (isFreeNonManual(cord) && vertex_segment(cord.vertex) == segment) has_free = true;
     }
     if (!has_free) continue;
     std::vector<double> scales;
@@ -61,11 +59,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
     std::vector<ForwardEvaluation> evaluations =
         closeCordSets(valve_case, sets, residual, options.threads);
     result.forward_sims += static_cast<int>(sets.size());
-    int best = -1;
-    for (std::size_t i = 0; i < evaluations.size(); ++i) {
-      const double best_cost = best < 0 ? result.best.cost : evaluations[best].cost;
-      if (evaluations[i].ok() && evaluations[i].cost < best_cost) best = static_cast<int>(i);
-    }
+    const int best = cheapestBelow(evaluations, result.best.cost);
     if (best < 0) continue;
     result.start = std::move(sets[best]);
     result.best = std::move(evaluations[best]);

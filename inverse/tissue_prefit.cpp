@@ -5,14 +5,12 @@
 
 #include "core/carpentier.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
 #include "inverse/finite_difference.h"
+#include "inverse/global_prefit.h"
 
 namespace chordfit::inverse {
 
 namespace {
-
-bool isFree(const Cord& cord) { return !cord.locked && cord.provenance != Provenance::kManual; }
 
 struct Candidate {
   double factor = 1.0;
@@ -33,14 +31,13 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
   result.best = start_evaluation;
   if (!options.enabled || options.factors.empty()) return result;
   const Eigen::Index n = valve_case.mesh.V.rows();
-  const Eigen::VectorXd own = valve_case.tissue_stiffness.size() == n ? valve_case.tissue_stiffness
-                                                                      : Eigen::VectorXd::Ones(n);
-  Eigen::VectorXd tissue = own;
+  // The case's own tissue (uniform when it has none); accepted softenings multiply it.
+  Eigen::VectorXd tissue = valve_case.tissue_stiffness.size() == n ? valve_case.tissue_stiffness
+                                                                   : Eigen::VectorXd::Ones(n);
   const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
   SegmentMap names;  // only for segmentName
   names.leaflet_names = valve_case.mesh.leaflet_names;
   const int segment_count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
-  const Eigen::VectorXd no_regularisation;
 
   // Greedy, best first: every segment's candidates from the same start, the best accepted;
   // then again for the segments not yet changed (a pass in a fixed order would let a
@@ -60,7 +57,7 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
           bool changed_cords = false;
           if (long_cords) {
             for (Cord& cord : c.cords.cords) {
-              if (isFree(cord) && vertex_segment(cord.vertex) == segment) {
+              if (isFreeNonManual(cord) && vertex_segment(cord.vertex) == segment) {
                 cord.rest_length = cord.seed_rest_length * bounds.scale_upper;
                 changed_cords = true;
               }
@@ -76,26 +73,10 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
     parallelFor(static_cast<int>(candidates.size()), options.threads, [&](int i) {
       ValveCase softened = valve_case;
       softened.tissue_stiffness = candidates[i].tissue;
-      ForwardEvaluation& e = evaluations[i];
-      const SimulationResult r =
-          simulateClosure(softened, candidates[i].cords, residual.settings());
-      residual.countClosure(r);
-      if (!r.ok()) {
-        e.error = r.error;
-        return;
-      }
-      e.converged = r.converged;
-      e.closed_V = r.V;
-      e.data = residual.dataResiduals(r.V);
-      e.cost = residual.cost(e.data, no_regularisation);
-      e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+      evaluations[i] = closeForData(softened, candidates[i].cords, residual);
     });
     result.forward_sims += static_cast<int>(candidates.size());
-    int best = -1;
-    for (std::size_t i = 0; i < evaluations.size(); ++i) {
-      const double best_cost = best < 0 ? result.best.cost : evaluations[best].cost;
-      if (evaluations[i].ok() && evaluations[i].cost < best_cost) best = static_cast<int>(i);
-    }
+    const int best = cheapestBelow(evaluations, result.best.cost);
     if (best < 0) break;
     done[candidate_segment[best]] = true;
     tissue = candidates[best].tissue;

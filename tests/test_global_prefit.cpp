@@ -7,11 +7,10 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/case_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
-#include "core/tracing_sampler.h"
 #include "inverse/global_prefit.h"
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -30,23 +29,15 @@ struct KindProblem {
 const KindProblem& kindProblem() {
   static const KindProblem problem = [] {
     KindProblem p;
-    Diagnostics diagnostics;
-    auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
-    if (!loaded || !loaded->cords) throw std::runtime_error("bundled case small-normal missing");
-    p.valve_case = *loaded;
-    p.settings = settingsFromJson(p.valve_case.simulation_json, diagnostics);
+    testing::BundledCase bundled = testing::bundledCase("small-normal");
+    p.valve_case = bundled.valve_case;
+    p.settings = bundled.settings;
     p.seed = *p.valve_case.cords;
     for (Cord& cord : p.seed.cords) cord.rest_length = cord.seed_rest_length;
     const CordSet truth = inverse::scaleFreeCords(p.seed, kPrimaryScale, kSecondaryScale);
     const SimulationResult closed = simulateClosure(p.valve_case, truth, p.settings);
     if (!closed.ok()) throw std::runtime_error(closed.error);
-    TracingSamplerOptions sampler;
-    sampler.planes = 6;
-    sampler.noise_mm = 0.0;
-    sampler.dropout_fraction = 0.0;
-    SeededRandom random(1);
-    p.valve_case.tracings = sampleTracings(closed.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
-                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 6);
     return p;
   }();
   return problem;

@@ -10,8 +10,8 @@
 #include "core/case_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
-#include "core/tracing_sampler.h"
 #include "inverse/fit_cords.h"
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -107,13 +107,7 @@ const RecoveryProblem& recoveryProblem() {
       if (!all_taut) truth.error = "again";
     }
     std::sort(p.perturbed.begin(), p.perturbed.end());
-    TracingSamplerOptions sampler;
-    sampler.planes = 3;  // as the bundled case
-    sampler.noise_mm = 0.0;
-    sampler.dropout_fraction = 0.0;
-    SeededRandom random(1);
-    p.valve_case.tracings = sampleTracings(truth.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
-                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, truth.V, 3);  // 3 as bundled
     for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
       if (std::find(p.perturbed.begin(), p.perturbed.end(), static_cast<int>(c)) ==
           p.perturbed.end()) {

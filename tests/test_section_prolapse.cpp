@@ -8,7 +8,7 @@
 #include "core/case_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
-#include "core/tracing_sampler.h"
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -29,13 +29,7 @@ TEST(SectionProlapse, MatchesNoiseFreeTracingsOfTheSameMesh) {
   const SimulationResult closed = simulateClosure(valve_case, cords, settings);
   ASSERT_TRUE(closed.ok()) << closed.error;
 
-  TracingSamplerOptions sampler;
-  sampler.planes = 6;
-  sampler.noise_mm = 0.0;
-  sampler.dropout_fraction = 0.0;
-  SeededRandom random(1);
-  valve_case.tracings = sampleTracings(closed.V, valve_case.mesh.F, valve_case.mesh.leaflet,
-                                       closedAnnulus(valve_case).frame, sampler, random);
+  valve_case.tracings = testing::noiseFreeTracings(valve_case, closed.V, 6);
   const ValveMetrics metrics = computeMetrics(valve_case, closed.V);
   EXPECT_FALSE(metrics.tracing_prolapse.segments.empty()) << "the case must prolapse somewhere";
   EXPECT_EQ(metrics.section_prolapse.segments, metrics.tracing_prolapse.segments);

@@ -5,13 +5,12 @@
 
 #include <filesystem>
 
-#include "core/carpentier.h"
-#include "core/case_io.h"
+#include "core/cohort_presets.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
-#include "core/tracing_sampler.h"
 #include "inverse/global_prefit.h"
 #include "inverse/segment_prefit.h"
+#include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
@@ -34,17 +33,11 @@ struct SegmentProblem {
 const SegmentProblem& segmentProblem() {
   static const SegmentProblem problem = [] {
     SegmentProblem p;
-    Diagnostics diagnostics;
-    auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
-    if (!loaded || !loaded->cords) throw std::runtime_error("bundled case small-normal missing");
-    p.valve_case = *loaded;
-    p.settings = settingsFromJson(p.valve_case.simulation_json, diagnostics);
+    testing::BundledCase bundled = testing::bundledCase("small-normal");
+    p.valve_case = bundled.valve_case;
+    p.settings = bundled.settings;
     p.vertex_segment = openStateSegments(p.valve_case.mesh);
-    SegmentMap names;
-    names.leaflet_names = p.valve_case.mesh.leaflet_names;
-    for (int s = 0; s < 6; ++s) {
-      if (segmentName(names, s) == "P2") p.p2 = s;
-    }
+    p.p2 = mitralSegmentId("P2");  // the bundled case's leaflets: anterior, posterior
     p.base = *p.valve_case.cords;
     for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kBaseScale;
     CordSet truth = p.base;
@@ -67,13 +60,7 @@ const SegmentProblem& segmentProblem() {
     if (!locked_one) throw std::runtime_error("small-normal has no P2 cord");
     const SimulationResult closed = simulateClosure(p.valve_case, truth, p.settings);
     if (!closed.ok()) throw std::runtime_error(closed.error);
-    TracingSamplerOptions sampler;
-    sampler.planes = 3;
-    sampler.noise_mm = 0.0;
-    sampler.dropout_fraction = 0.0;
-    SeededRandom random(1);
-    p.valve_case.tracings = sampleTracings(closed.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
-                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 3);
     return p;
   }();
   return problem;

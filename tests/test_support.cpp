@@ -5,9 +5,14 @@
 #include <cstdlib>
 #include <fstream>
 #include <sstream>
+#include <stdexcept>
 
 #include <sys/wait.h>
 #include <unistd.h>
+
+#include "core/case_io.h"
+#include "core/metrics.h"
+#include "core/tracing_sampler.h"
 
 namespace chordfit::testing {
 
@@ -24,6 +29,27 @@ TempDir::TempDir() {
 TempDir::~TempDir() {
   std::error_code ec;
   fs::remove_all(path_, ec);
+}
+
+BundledCase bundledCase(const std::string& name) {
+  Diagnostics diagnostics;
+  auto loaded = loadCase(fs::path(CHORDFIT_CASES_DIR) / name, diagnostics);
+  if (!loaded || !loaded->cords) throw std::runtime_error("bundled case " + name + " missing");
+  BundledCase bundled;
+  bundled.valve_case = *loaded;
+  bundled.settings = settingsFromJson(bundled.valve_case.simulation_json, diagnostics);
+  return bundled;
+}
+
+std::vector<Tracing> noiseFreeTracings(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                                       int planes) {
+  TracingSamplerOptions sampler;
+  sampler.planes = planes;
+  sampler.noise_mm = 0.0;
+  sampler.dropout_fraction = 0.0;
+  SeededRandom random(1);
+  return sampleTracings(closed_V, valve_case.mesh.F, valve_case.mesh.leaflet,
+                        closedAnnulus(valve_case).frame, sampler, random);
 }
 
 ValveCase tinyConeCase() {

@@ -4,8 +4,12 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
+
+#include <Eigen/Core>
 
 #include "core/case_data.h"
+#include "core/simulator.h"
 
 namespace chordfit::testing {
 
@@ -30,6 +34,20 @@ class TempDir {
 // The annulus plane is z = 0 with n_AP = +z (leaflets hang below), a = +x, l = +y.
 // Closed annulus = the open ring; no tracings, tips or cords.
 ValveCase tinyConeCase();
+
+// A bundled synthetic case (build/cases/<name>, cases/CMakeLists.txt) with its simulator
+// settings; throws when it is missing or has no cords.
+struct BundledCase {
+  ValveCase valve_case;
+  SimulationSettings settings;
+};
+BundledCase bundledCase(const std::string& name);
+
+// Tracings of the closed state `closed_V` of `valve_case` on `planes` long-axis planes, without
+// noise or dropout (sampler seed 1): the tracings a perfect reader would draw, so a fit can
+// reproduce them exactly.
+std::vector<Tracing> noiseFreeTracings(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                                       int planes);
 
 // Writes `text` to `path` (creating directories).
 void writeText(const std::filesystem::path& path, const std::string& text);

@@ -6,11 +6,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "core/carpentier.h"
 #include "core/case_io.h"
+#include "core/cohort_presets.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
-#include "core/tracing_sampler.h"
 #include "inverse/global_prefit.h"
 #include "inverse/tissue_prefit.h"
 #include "tests/test_support.h"
@@ -32,17 +31,11 @@ struct TissueProblem {
 const TissueProblem& tissueProblem() {
   static const TissueProblem problem = [] {
     TissueProblem p;
-    Diagnostics diagnostics;
-    auto loaded = loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
-    if (!loaded || !loaded->cords) throw std::runtime_error("bundled case small-normal missing");
-    p.valve_case = *loaded;
-    p.settings = settingsFromJson(p.valve_case.simulation_json, diagnostics);
+    testing::BundledCase bundled = testing::bundledCase("small-normal");
+    p.valve_case = bundled.valve_case;
+    p.settings = bundled.settings;
     p.vertex_segment = openStateSegments(p.valve_case.mesh);
-    SegmentMap names;
-    names.leaflet_names = p.valve_case.mesh.leaflet_names;
-    for (int s = 0; s < 6; ++s) {
-      if (segmentName(names, s) == "P2") p.p2 = s;
-    }
+    p.p2 = mitralSegmentId("P2");  // the bundled case's leaflets: anterior, posterior
     p.base = *p.valve_case.cords;
     for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kBaseScale;
     for (Cord& cord : p.base.cords) {
@@ -59,13 +52,7 @@ const TissueProblem& tissueProblem() {
     }
     const SimulationResult closed = simulateClosure(truth, p.base, p.settings);
     if (!closed.ok()) throw std::runtime_error(closed.error);
-    TracingSamplerOptions sampler;
-    sampler.planes = 3;
-    sampler.noise_mm = 0.0;
-    sampler.dropout_fraction = 0.0;
-    SeededRandom random(1);
-    p.valve_case.tracings = sampleTracings(closed.V, p.valve_case.mesh.F, p.valve_case.mesh.leaflet,
-                                           closedAnnulus(p.valve_case).frame, sampler, random);
+    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 3);
     return p;
   }();
   return problem;
