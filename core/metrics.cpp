@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <limits>
 #include <map>
+#include <memory>
 #include <set>
 
 #include "core/cgal_backend.h"
@@ -24,6 +25,37 @@ Eigen::VectorXd pointToSurfaceDistances(const Eigen::MatrixXd& V, const Eigen::M
   if (points.rows() == 0) return d;
   const SurfaceDistance surface(V, F);
   for (Eigen::Index i = 0; i < points.rows(); ++i) d(i) = surface.distance(points.row(i));
+  return d;
+}
+
+Eigen::VectorXd pointToOwnLeafletDistances(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                           const Eigen::VectorXi& face_leaflet,
+                                           const Eigen::MatrixXd& points,
+                                           const Eigen::VectorXi& point_leaflet) {
+  Eigen::VectorXd d(points.rows());
+  if (points.rows() == 0) return d;
+  // One AABB tree per leaflet label that some point asks for, plus the whole mesh.
+  std::map<int, std::vector<Eigen::Index>> faces_of;
+  for (Eigen::Index f = 0; f < F.rows(); ++f) faces_of[face_leaflet(f)].push_back(f);
+  std::map<int, std::unique_ptr<SurfaceDistance>> leaflet_surface;
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const int label = point_leaflet(i);
+    const auto faces = faces_of.find(label);
+    if (label < 0 || faces == faces_of.end() || leaflet_surface.count(label) > 0) continue;
+    Eigen::MatrixXi sub(static_cast<Eigen::Index>(faces->second.size()), 3);
+    for (std::size_t k = 0; k < faces->second.size(); ++k) sub.row(k) = F.row(faces->second[k]);
+    leaflet_surface[label] = std::make_unique<SurfaceDistance>(V, sub);
+  }
+  std::unique_ptr<SurfaceDistance> whole;  // built only if some point has no own leaflet
+  for (Eigen::Index i = 0; i < points.rows(); ++i) {
+    const auto own = leaflet_surface.find(point_leaflet(i));
+    if (own != leaflet_surface.end()) {
+      d(i) = own->second->distance(points.row(i));
+      continue;
+    }
+    if (!whole) whole = std::make_unique<SurfaceDistance>(V, F);
+    d(i) = whole->distance(points.row(i));
+  }
   return d;
 }
 

@@ -27,6 +27,17 @@ struct DeviationStats {
 // Distances from each row of `points` to the triangle mesh (V, F). #points values, mm.
 Eigen::VectorXd pointToSurfaceDistances(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                                         const Eigen::MatrixXd& points);
+// Distances from each point to the faces of its own leaflet: point i is measured against the
+// faces f with face_leaflet(f) == point_leaflet(i) (faceLeaflets, the labelling the tracing
+// sampler uses), and against the whole mesh when its label is -1 or no face carries it.
+// A tracing reader names the leaflet of every polyline, so a point of the posterior leaflet
+// must not be explained by an anterior bulge that happens to pass close to it.
+//   face_leaflet  #F,  point_leaflet  #points.  Returns #points values, mm; each is >= the
+//   pointToSurfaceDistances value.
+Eigen::VectorXd pointToOwnLeafletDistances(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                           const Eigen::VectorXi& face_leaflet,
+                                           const Eigen::MatrixXd& points,
+                                           const Eigen::VectorXi& point_leaflet);
 DeviationStats summarizeDeviation(const Eigen::VectorXd& distances);
 
 // Sum of triangle areas, mm^2.

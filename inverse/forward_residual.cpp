@@ -7,6 +7,7 @@
 #include "core/annulus_plane.h"
 #include "core/carpentier.h"
 #include "core/metrics.h"
+#include "core/tracing_sampler.h"
 #include "inverse/robust_loss.h"
 
 namespace chordfit::inverse {
@@ -44,8 +45,9 @@ ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameter
       parameters_(parameters),
       settings_(settings),
       options_(options),
-      tracing_points_(stackTracingPoints(valve_case.tracings)),
+      face_leaflets_(faceLeaflets(valve_case.mesh.F, valve_case.mesh.leaflet)),
       neighbours_(neighbouringCords(valve_case, parameters)) {
+  tracing_points_ = stackTracingPoints(valve_case.tracings, &tracing_leaflets_);
   settings_.progress_every = 0;
   settings_.progress = nullptr;
   const int n = parameters.size();
@@ -78,7 +80,19 @@ ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameter
 }
 
 Eigen::VectorXd ForwardResidual::dataResiduals(const Eigen::MatrixXd& closed_V) const {
+  if (!options_.own_leaflet) return surfaceDistances(closed_V);
+  return pointToOwnLeafletDistances(closed_V, case_.mesh.F, face_leaflets_, tracing_points_,
+                                    tracing_leaflets_);
+}
+
+Eigen::VectorXd ForwardResidual::surfaceDistances(const Eigen::MatrixXd& closed_V) const {
   return pointToSurfaceDistances(closed_V, case_.mesh.F, tracing_points_);
+}
+
+double ForwardResidual::meanDeviation(const Eigen::MatrixXd& closed_V,
+                                      const Eigen::VectorXd& data) const {
+  if (data.size() == 0) return 0.0;
+  return options_.own_leaflet ? surfaceDistances(closed_V).mean() : data.mean();
 }
 
 double ForwardResidual::cost(const Eigen::VectorXd& data,
@@ -107,7 +121,7 @@ ForwardEvaluation ForwardResidual::evaluate(const Eigen::VectorXd& x,
   e.data = dataResiduals(e.closed_V);
   e.regularisation = regularisation(x);
   e.cost = cost(e.data, e.regularisation);
-  e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+  e.mean_deviation_mm = meanDeviation(e.closed_V, e.data);
   return e;
 }
 

@@ -1,9 +1,14 @@
 // The fit's residual (DESIGN §7, issue 5 item 2): the forward closure as a black box.
 //
-// Data residuals: one per tracing point, r_i = distance (mm) from the point to the closed mesh
-// surface (exact point-to-triangle; the AvgD of the paper's Table 1 is their mean). They go
-// through Huber's loss (robust_loss.h) with delta = huber_delta_mm: tracings are noisy and
-// have outliers, and a point beyond delta should pull linearly, not quadratically.
+// Data residuals: one per tracing point, r_i = distance (mm) from the point to the closed
+// surface of its own leaflet (exact point-to-triangle; the tracing reader labels each polyline
+// with its leaflet), or to the whole closed mesh for unlabelled points or with own_leaflet
+// false (then their mean is the AvgD of the paper's Table 1). Why the own leaflet: with
+// whole-mesh distances, points traced on a flipped posterior flap over the valve centre are
+// explained as well by an anterior bulge, and the fit can settle there (prolapse-P2 and
+// flail-P2 seeds 2: the fits bulged in A1 and A3; docs/fitting.md). They go through Huber's
+// loss (robust_loss.h) with delta = huber_delta_mm: tracings are noisy and have outliers, and
+// a point beyond delta should pull linearly, not quadratically.
 //
 // Regularisation residuals (linear in x, r = A x - b, no loss):
 //   seed       w_seed * (s_c - s0_c) per scale parameter: toward the starting (seed or manual)
@@ -42,6 +47,10 @@ struct RegularisationWeights {
 
 struct ResidualOptions {
   double huber_delta_mm = 1.0;  // ~3x the tracing noise SD of the synthetic cohort (0.3 mm)
+  // true: a labelled tracing point is measured to its own leaflet's surface
+  // (pointToOwnLeafletDistances, metrics.h); unlabelled points to the whole mesh. false: every
+  // point to the whole mesh, the Table 1 AvgD itself.
+  bool own_leaflet = true;
   RegularisationWeights weights;
 };
 
@@ -51,7 +60,8 @@ struct ForwardEvaluation {
   Eigen::VectorXd data;            // #tracing points, mm
   Eigen::VectorXd regularisation;  // A x - b
   double cost = 0.0;               // 1/2 sum rho(data^2) + 1/2 |regularisation|^2
-  double mean_deviation_mm = 0.0;  // mean of data (AvgD)
+  double mean_deviation_mm = 0.0;  // AvgD: mean whole-mesh distance (= mean of data when
+                                   // the residual is not own-leaflet)
   Eigen::MatrixXd closed_V;        // #V by 3 closed state
   bool converged = false;
   bool warm_started = false;  // true only for finite-difference perturbations
@@ -76,8 +86,12 @@ class ForwardResidual {
   ForwardEvaluation evaluate(const Eigen::VectorXd& x,
                              const Eigen::MatrixXd* warm_start = nullptr) const;
 
-  // Data residuals of a closed state.
+  // Data residuals of a closed state (own-leaflet or whole-mesh distances, options).
   Eigen::VectorXd dataResiduals(const Eigen::MatrixXd& closed_V) const;
+  // Whole-mesh distances of every tracing point: their mean is the Table 1 AvgD.
+  Eigen::VectorXd surfaceDistances(const Eigen::MatrixXd& closed_V) const;
+  // AvgD of a closed state whose data residuals are `data`.
+  double meanDeviation(const Eigen::MatrixXd& closed_V, const Eigen::VectorXd& data) const;
   // Regularisation r = A x - b and its (constant) Jacobian A.
   Eigen::VectorXd regularisation(const Eigen::VectorXd& x) const { return A_ * x - b_; }
   const Eigen::MatrixXd& regularisationJacobian() const { return A_; }
@@ -101,6 +115,8 @@ class ForwardResidual {
   SimulationSettings settings_;
   ResidualOptions options_;
   Eigen::MatrixXd tracing_points_;
+  Eigen::VectorXi tracing_leaflets_;  // per point, -1 unlabelled
+  Eigen::VectorXi face_leaflets_;     // per face of the case mesh
   std::vector<std::pair<int, int>> neighbours_;
   Eigen::MatrixXd A_;
   Eigen::VectorXd b_;

@@ -53,6 +53,16 @@ TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
   EXPECT_NE(r.err.find("--scale-bounds"), std::string::npos) << r.err;
 }
 
+TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --distance nearest --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--distance"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("nearest"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 // One free cord (the others locked, as the paper's editor would write them): 1 + 2 + 1 runs.
 TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   TempDir dir;
@@ -73,11 +83,13 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
     EXPECT_TRUE(std::filesystem::exists(dir / "fit" / file)) << file;
   }
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
-  for (const char* key : {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims",
-                          "fit_seconds", "initial_mean_mm", "unsettled_sims", "averaged_steps"}) {
+  for (const char* key :
+       {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims", "fit_seconds",
+        "initial_mean_mm", "unsettled_sims", "averaged_steps", "distance"}) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_EQ(metrics["optimizer"], "ceres");
+  EXPECT_EQ(metrics["distance"], "own-leaflet");     // the default data residual
   EXPECT_LE(metrics["forward_sims"].get<int>(), 5);  // budget 4 + the closure written
   EXPECT_GE(metrics["unsettled_sims"].get<int>(), 0);
   EXPECT_LT(metrics["unsettled_sims"].get<int>(), metrics["forward_sims"].get<int>());

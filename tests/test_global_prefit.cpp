@@ -59,6 +59,7 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   const inverse::PrefitResult result =
       inverse::globalScalePrefit(p.valve_case, p.seed, seed[0], bounds, residual, options);
   ASSERT_FALSE(result.costs.empty());
+
   const double best_common = *std::min_element(result.costs.begin(), result.costs.end());
   // The secondaries end relatively longer than the primaries, as in the truth, and the data
   // cost falls well below that of the best common factor.
@@ -66,7 +67,11 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   EXPECT_LT(std::abs(result.primary_factor - kPrimaryScale), 0.05);
   EXPECT_LT(std::abs(result.secondary_factor - kSecondaryScale), 0.05);
   EXPECT_LT(result.best.cost, 0.5 * best_common) << "better than any common factor";
-  EXPECT_EQ(result.forward_sims, static_cast<int>(result.costs.size()) + 2 * options.kind_points);
+  // Each kind round is at most 2 x kind_points closures (fewer where a factor would leave
+  // the bounds); a second round runs only when the first moved a factor.
+  const int kind_sims = result.forward_sims - static_cast<int>(result.costs.size());
+  EXPECT_GT(kind_sims, 0);
+  EXPECT_LE(kind_sims, 2 * options.kind_points * options.kind_rounds);
   // The start is the seed with the two factors on its free cords.
   for (std::size_t c = 0; c < p.seed.cords.size(); ++c) {
     const Cord& cord = result.start.cords[c];

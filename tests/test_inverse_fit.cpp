@@ -20,6 +20,7 @@ constexpr double kRecoveryTolerance = 0.02;  // issue 5: recovered within 2 %
 constexpr double kTrueScale = 0.65;          // every cord taut, as in the cohort's truth
 constexpr double kPerturbation = 0.15;       // issue 5: four cords perturbed by +-15 %
 constexpr double kNearPlaneMm = 3.0;         // identifiable: attached this near a plane
+constexpr int kRecoveryBudget = 200;         // forward closures of the recovery fit
 
 std::filesystem::path smallCase() {
   return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
@@ -135,7 +136,9 @@ inverse::FitOptions perCordOptions(const std::string& optimizer, int max_sims, i
 
 TEST(InverseFit, RecoversFourPerturbedCordsWithinTwoPercentAndKeepsLockedCords) {
   const RecoveryProblem& p = recoveryProblem();
-  inverse::FitOptions options = perCordOptions("ceres", 110, 2);
+  // 200 closures: Ceres stops on its tolerance after ~184 with the own-leaflet residual (the
+  // whole-mesh distance needed ~110; at 110 own-leaflet ends with one cord 2.5 % off).
+  inverse::FitOptions options = perCordOptions("ceres", kRecoveryBudget, 2);
   // Noise-free tracings: the data alone determine the four cords, so the prior is made 10x
   // weaker than the default (which biases a weakly seen cord by ~2 % here toward its seed).
   options.residual.weights.seed *= 0.1;
@@ -156,7 +159,7 @@ TEST(InverseFit, RecoversFourPerturbedCordsWithinTwoPercentAndKeepsLockedCords) 
     EXPECT_EQ(fit.fitted.cords[c].provenance, Provenance::kManual);
   }
   EXPECT_LT(fit.final_evaluation.mean_deviation_mm, 0.2 * fit.seed_evaluation.mean_deviation_mm);
-  EXPECT_LE(fit.forward_sims, 110);
+  EXPECT_LE(fit.forward_sims, kRecoveryBudget);
 }
 
 TEST(InverseFit, KeepsEveryScaleWithinItsBounds) {

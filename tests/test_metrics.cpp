@@ -19,6 +19,36 @@ void unitSquare(Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
   F << 0, 1, 2, 0, 2, 3;
 }
 
+// Two unit squares 1 mm apart: leaflet 0 in z = 0, leaflet 1 in z = 1.
+void twoLeafletSquares(Eigen::MatrixXd& V, Eigen::MatrixXi& F, Eigen::VectorXi& face_leaflet) {
+  V.resize(8, 3);
+  V << 0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1;
+  F.resize(4, 3);
+  F << 0, 1, 2, 0, 2, 3, 4, 5, 6, 4, 6, 7;
+  face_leaflet.resize(4);
+  face_leaflet << 0, 0, 1, 1;
+}
+
+TEST(OwnLeafletDistance, MeasuresEachPointToItsOwnLeafletOnly) {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  Eigen::VectorXi face_leaflet;
+  twoLeafletSquares(V, F, face_leaflet);
+  // The same point 0.1 above leaflet 0, four labels.
+  Eigen::MatrixXd points(4, 3);
+  points << 0.5, 0.5, 0.1, 0.5, 0.5, 0.1, 0.5, 0.5, 0.1, 0.5, 0.5, 0.1;
+  Eigen::VectorXi labels(4);
+  labels << 0, 1, -1, 7;  // own, the other leaflet, unlabelled, a label no face carries
+  const Eigen::VectorXd own = pointToOwnLeafletDistances(V, F, face_leaflet, points, labels);
+  const Eigen::VectorXd any = pointToSurfaceDistances(V, F, points);
+  ASSERT_EQ(own.size(), 4);
+  EXPECT_NEAR(own(0), 0.1, kTolerance);
+  EXPECT_NEAR(own(1), 0.9, kTolerance);  // must reach the upper square
+  EXPECT_NEAR(own(2), 0.1, kTolerance);  // whole mesh
+  EXPECT_NEAR(own(3), 0.1, kTolerance);  // whole mesh
+  for (int i = 0; i < 4; ++i) EXPECT_GE(own(i), any(i) - kTolerance);
+}
+
 TEST(SurfaceArea, OfAUnitSquareIsOne) {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;

@@ -126,11 +126,12 @@ struct FitCommandOptions {
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
-  bool prefit = true;           // global and segment pre-fits before the optimiser
-  bool tissue_prefit = false;   // softer tissue per segment, after the cord pre-fits
-  double fd_scale_step = 0.01;  // central-difference step on a scale
-  double fd_tip_step_mm = 0.1;  // ... on a tip offset coordinate
-  bool fd_warm_start = false;   // perturbed closures start from the base closed state
+  bool prefit = true;                    // global and segment pre-fits before the optimiser
+  bool tissue_prefit = false;            // softer tissue per segment, after the cord pre-fits
+  double fd_scale_step = 0.01;           // central-difference step on a scale
+  double fd_tip_step_mm = 0.1;           // ... on a tip offset coordinate
+  bool fd_warm_start = false;            // perturbed closures start from the base closed state
+  std::string distance = "own-leaflet";  // own-leaflet | surface (inverse/forward_residual.h)
   std::string out_dir;
   bool quiet = false;
 };

@@ -85,6 +85,10 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
   md << "# Cord fit: " << c.name << "\n\n";
   md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
      << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
+  md << "- data residual: "
+     << (o.distance == "own-leaflet" ? "each tracing point to its own leaflet's closed surface"
+                                     : "each tracing point to the whole closed mesh")
+     << " (--distance " << o.distance << "); AvgD below is always to the whole mesh\n";
   md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)")
      << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
      << fit.prefit_secondary_factor << "\n";
@@ -132,6 +136,11 @@ int runFit(const FitCommandOptions& o) {
               << ", got \"" << o.optimizer << "\"\n";
     return kExitBadInput;
   }
+  if (o.distance != "own-leaflet" && o.distance != "surface") {
+    std::cerr << "error: fit: --distance: expected own-leaflet or surface, got \"" << o.distance
+              << "\"\n";
+    return kExitBadInput;
+  }
   if (o.scale_bounds.size() != 2 || !(o.scale_bounds[0] > 0.0) ||
       !(o.scale_bounds[0] < o.scale_bounds[1])) {
     std::cerr << "error: fit: --scale-bounds: need two numbers 0 < lower < upper\n";
@@ -169,6 +178,7 @@ int runFit(const FitCommandOptions& o) {
   options.finite_difference.scale_step = o.fd_scale_step;
   options.finite_difference.tip_step_mm = o.fd_tip_step_mm;
   options.finite_difference.warm_start = o.fd_warm_start;
+  options.residual.own_leaflet = o.distance == "own-leaflet";
   if (!o.quiet) {
     std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
                 valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
@@ -221,6 +231,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["tissue_prefit"] = fit.tissue_prefit_changes;
+  metrics["distance"] = o.distance;  // the data residual the fit minimised
   metrics["scale_bounds"] = o.scale_bounds;
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;

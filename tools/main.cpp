@@ -145,6 +145,10 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_flag("--fd-warm", o.fd_warm_start,
                 "Warm-start finite-difference closures from the base closed state");
+  cmd->add_option("--distance", o.distance,
+                  "Data residual per tracing point: own-leaflet (distance to the surface of the "
+                  "point's labelled leaflet) | surface (to the whole closed mesh, as AvgD)")
+      ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
