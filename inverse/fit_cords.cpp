@@ -51,9 +51,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
     // The kind stage only when it fits as well (a small budget keeps the common factor).
-    if (!budget_allows(common_sims + 2 * prefit.kind_points * prefit.kind_rounds)) {
-      prefit.kind_points = 0;
-    }
+    if (!budget_allows(common_sims + 2 * prefit.kind_points)) prefit.kind_points = 0;
     const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
                                                   options.bounds, seed_residual, prefit);
     outcome.forward_sims += result.forward_sims;
@@ -65,8 +63,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     record("prefit", 1, start_evaluation, start_evaluation.cost);
   }
   if (options.segment_prefit.enabled && seed_parameters.size() > 0 &&
-      options.mode != ParameterMode::kGroups &&
-      budget_allows(segmentPrefitMaxSims(options.segment_prefit))) {
+      options.mode != ParameterMode::kGroups && budget_allows(6 * options.segment_prefit.points)) {
     SegmentPrefitOptions segment = options.segment_prefit;
     segment.threads = options.finite_difference.threads;
     const SegmentPrefitResult result = segmentScalePrefit(valve_case, start_set, start_evaluation,

@@ -34,7 +34,7 @@ ForwardEvaluation closeForData(const ValveCase& valve_case, const CordSet& cords
   e.closed_V = r.V;
   e.data = residual.dataResiduals(r.V);
   e.cost = residual.cost(e.data, Eigen::VectorXd());
-  e.mean_deviation_mm = residual.meanDeviation(r.V, e.data);
+  e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
   return e;
 }
 
@@ -115,24 +115,14 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   std::sort(refine.begin(), refine.end());
   consider(refine);
 
-  // Kind stage: secondaries, then primaries, each around the current factors; repeated.
-  double round_primary = result.primary_factor, round_secondary = result.secondary_factor;
+  // Kind stage: secondaries, then primaries, each around the current factors.
   const int kind_half = options.kind_points / 2;
   const bool has_both = std::any_of(seed.cords.begin(), seed.cords.end(),
                                     [](const Cord& c) { return c.kind == CordKind::kPrimary; }) &&
                         std::any_of(seed.cords.begin(), seed.cords.end(),
                                     [](const Cord& c) { return c.kind == CordKind::kSecondary; });
-  for (int step = 0; has_both && kind_half > 0 && step < 2 * options.kind_rounds; ++step) {
-    // A new round only when the last one moved a factor.
-    if (step > 0 && step % 2 == 0 && result.primary_factor == round_primary &&
-        result.secondary_factor == round_secondary) {
-      break;
-    }
-    if (step % 2 == 0) {
-      round_primary = result.primary_factor;
-      round_secondary = result.secondary_factor;
-    }
-    const bool secondaries = step % 2 == 0;
+  for (int kind = 0; has_both && kind_half > 0 && kind < 2; ++kind) {
+    const bool secondaries = kind == 0;
     std::vector<std::pair<double, double>> pairs;
     for (int k = -kind_half; k <= kind_half; ++k) {
       if (k == 0) continue;

@@ -15,9 +15,6 @@
 // hold different parts of the leaflet (free edge, belly), and one common factor is a
 // compromise between them: on the prolapse-P2 cohort case the best common factor leaves the
 // belly high and the free edge low (docs/fitting.md, "Pre-fit stages: what was tried").
-// Up to `kind_rounds` such alternations: one is a coordinate step, and when the primaries
-// move, the secondaries' best factor moves with them (GlobalPrefit.ScalesEachCordKindOnItsOwn:
-// one round ended at primaries 0.78 / secondaries 0.83 against a truth of 0.8 / 0.9).
 // Manual (provenance manual) and locked cords keep their values: the user's edits are the
 // starting point and prior of the optimisation, not something to rescale.
 #pragma once
@@ -41,7 +38,6 @@ struct PrefitOptions {
   int points = 9;         // grid over [scale_lower, scale_upper], ends included
   int refine_points = 4;  // then evenly inside the best point's two grid intervals
   int kind_points = 4;    // then per cord kind around the common factor (0: no kind stage)
-  int kind_rounds = 2;    // alternations secondaries -> primaries; stops when one moves none
   int threads = 2;
 };
 

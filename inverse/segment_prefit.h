@@ -9,18 +9,12 @@
 // the paper's manual workflow at a finer grain (its user scales groups of cords until the
 // closed valve matches the tracings).
 //
-// Best first, in two stages. (1) For every segment s, every free non-manual cord whose
-// leaflet vertex lies in s (open-state position, as the prolapse measure localises) is set to
-// scale t for each t of a grid over the scale bounds, all from the same start; the
-// 6 x points candidates close in parallel. (2) Segments whose best grid point lowers the data
-// cost 1/2 sum rho(r^2) are ordered by that cost; the best is taken, and each of the others
-// is added with its own best scale only if the combination lowers the cost again (one
-// closure each, at most 5). Manual and locked cords keep their values.
-// Why best first: the earlier one pass in Carpentier order (a coordinate descent, each
-// segment's grid from the cords so far) let a segment that comes first take a neighbour's
-// change. On the bundled small case with noise-free tracings of longer P2 cords and the
-// own-leaflet residual it kept "A2 0.7" before reaching P2 and ended at a cost of 78 instead
-// of 0 (SegmentPrefit.FindsTheLongerP2CordsAndKeepsManualCords).
+// One pass, segments in Carpentier order (A1, A2, A3, P1, P2, P3): for segment s, every
+// free non-manual cord whose leaflet vertex lies in s (open-state position, as the prolapse
+// measure localises) is set to scale t for each t of a grid over the scale bounds; the
+// candidates close in parallel, and the best t is kept if it lowers the data cost
+// 1/2 sum rho(r^2). The next segment starts from the cords so far, so the pass is a
+// coordinate descent. Manual and locked cords keep their values.
 #pragma once
 
 #include <string>
@@ -45,11 +39,6 @@ struct SegmentPrefitResult {
   std::vector<std::string> changed;  // "P2 1.3", one per accepted segment, in order
   int forward_sims = 0;
 };
-
-// Closures the pre-fit may run on a mitral mesh: 6 segments x points, plus 5 combinations.
-inline int segmentPrefitMaxSims(const SegmentPrefitOptions& options) {
-  return 6 * options.points + 5;
-}
 
 // start_evaluation: the closure of `start` (already run, not repeated).
 SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSet& start,

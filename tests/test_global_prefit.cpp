@@ -50,7 +50,14 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   const inverse::ParameterBounds bounds;
   const inverse::FitParameterization parameters(p.valve_case, p.seed,
                                                 inverse::ParameterMode::kScales, bounds);
-  const inverse::ForwardResidual residual(p.valve_case, parameters, p.settings, {});
+  // The whole-mesh residual: this tests the kind stage's mechanism on noise-free data. With
+  // the default own-leaflet residual the one round of the stage takes another path on this
+  // problem (primaries 0.78, secondaries 0.83, cost 118 against 213 for the best common
+  // factor); a second round fixed that but did worse on the cohort (docs/fitting.md,
+  // "Own-leaflet residual: pre-fit variants").
+  inverse::ResidualOptions whole_mesh;
+  whole_mesh.own_leaflet = false;
+  const inverse::ForwardResidual residual(p.valve_case, parameters, p.settings, whole_mesh);
   const std::vector<inverse::ForwardEvaluation> seed =
       inverse::closeCordSets(p.valve_case, {p.seed}, residual, 2);
   ASSERT_TRUE(seed[0].ok()) << seed[0].error;
@@ -59,7 +66,6 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   const inverse::PrefitResult result =
       inverse::globalScalePrefit(p.valve_case, p.seed, seed[0], bounds, residual, options);
   ASSERT_FALSE(result.costs.empty());
-
   const double best_common = *std::min_element(result.costs.begin(), result.costs.end());
   // The secondaries end relatively longer than the primaries, as in the truth, and the data
   // cost falls well below that of the best common factor.
@@ -67,11 +73,7 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   EXPECT_LT(std::abs(result.primary_factor - kPrimaryScale), 0.05);
   EXPECT_LT(std::abs(result.secondary_factor - kSecondaryScale), 0.05);
   EXPECT_LT(result.best.cost, 0.5 * best_common) << "better than any common factor";
-  // Each kind round is at most 2 x kind_points closures (fewer where a factor would leave
-  // the bounds); a second round runs only when the first moved a factor.
-  const int kind_sims = result.forward_sims - static_cast<int>(result.costs.size());
-  EXPECT_GT(kind_sims, 0);
-  EXPECT_LE(kind_sims, 2 * options.kind_points * options.kind_rounds);
+  EXPECT_EQ(result.forward_sims, static_cast<int>(result.costs.size()) + 2 * options.kind_points);
   // The start is the seed with the two factors on its free cords.
   for (std::size_t c = 0; c < p.seed.cords.size(); ++c) {
     const Cord& cord = result.start.cords[c];
