@@ -34,7 +34,7 @@ Eigen::VectorXd pointToOwnLeafletDistances(const Eigen::MatrixXd& V, const Eigen
                                            const Eigen::VectorXi& point_leaflet) {
   Eigen::VectorXd d(points.rows());
   if (points.rows() == 0) return d;
-  // One AABB tree per leaflet label that some point asks for, plus the whole mesh.
+  // One AABB tree per leaflet label some point asks for; the whole mesh only when needed.
   std::map<int, std::vector<Eigen::Index>> faces_of;
   for (Eigen::Index f = 0; f < F.rows(); ++f) faces_of[face_leaflet(f)].push_back(f);
   std::map<int, std::unique_ptr<SurfaceDistance>> leaflet_surface;
