@@ -34,7 +34,7 @@ ForwardEvaluation closeForData(const ValveCase& valve_case, const CordSet& cords
   e.closed_V = r.V;
   e.data = residual.dataResiduals(r.V);
   e.cost = residual.cost(e.data, Eigen::VectorXd());
-  e.mean_deviation_mm = e.data.size() > 0 ? e.data.mean() : 0.0;
+  e.mean_deviation_mm = residual.meanDeviation(r.V, e.data);
   return e;
 }
 

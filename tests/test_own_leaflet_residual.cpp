@@ -6,6 +6,7 @@
 #include "core/metrics.h"
 #include "inverse/fit_parameters.h"
 #include "inverse/forward_residual.h"
+#include "inverse/global_prefit.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -40,6 +41,15 @@ TEST(OwnLeafletResidual, IsTheOwnLeafletDistanceAndKeepsAvgDOnTheWholeMesh) {
   }
   EXPECT_GT(farther, 0) << "no point is nearer to the other leaflet in the open state";
   EXPECT_DOUBLE_EQ(own.meanDeviation(c.mesh.V, own_data), surface_data.mean());
+
+  // The pre-fits' closures report the whole-mesh AvgD, as evaluate() does, not the mean of
+  // their own-leaflet data (cords other than the traced ones, so the two differ).
+  const CordSet shorter = inverse::scaleFreeCords(*c.cords, 0.9);
+  const inverse::ForwardEvaluation prefit_closure = inverse::closeForData(traced, shorter, own);
+  ASSERT_TRUE(prefit_closure.ok()) << prefit_closure.error;
+  EXPECT_DOUBLE_EQ(prefit_closure.mean_deviation_mm,
+                   own.surfaceDistances(prefit_closure.closed_V).mean());
+  EXPECT_GT(prefit_closure.data.mean(), prefit_closure.mean_deviation_mm);
 
   // On the traced closed state every point lies on its own leaflet's surface.
   const Eigen::VectorXd on_surface = own.dataResiduals(closed.V);
