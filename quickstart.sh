@@ -57,7 +57,7 @@ run_fit() {
   if [ -f "$case_dir/truth/metrics.json" ]; then
     grep -o '"mean_mm": [0-9.]*' "$case_dir/truth/metrics.json" | sed 's/^/      truth /'
   fi
-  say "done: $out/report.md, cords.json, closed.ply / closed.vtk (ParaView, 3D Slicer)"
+  say "done: $out/report.md, sections.svg (fit vs tracings per plane), cords.json, closed.ply / closed.vtk (ParaView, 3D Slicer)"
 }
 
 run_tests() {

@@ -15,7 +15,7 @@
 #include "core/heuristic.h"
 #include "core/mesh_io.h"
 #include "core/metrics_json.h"
-#include "core/svg_cross_sections.h"
+#include "core/section_figure.h"
 
 namespace chordfit {
 
@@ -23,8 +23,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using nlohmann::json;
-
-constexpr double kPi = 3.14159265358979323846;
 
 // Independent random streams of one patient (SeededRandom::stream).
 enum Stream : std::uint64_t {
@@ -34,13 +32,8 @@ enum Stream : std::uint64_t {
   kTracingStream = 4
 };
 
-// Colours of the cross-section figure.
-constexpr const char* kAnteriorColour = "#c0392b";
-constexpr const char* kPosteriorColour = "#1f5fa8";
+// Colour of the open state in the cross-section figure.
 constexpr const char* kOpenColour = "#9a9a9a";
-constexpr const char* kTracingColour = "#111111";
-constexpr const char* kClosedAnnulusColour = "#e67e22";
-constexpr const char* kOpenAnnulusColour = "#f5cba7";
 
 // Step cap of the truth closure. Some truths never meet the equilibrium criterion (a part of
 // a leaflet keeps moving ~0.05 mm per step; experiments/README.md "Calibration") although
@@ -86,96 +79,22 @@ json settingsJson(const SimulationSettings& s) {
 // Figure
 // ---------------------------------------------------------------------------------------
 
-Eigen::MatrixXd project(const ImagePlane& plane, const Eigen::MatrixXd& P) {
-  Eigen::MatrixXd Q(P.rows(), 2);
-  for (Eigen::Index i = 0; i < P.rows(); ++i) {
-    const Eigen::Vector3d d = P.row(i).transpose() - plane.origin;
-    Q(i, 0) = plane.u.dot(d);
-    Q(i, 1) = plane.w.dot(d);
-  }
-  return Q;
-}
-
-// Where the closed polyline `ring` (#ring by 3) crosses the plane, projected (#hits by 2).
-Eigen::MatrixXd ringCrossings(const ImagePlane& plane, const Eigen::MatrixXd& ring) {
-  std::vector<Eigen::Vector3d> hits;
-  const Eigen::Index n = ring.rows();
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const Eigen::Vector3d p = ring.row(i).transpose(), q = ring.row((i + 1) % n).transpose();
-    const double dp = plane.normal.dot(p - plane.origin), dq = plane.normal.dot(q - plane.origin);
-    if ((dp >= 0.0) == (dq >= 0.0)) continue;
-    hits.push_back(p + dp / (dp - dq) * (q - p));
-  }
-  Eigen::MatrixXd P(hits.size(), 3);
-  for (std::size_t i = 0; i < hits.size(); ++i) P.row(i) = hits[i].transpose();
-  return project(plane, P);
-}
-
+// The truth mesh's open and closed sections under the case's tracings, on the planes the
+// tracings were sampled on (section_figure.h).
 std::string crossSectionFigure(const SyntheticCase& s) {
   const ValveCase& truth = s.truth_case;
   const ClosedAnnulus closed = closedAnnulus(truth);
-  const std::vector<ImagePlane> planes = longAxisPlanes(closed.frame, s.options.tracing.planes);
-  const Eigen::VectorXi face_leaflet = faceLeaflets(truth.mesh.F, truth.mesh.leaflet);
-  Eigen::MatrixXd open_ring(truth.mesh.annulus.size(), 3);
-  for (Eigen::Index i = 0; i < truth.mesh.annulus.size(); ++i) {
-    open_ring.row(i) = truth.mesh.V.row(truth.mesh.annulus(i));
-  }
-
-  std::vector<SvgPanel> panels;
-  for (std::size_t i = 0; i < planes.size(); ++i) {
-    const ImagePlane& plane = planes[i];
-    SvgPanel panel;
-    char title[96];
-    std::snprintf(title, sizeof title, "plane %zu: %.0f deg from the AP axis%s", i,
-                  plane.angle * 180.0 / kPi, i == 0 ? " (anteroposterior)" : "");
-    panel.title = title;
-
-    SvgSeries open{SvgSeries::Kind::kLine, {}, kOpenColour, 1.2, true, "open state (truth mesh)"};
-    for (const SectionPolyline& p :
-         planeSection(truth.mesh.V, truth.mesh.F, face_leaflet, plane.origin, plane.normal)) {
-      open.parts.push_back(project(plane, p.points));
-    }
-    SvgSeries anterior{SvgSeries::Kind::kLine, {}, kAnteriorColour, 2.0, false,
-                       "true closed, anterior"};
-    SvgSeries posterior{SvgSeries::Kind::kLine,  {}, kPosteriorColour, 2.0, false,
-                        "true closed, posterior"};
-    for (const SectionPolyline& p :
-         planeSection(s.truth_result.V, truth.mesh.F, face_leaflet, plane.origin, plane.normal)) {
-      (p.leaflet == 0 ? anterior : posterior).parts.push_back(project(plane, p.points));
-    }
-    SvgSeries tracing{SvgSeries::Kind::kDots,
-                      {},
-                      kTracingColour,
-                      1.1,
-                      false,
-                      "tracing points (noisy, with dropout)"};
-    for (const Tracing& t : s.valve_case.tracings) {
-      if ((t.plane_normal - plane.normal).norm() < 1e-9)
-        tracing.parts.push_back(project(plane, t.points));
-    }
-    SvgSeries closed_ring{SvgSeries::Kind::kSquares,
-                          {ringCrossings(plane, truth.annulus_closed)},
-                          kClosedAnnulusColour,
-                          3.0,
-                          false,
-                          "closed annulus"};
-    SvgSeries open_ring_points{SvgSeries::Kind::kSquares,
-                               {ringCrossings(plane, open_ring)},
-                               kOpenAnnulusColour,
-                               3.0,
-                               false,
-                               "open annulus"};
-    panel.series = {open, open_ring_points, anterior, posterior, closed_ring, tracing};
-    panels.push_back(std::move(panel));
-  }
-  SvgFigureOptions options;
+  const std::vector<SectionLayer> layers = {
+      {"open state (truth mesh)", truth.mesh.V, kOpenColour, true, 1.2},
+      {"true closed", s.truth_result.V, "", false, 2.0}};
+  SectionFigureOptions options;
   options.title = "Synthetic case " + s.valve_case.name + " (" + s.preset.name +
-                  "): true closed valve and tracings on " + std::to_string(planes.size()) +
-                  " long-axis planes";
-  options.x_label = "in-plane axis u (mm)";
-  options.y_label = "height along n_AP, atrium up (mm)";
-  options.columns = std::min<int>(3, static_cast<int>(planes.size()));
-  return crossSectionsSvg(panels, options);
+                  "): true closed valve and tracings on " +
+                  std::to_string(s.options.tracing.planes) + " long-axis planes";
+  options.open_annulus = true;
+  options.tracing_label = "tracing points (noisy, with dropout)";
+  return sectionFigureSvg(truth.mesh, closed.ring, s.valve_case.tracings,
+                          longAxisPlanes(closed.frame, s.options.tracing.planes), layers, options);
 }
 
 }  // namespace

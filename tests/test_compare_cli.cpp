@@ -89,6 +89,10 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
   // The loose set closes differently: a different mean deviation (the test would pass with
   // two identical rows otherwise).
   EXPECT_NE(rows[1][6], rows[2][6]);
+  // Both closures against the tracings, one colour per cord set.
+  const std::string svg = readText(out / "sections.svg");
+  EXPECT_NE(svg.find(">heuristic<"), std::string::npos);
+  EXPECT_NE(svg.find(">loose<"), std::string::npos);
 }
 
 TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {

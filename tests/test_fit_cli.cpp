@@ -79,8 +79,14 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   EXPECT_NE(r.out.find("ceres   iter"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("| seed |"), std::string::npos) << r.out;
   for (const char* file : {"cords.json", "closed.ply", "closed.vtk", "metrics.json",
-                           "convergence.csv", "convergence.svg", "report.md"}) {
+                           "convergence.csv", "convergence.svg", "sections.svg", "report.md"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "fit" / file)) << file;
+  }
+  // The seed and the fitted closure against the tracings, one panel per plane (3 planes).
+  const std::string sections = testing::readText(dir / "fit" / "sections.svg");
+  for (const char* text : {">seed closure<", ">fitted closure, anterior<",
+                           ">fitted closure, posterior<", ">tracing points<", ">plane 2: "}) {
+    EXPECT_NE(sections.find(text), std::string::npos) << text;
   }
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   for (const char* key :

@@ -39,6 +39,22 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
   EXPECT_NE(
       testing::readText(dir_ / "sim" / "closed.ply").find("property float prolapse_height_mm"),
       std::string::npos);
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "sections.svg"))
+      << "no tracings, no figure of them";
+}
+
+TEST(SimulateCommandWithTracings, DrawsTheClosedValveAgainstTheTracingsOfEveryPlane) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const auto r = runChordfit("simulate " + quoted(small) + " --quiet --out " + quoted(dir / "sim"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("sections.svg"), std::string::npos) << r.out;
+  const std::string svg = testing::readText(dir / "sim" / "sections.svg");
+  for (const char* text : {">simulated closed, anterior<", ">simulated closed, posterior<",
+                           ">tracing points<", ">closed annulus<", ">plane 0: ", ">plane 2: "}) {
+    EXPECT_NE(svg.find(text), std::string::npos) << text;
+  }
+  EXPECT_EQ(svg.find(">plane 3: "), std::string::npos) << "the case has 3 tracing planes";
 }
 
 TEST_F(SimulateCommand, IsDeterministicByteForByte) {

@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/case_io.h"
 #include "core/metrics.h"
+#include "core/section_figure.h"
 #include "core/simulator.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -30,7 +31,24 @@ struct ComparedSet {
   ValveMetrics metrics;
   bool converged = false;
   int steps = 0;
+  Eigen::MatrixXd closed_V;
 };
+
+// One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008).
+const char* const kSetColours[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7",
+                                   "#e69f00", "#56b4e9", "#000000"};
+
+std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets) {
+  std::vector<SectionLayer> layers;
+  for (std::size_t i = 0; i < sets.size(); ++i) {
+    layers.push_back(
+        {sets[i].label, sets[i].closed_V, kSetColours[i % std::size(kSetColours)], false, 1.8});
+  }
+  return caseSectionFigureSvg(c, layers,
+                              {"Cord sets compared on case " + c.name +
+                               ": closed valves against "
+                               "the tracings"});
+}
 
 std::vector<std::string> splitLabels(const std::string& text) {
   std::vector<std::string> labels;
@@ -161,7 +179,7 @@ int runCompare(const CompareOptions& options) {
   for (std::size_t i = 0; i < options.cords_files.size(); ++i) {
     const auto cords = resolveCords(*valve_case, options.cords_files[i]);
     if (!cords) return kExitBadInput;
-    ComparedSet set{labels[i], options.cords_files[i], *cords, *valve_case, {}, false, 0};
+    ComparedSet set{labels[i], options.cords_files[i], *cords, *valve_case, {}, false, 0, {}};
     if (tissues[i] != "-") {
       Diagnostics diagnostics;
       if (!loadTissueFile(tissues[i], tissues[i], set.valve_case, diagnostics))
@@ -185,6 +203,7 @@ int runCompare(const CompareOptions& options) {
     s.metrics = computeMetrics(*valve_case, closed.V);
     s.converged = closed.converged;
     s.steps = closed.steps;
+    s.closed_V = closed.V;
     if (!options.quiet) {
       std::fprintf(stderr, "compare: [%zu/%zu] %s: %s after %d steps, %.1f s, AvgD %.2f mm\n",
                    i + 1, sets.size(), s.label.c_str(),
@@ -209,7 +228,10 @@ int runCompare(const CompareOptions& options) {
     const std::filesystem::path out(options.out_dir);
     writeFileAtomically(out / "compare.md", compareMarkdown(*valve_case, sets));
     writeFileAtomically(out / "compare.csv", compareCsv(sets));
-    std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv\n";
+    const std::string sections = sectionsSvg(*valve_case, sets);
+    if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
+    std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv"
+              << (sections.empty() ? "" : ", sections.svg") << "\n";
   }
   return kExitOk;
 }

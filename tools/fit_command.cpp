@@ -14,6 +14,7 @@
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
+#include "core/section_figure.h"
 #include "core/simulator.h"
 #include "core/svg_line_plot.h"
 #include "inverse/fit_cords.h"
@@ -25,6 +26,8 @@ namespace chordfit::cli {
 namespace {
 
 using inverse::IterationRecord;
+
+constexpr const char* kSeedColour = "#9a9a9a";  // the seed closure in sections.svg
 
 std::string joinNames(const std::vector<std::string>& names) {
   std::string joined;
@@ -117,6 +120,8 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
      << " (Table 1 compares these); tissue: seed "
      << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
+  md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
+        "(sections.svg)\n\n";
   md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic).\n\n"
      << cordTable(c, fit.seed, fit.fitted);
   return md.str();
@@ -239,6 +244,14 @@ int runFit(const FitCommandOptions& o) {
   writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
   writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
   writeFileAtomically(out / "report.md", report(*valve_case, o, fit, seed_metrics, fit_metrics));
+  // Replaces simulate's figure of the fitted closure alone: the seed closure beside it.
+  writeFileAtomically(
+      out / "sections.svg",
+      caseSectionFigureSvg(*valve_case,
+                           {{"seed closure", fit.seed_evaluation.closed_V, kSeedColour, true, 1.4},
+                            {"fitted closure", fit.final_evaluation.closed_V, "", false, 2.0}},
+                           {valve_case->name + ": seed and fitted closures against the tracings (" +
+                            o.optimizer + ", " + o.params + ")"}));
 
   std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
               fit.seconds, fit.termination.c_str());
@@ -251,7 +264,7 @@ int runFit(const FitCommandOptions& o) {
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
   std::cout << "wrote " << (out / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
-               "report.md\n";
+               "sections.svg, report.md\n";
   return kExitOk;
 }
 

@@ -10,6 +10,7 @@
 #include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "core/metrics_json.h"
+#include "core/section_figure.h"
 #include "core/simulator.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -133,6 +134,10 @@ int runSimulate(const SimulateOptions& options) {
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
   writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
+  const std::string sections = caseSectionFigureSvg(
+      *valve_case, {{"simulated closed", closed.V, "", false, 2.0}},
+      {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
+  if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
 
   std::printf("closure: %s after %d steps, %.2f s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
@@ -147,7 +152,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << prolapseSummary(metrics);
-  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json\n";
+  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json"
+            << (sections.empty() ? "" : ", sections.svg") << "\n";
   return kExitOk;
 }
 

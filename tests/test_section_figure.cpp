@@ -1,0 +1,153 @@
+// The closed-valve-against-tracings figure (core/section_figure.h): image planes recovered
+// from tracings, annulus crossings, and the figure's content. Hand-built and parametric meshes,
+// no simulation.
+#include <cmath>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/annulus_plane.h"
+#include "core/cohort_presets.h"
+#include "core/parametric_valve.h"
+#include "core/section_figure.h"
+#include "core/tracing_sampler.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kTight = 1e-9;
+
+std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
+    ++count;
+  return count;
+}
+
+Tracing tracingOn(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal,
+                  const Eigen::MatrixXd& points, int leaflet) {
+  Tracing t;
+  t.points = points;
+  t.plane_origin = origin;
+  t.plane_normal = normal;
+  t.leaflet = leaflet;
+  return t;
+}
+
+TEST(TracingPlanes, RecoverTheLongAxisPlanesTheTracingsWereSampledOn) {
+  ValveParameters parameters;
+  parameters.target_edge_mm = 3.0;
+  const ValveCase valve = makeParametricValve(parameters).valve_case;
+  const AnnulusFrame frame = openAnnulusFrame(valve.mesh);
+  TracingSamplerOptions options;
+  options.noise_mm = 0.0;
+  options.dropout_fraction = 0.0;
+  SeededRandom random(1);
+  const std::vector<Tracing> tracings =
+      sampleTracings(valve.mesh.V, valve.mesh.F, valve.mesh.leaflet, frame, options, random);
+  ASSERT_GT(tracings.size(), 6u) << "several polylines per plane";
+
+  const std::vector<ImagePlane> expected = longAxisPlanes(frame, options.planes);
+  const std::vector<ImagePlane> planes = tracingPlanes(tracings, frame);
+  ASSERT_EQ(planes.size(), expected.size());
+  for (std::size_t i = 0; i < planes.size(); ++i) {
+    EXPECT_LT((planes[i].origin - expected[i].origin).norm(), kTight) << i;
+    EXPECT_LT((planes[i].normal - expected[i].normal).norm(), kTight) << i;
+    EXPECT_LT((planes[i].u - expected[i].u).norm(), 1e-12) << "u = d_i, plane " << i;
+    EXPECT_LT((planes[i].w - expected[i].w).norm(), 1e-12) << "w = n_AP, plane " << i;
+    EXPECT_NEAR(planes[i].angle, expected[i].angle, kTight) << i;
+  }
+  for (const Tracing& t : tracings) {
+    int on = 0;
+    for (const ImagePlane& p : planes) on += tracedOnPlane(t, p) ? 1 : 0;
+    EXPECT_EQ(on, 1) << "every tracing lies on exactly one plane";
+  }
+}
+
+TEST(TracingPlanes, OneImagePlaneHoldsPolylinesWithDifferentOriginsInIt) {
+  AnnulusFrame frame;  // centre 0, n = z, a = x, l = y
+  const Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
+  Eigen::MatrixXd P(2, 3);
+  P << 0, 0, 0, 1, 0, 0;
+  const std::vector<Tracing> tracings = {
+      tracingOn({0, 0, 0}, normal, P, 0), tracingOn({5, 0, -3}, normal, P, 1),
+      tracingOn({0, 0.5, 0}, normal, P, 1),  // parallel, 0.5 mm away: another plane
+      tracingOn({0, 0, 0}, Eigen::Vector3d::UnitZ(), P, 0)};  // short axis: no "up" in it
+  const std::vector<ImagePlane> planes = tracingPlanes(tracings, frame);
+  ASSERT_EQ(planes.size(), 3u);
+  EXPECT_TRUE(tracedOnPlane(tracings[1], planes[0]));
+  EXPECT_FALSE(tracedOnPlane(tracings[2], planes[0]));
+  EXPECT_LT((planes[0].w - Eigen::Vector3d::UnitZ()).norm(), kTight);
+  EXPECT_LT((planes[0].u - Eigen::Vector3d::UnitX()).norm(), kTight) << "u = normal x w";
+  EXPECT_NEAR(planes[0].angle, 0.0, kTight) << "the anteroposterior plane";
+  EXPECT_TRUE(planes[2].u.allFinite() && planes[2].w.allFinite());
+  EXPECT_NEAR(planes[2].w.dot(Eigen::Vector3d::UnitZ()), 0.0, kTight) << "w lies in the plane";
+  EXPECT_NEAR(planes[2].w.norm(), 1.0, kTight);
+}
+
+TEST(RingCrossings, FindTheTwoHingesOfALongAxisPlane) {
+  const ValveCase cone = testing::tinyConeCase();
+  ImagePlane plane;  // the xz-plane: normal y, u = x, w = z
+  plane.normal = Eigen::Vector3d::UnitY();
+  plane.u = Eigen::Vector3d::UnitX();
+  plane.w = Eigen::Vector3d::UnitZ();
+  Eigen::MatrixXd hinges = ringCrossings(plane, cone.annulus_closed);
+  ASSERT_EQ(hinges.rows(), 2);
+  if (hinges(0, 0) > hinges(1, 0)) hinges.row(0).swap(hinges.row(1));
+  EXPECT_NEAR(hinges(0, 0), -10.0, kTight);
+  EXPECT_NEAR(hinges(1, 0), 10.0, kTight);
+  EXPECT_NEAR(hinges(0, 1), 0.0, kTight);
+  EXPECT_NEAR(hinges(1, 1), 0.0, kTight);
+}
+
+TEST(SectionFigureSvg, DrawsEveryLayerByLeafletTheHingesTheThresholdAndThePlaneTracings) {
+  ValveCase cone = testing::tinyConeCase();
+  Eigen::MatrixXd traced(3, 3);  // on the anterior section (x from 10 to 6 at y = 0)
+  traced << 10, 0, 0, 8, 0, -4, 6, 0, -8;
+  cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0)};
+  Eigen::MatrixXd lowered = cone.mesh.V;
+  lowered.col(2).array() -= 1.0;
+  const std::vector<SectionLayer> layers = {{"seed", lowered, "#9a9a9a", true, 1.4},
+                                            {"fit", cone.mesh.V, "", false, 2.0}};
+  const std::string svg = caseSectionFigureSvg(cone, layers, {"cone <test>"});
+  EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
+  EXPECT_NE(svg.find("cone &lt;test&gt;"), std::string::npos);
+  EXPECT_NE(svg.find(">plane 0: 0 deg from the AP axis (anteroposterior)<"), std::string::npos);
+  for (const char* label : {"seed", "fit, anterior", "fit, posterior", "closed annulus",
+                            "prolapse: hinges + 2 mm", "tracing points"}) {
+    EXPECT_NE(svg.find(">" + std::string(label) + "<"), std::string::npos) << label;
+  }
+  EXPECT_EQ(svg.find("open annulus"), std::string::npos) << "off by default";
+  // The plane cuts each leaflet once: 2 seed + 2 fit polylines and the threshold line (legend
+  // samples are <line>s).
+  EXPECT_EQ(occurrences(svg, "<polyline"), 5u);
+  EXPECT_EQ(occurrences(svg, "<circle"), 3u + 1u) << "3 tracing points and a legend dot";
+  EXPECT_EQ(occurrences(svg, "stroke=\"#9a9a9a\""), 2u + 1u) << "the seed in its own colour";
+  EXPECT_EQ(svg.find("nan"), std::string::npos);
+}
+
+TEST(SectionFigureSvg, EachPanelShowsOnlyTheTracingsOfItsPlane) {
+  ValveCase cone = testing::tinyConeCase();
+  Eigen::MatrixXd traced(3, 3);
+  traced << 10, 0, 0, 8, 0, -4, 6, 0, -8;
+  Eigen::MatrixXd elsewhere(2, 3);  // on the plane x = 0.5
+  elsewhere << 0.5, 9, 0, 0.5, 5, -8;
+  cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0),
+                   tracingOn({0.5, 0, 0}, Eigen::Vector3d::UnitX(), elsewhere, 1)};
+  SectionFigureOptions options;
+  options.open_annulus = true;
+  const std::string svg =
+      caseSectionFigureSvg(cone, {{"closed", cone.mesh.V, "", false, 2.0}}, options);
+  EXPECT_NE(svg.find(">plane 1: 90 deg from the AP axis<"), std::string::npos);
+  EXPECT_NE(svg.find(">open annulus<"), std::string::npos);
+  EXPECT_EQ(occurrences(svg, "<circle"), 3u + 2u + 1u) << "each point once, in its own panel";
+}
+
+TEST(SectionFigureSvg, IsEmptyForACaseWithoutTracings) {
+  const ValveCase cone = testing::tinyConeCase();
+  EXPECT_TRUE(caseSectionFigureSvg(cone, {{"fit", cone.mesh.V, "", false, 2.0}}, {}).empty());
+}
+
+}  // namespace
+}  // namespace chordfit
