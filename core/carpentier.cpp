@@ -144,15 +144,19 @@ int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
   return position.leaflet * 3 + index;
 }
 
-std::string segmentName(const SegmentMap& map, int segment_id) {
+std::string segmentName(const std::vector<std::string>& leaflet_names, int segment_id) {
   if (segment_id < 0) return "?";
   const int leaflet = segment_id / 3;
   std::string prefix =
-      leaflet < static_cast<int>(map.leaflet_names.size()) && !map.leaflet_names[leaflet].empty()
-          ? std::string(1, static_cast<char>(std::toupper(
-                               static_cast<unsigned char>(map.leaflet_names[leaflet][0]))))
+      leaflet < static_cast<int>(leaflet_names.size()) && !leaflet_names[leaflet].empty()
+          ? std::string(1, static_cast<char>(
+                               std::toupper(static_cast<unsigned char>(leaflet_names[leaflet][0]))))
           : "L" + std::to_string(leaflet);
   return prefix + std::to_string(segment_id % 3 + 1);
+}
+
+std::string segmentName(const SegmentMap& map, int segment_id) {
+  return segmentName(map.leaflet_names, segment_id);
 }
 
 }  // namespace chordfit

@@ -58,6 +58,7 @@ ArcPosition arcPositionOf(const SegmentMap& map, const Eigen::Vector3d& p, int l
 int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet);
 
 // "A2", "P1", ...: first letter of the leaflet name, upper-cased, + (index + 1).
+std::string segmentName(const std::vector<std::string>& leaflet_names, int segment_id);
 std::string segmentName(const SegmentMap& map, int segment_id);
 
 }  // namespace chordfit

@@ -37,12 +37,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
   const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
   const int points = std::max(2, options.points);
   const double spacing = (bounds.scale_upper - bounds.scale_lower) / (points - 1);
-  SegmentMap names;  // only for segmentName
-  names.leaflet_names = valve_case.mesh.leaflet_names;
-  int segment_count = 0;
-  for (Eigen::Index v = 0; v < vertex_segment.size(); ++v) {
-    segment_count = std::max(segment_count, vertex_segment(v) + 1);
-  }
+  const int segment_count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
   for (int segment = 0; segment < segment_count; ++segment) {
     bool has_free = false;
     for (const Cord& cord : result.start.cords) {
@@ -64,7 +59,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
     result.start = std::move(sets[best]);
     result.best = std::move(evaluations[best]);
     std::ostringstream change;
-    change << segmentName(names, segment) << " " << scales[best];
+    change << segmentName(valve_case.mesh.leaflet_names, segment) << " " << scales[best];
     result.changed.push_back(change.str());
   }
   return result;

@@ -35,8 +35,6 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
   Eigen::VectorXd tissue = valve_case.tissue_stiffness.size() == n ? valve_case.tissue_stiffness
                                                                    : Eigen::VectorXd::Ones(n);
   const Eigen::VectorXi vertex_segment = openStateSegments(valve_case.mesh);
-  SegmentMap names;  // only for segmentName
-  names.leaflet_names = valve_case.mesh.leaflet_names;
   const int segment_count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
 
   // Greedy, best first: every segment's candidates from the same start, the best accepted;
@@ -83,7 +81,8 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
     result.start = std::move(candidates[best].cords);
     result.best = std::move(evaluations[best]);
     std::ostringstream change;
-    change << segmentName(names, candidate_segment[best]) << " " << candidates[best].factor;
+    change << segmentName(valve_case.mesh.leaflet_names, candidate_segment[best]) << " "
+           << candidates[best].factor;
     if (candidates[best].long_cords) change << ", cords " << bounds.scale_upper;
     result.changed.push_back(change.str());
   }
