@@ -13,8 +13,8 @@ namespace {
 
 Eigen::VectorXd toVector(const double* x, int n) { return Eigen::Map<const Eigen::VectorXd>(x, n); }
 
-// Residual i = distance of tracing point i to the closed surface; its Jacobian row comes from
-// the objective's central differences at x.
+// Data residual i (tracing point i's distance to the closed surface, or a section residual);
+// its Jacobian row comes from the objective's central differences at x.
 class DataPointCost : public ceres::CostFunction {
  public:
   DataPointCost(FitObjective& objective, int point) : objective_(objective), point_(point) {
@@ -119,8 +119,11 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   // The problem owns cost and loss functions (one loss object per block: no shared
   // ownership to get wrong).
   for (int i = 0; i < residual.dataCount(); ++i) {
-    problem.AddResidualBlock(new DataPointCost(objective, i),
-                             new ceres::HuberLoss(residual.options().huber_delta_mm), x.data());
+    // Tracing points through Huber's loss; the section residuals carry their own cap.
+    ceres::LossFunction* loss = i < residual.pointCount()
+                                    ? new ceres::HuberLoss(residual.options().huber_delta_mm)
+                                    : nullptr;
+    problem.AddResidualBlock(new DataPointCost(objective, i), loss, x.data());
   }
   if (residual.regularisationCount() > 0) {
     problem.AddResidualBlock(new RegularisationCost(residual), nullptr, x.data());

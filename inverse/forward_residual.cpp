@@ -46,6 +46,7 @@ ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameter
       settings_(settings),
       options_(options),
       face_leaflets_(faceLeaflets(valve_case.mesh.F, valve_case.mesh.leaflet)),
+      sections_(valve_case, options.section),
       neighbours_(neighbouringCords(valve_case, parameters)) {
   tracing_points_ = stackTracingPoints(valve_case.tracings, &tracing_leaflets_);
   settings_.progress_every = 0;
@@ -80,9 +81,14 @@ ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameter
 }
 
 Eigen::VectorXd ForwardResidual::dataResiduals(const Eigen::MatrixXd& closed_V) const {
-  if (!options_.own_leaflet) return surfaceDistances(closed_V);
-  return pointToOwnLeafletDistances(closed_V, case_.mesh.F, face_leaflets_, tracing_points_,
-                                    tracing_leaflets_);
+  Eigen::VectorXd data(dataCount());
+  data.head(pointCount()) = options_.own_leaflet
+                                ? pointToOwnLeafletDistances(closed_V, case_.mesh.F, face_leaflets_,
+                                                             tracing_points_, tracing_leaflets_)
+                                : surfaceDistances(closed_V);
+  if (sectionCount() > 0)
+    data.tail(sectionCount()) = (options_.section_weight * sections_.excess(closed_V)).cwiseSqrt();
+  return data;
 }
 
 Eigen::VectorXd ForwardResidual::surfaceDistances(const Eigen::MatrixXd& closed_V) const {
@@ -91,15 +97,16 @@ Eigen::VectorXd ForwardResidual::surfaceDistances(const Eigen::MatrixXd& closed_
 
 double ForwardResidual::meanDeviation(const Eigen::MatrixXd& closed_V,
                                       const Eigen::VectorXd& data) const {
-  if (data.size() == 0) return 0.0;
-  return options_.own_leaflet ? surfaceDistances(closed_V).mean() : data.mean();
+  if (pointCount() == 0) return 0.0;
+  return options_.own_leaflet ? surfaceDistances(closed_V).mean() : data.head(pointCount()).mean();
 }
 
 double ForwardResidual::cost(const Eigen::VectorXd& data,
                              const Eigen::VectorXd& regularisation) const {
   double sum = 0.0;
   for (Eigen::Index i = 0; i < data.size(); ++i) {
-    sum += huberRho(data(i) * data(i), options_.huber_delta_mm);
+    sum +=
+        i < pointCount() ? huberRho(data(i) * data(i), options_.huber_delta_mm) : data(i) * data(i);
   }
   return 0.5 * sum + 0.5 * regularisation.squaredNorm();
 }

@@ -63,6 +63,37 @@ TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --section-weight -0.1 --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--section-weight"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
+// The section residuals (--section-weight) reach the fit: recorded in metrics.json and
+// report.md, and the data cost of the start changes (the seed's sections stray from the
+// tracings), while AvgD, the tracing points' mean, does not.
+TEST(FitCommand, SectionWeightIsRecordedAndAddsToTheCostNotToAvgD) {
+  TempDir dir;
+  nlohmann::json runs[2];
+  for (int k = 0; k < 2; ++k) {
+    const std::string out = k == 0 ? "plain" : "sections";
+    const auto r = runChordfit("fit " + quoted(smallCase()) + " --no-prefit --max-sims 1" +
+                               (k == 0 ? std::string() : " --section-weight 0.5") + " --out " +
+                               quoted(dir / out));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    runs[k] = nlohmann::json::parse(testing::readText(dir / out / "metrics.json"));
+  }
+  EXPECT_EQ(runs[0]["section_weight"].get<double>(), 0.0);
+  EXPECT_EQ(runs[1]["section_weight"].get<double>(), 0.5);
+  EXPECT_GT(runs[1]["initial_cost"].get<double>(), runs[0]["initial_cost"].get<double>());
+  EXPECT_EQ(runs[1]["initial_mean_mm"].get<double>(), runs[0]["initial_mean_mm"].get<double>());
+  EXPECT_NE(testing::readText(dir / "sections" / "report.md").find("section residuals: weight 0.5"),
+            std::string::npos);
+}
+
 // One free cord (the others locked, as the paper's editor would write them): 1 + 2 + 1 runs.
 TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   TempDir dir;

@@ -132,6 +132,7 @@ struct FitCommandOptions {
   double fd_tip_step_mm = 0.1;           // ... on a tip offset coordinate
   bool fd_warm_start = false;            // perturbed closures start from the base closed state
   std::string distance = "own-leaflet";  // own-leaflet | surface (inverse/forward_residual.h)
+  double section_weight = 0.0;           // ResidualOptions::section_weight
   std::string out_dir;
   bool quiet = false;
 };

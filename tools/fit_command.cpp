@@ -35,6 +35,12 @@ std::string joinNames(const std::vector<std::string>& names) {
   return joined;
 }
 
+std::string formatWeight(double weight) {
+  std::ostringstream text;
+  text << weight;
+  return text.str();
+}
+
 std::string convergenceCsv(const std::vector<IterationRecord>& history) {
   std::ostringstream csv;
   csv.precision(10);
@@ -92,6 +98,12 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
      << (o.distance == "own-leaflet" ? "each tracing point to its own leaflet's closed surface"
                                      : "each tracing point to the whole closed mesh")
      << " (--distance " << o.distance << "); AvgD below is always to the whole mesh\n";
+  md << "- section residuals: "
+     << (o.section_weight > 0.0 ? "weight " + formatWeight(o.section_weight) +
+                                      " (closed-mesh sections straying more than 1.5 mm from "
+                                      "their plane's tracings are charged)"
+                                : std::string("off"))
+     << "\n";
   md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)")
      << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
      << fit.prefit_secondary_factor << "\n";
@@ -151,6 +163,11 @@ int runFit(const FitCommandOptions& o) {
     std::cerr << "error: fit: --scale-bounds: need two numbers 0 < lower < upper\n";
     return kExitBadInput;
   }
+  if (!(o.section_weight >= 0.0) || !std::isfinite(o.section_weight)) {
+    std::cerr << "error: fit: --section-weight: must be a finite number >= 0, got "
+              << o.section_weight << "\n";
+    return kExitBadInput;
+  }
   if (o.max_sims < 1 || o.threads < 1 || !(o.tip_box_mm > 0.0) || !(o.fd_scale_step > 0.0) ||
       !(o.fd_tip_step_mm > 0.0)) {
     std::cerr << "error: fit: --max-sims, --threads, --tip-box and the finite-difference steps "
@@ -184,6 +201,7 @@ int runFit(const FitCommandOptions& o) {
   options.finite_difference.tip_step_mm = o.fd_tip_step_mm;
   options.finite_difference.warm_start = o.fd_warm_start;
   options.residual.own_leaflet = o.distance == "own-leaflet";
+  options.residual.section_weight = o.section_weight;
   if (!o.quiet) {
     std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
                 valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
@@ -237,6 +255,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["tissue_prefit"] = fit.tissue_prefit_changes;
   metrics["distance"] = o.distance;  // the data residual the fit minimised
+  metrics["section_weight"] = o.section_weight;
   metrics["scale_bounds"] = o.scale_bounds;
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;

@@ -149,6 +149,10 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
                   "Data residual per tracing point: own-leaflet (distance to the surface of the "
                   "point's labelled leaflet) | surface (to the whole closed mesh, as AvgD)")
       ->capture_default_str();
+  cmd->add_option("--section-weight", o.section_weight,
+                  "Weight of the section residuals: closed-mesh sections farther than 1.5 mm "
+                  "from the tracings of their plane (0: off; docs/fitting.md)")
+      ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
