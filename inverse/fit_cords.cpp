@@ -110,6 +110,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   for (const IterationRecord& r : objective.history()) outcome.history.push_back(r);
   outcome.forward_sims = objective.forwardSims();
   outcome.parameter_names = parameters.names();
+  for (int p = 0; p < parameters.size(); ++p)
+    outcome.parameter_is_scale.push_back(parameters.isScale(p));
+  outcome.cord_parameter = parameters.cordParameter();
 
   auto best = objective.best();
   if (!best) best = objective.evaluate(parameters.initial());
@@ -134,6 +137,31 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   }
   outcome.unsettled_sims = seed_residual.unsettledClosures() + residual.unsettledClosures();
   outcome.seconds = seconds();
+  if (options.uncertainty && parameters.size() > 0) {
+    std::shared_ptr<const Eigen::MatrixXd> J = objective.cachedJacobian(best->x);
+    int jacobian_sims = 0;
+    std::string jacobian_error;
+    if (!J) {
+      JacobianResult result =
+          centralDifferenceJacobian(residual, best->x, best->closed_V, options.finite_difference);
+      jacobian_sims = result.forward_sims;
+      jacobian_error = result.error;
+      if (result.ok()) J = std::make_shared<const Eigen::MatrixXd>(std::move(result.J));
+    }
+    if (J) {
+      std::vector<int> runs;  // the stacked tracing points, polyline by polyline
+      for (const Tracing& t : working_case.tracings)
+        runs.push_back(static_cast<int>(t.points.rows()));
+      outcome.uncertainty = fitUncertainty(*J, best->data, runs, options.residual.huber_delta_mm,
+                                           residual.regularisationJacobian(), best->x,
+                                           parameters.lower(), parameters.upper());
+    } else {
+      outcome.uncertainty.error =
+          "uncertainty: a finite-difference closure failed: " + jacobian_error;
+    }
+    outcome.uncertainty.jacobian_sims = jacobian_sims;
+    outcome.uncertainty_seconds = seconds() - outcome.seconds;
+  }
   return outcome;
 }
 

@@ -18,6 +18,7 @@
 #include "inverse/finite_difference.h"
 #include "inverse/fit_objective.h"
 #include "inverse/fit_parameters.h"
+#include "inverse/fit_uncertainty.h"
 #include "inverse/forward_residual.h"
 #include "inverse/global_prefit.h"
 #include "inverse/optimizer.h"
@@ -37,6 +38,10 @@ struct FitOptions {
   std::string optimizer = "ceres";
   OptimizerSettings optimizer_settings;
   int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
+  // After the fit, the uncertainty of each parameter (fit_uncertainty.h) from the Jacobian at
+  // the best point: the optimiser's when it computed one there, else 2 closures per parameter
+  // outside max_sims (FitOutcome::uncertainty.jacobian_sims). `chordfit fit` turns it on.
+  bool uncertainty = false;
   std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
 };
 
@@ -53,11 +58,15 @@ struct FitOutcome {
   // Per-vertex tissue the cords were fitted on (tissue pre-fit); empty = the case's own.
   Eigen::VectorXd tissue;
   std::vector<std::string> parameter_names;
+  std::vector<bool> parameter_is_scale;  // scale or group factor; false: tip offset (mm)
+  std::vector<int> cord_parameter;       // per cord, its parameter (-1: locked)
   Eigen::VectorXd x;                     // fitted parameters
   std::vector<IterationRecord> history;  // seed, pre-fit and optimiser records
   int forward_sims = 0;
-  int unsettled_sims = 0;  // of forward_sims: closures that reached their step cap
-  double seconds = 0.0;
+  int unsettled_sims = 0;      // of forward_sims: closures that reached their step cap
+  double seconds = 0.0;        // the fit, without the uncertainty
+  FitUncertainty uncertainty;  // empty (sd.size() == 0) when not asked for
+  double uncertainty_seconds = 0.0;
   std::string termination;
   bool ok() const { return error.empty(); }
 };

@@ -83,6 +83,11 @@ std::shared_ptr<const ForwardEvaluation> FitObjective::cached(const Eigen::Vecto
   return entry ? entry->evaluation : nullptr;
 }
 
+std::shared_ptr<const Eigen::MatrixXd> FitObjective::cachedJacobian(const Eigen::VectorXd& x) {
+  Entry* entry = find(x);
+  return entry ? entry->jacobian : nullptr;
+}
+
 void FitObjective::recordIteration(const std::string& stage, int iteration, double cost,
                                    double mean_deviation_mm) {
   IterationRecord record;

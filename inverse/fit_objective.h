@@ -66,6 +66,8 @@ class FitObjective {
   void remember(const ForwardEvaluation& evaluation);
   // The cached full closure at x, or nullptr (no forward run).
   std::shared_ptr<const ForwardEvaluation> cached(const Eigen::VectorXd& x);
+  // The Jacobian computed at x, if it is still cached, or nullptr (no forward run).
+  std::shared_ptr<const Eigen::MatrixXd> cachedJacobian(const Eigen::VectorXd& x);
   // Appends a history record for the driver's current point and calls on_iteration.
   void recordIteration(const std::string& stage, int iteration, double cost,
                        double mean_deviation_mm);

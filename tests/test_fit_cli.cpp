@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "tests/test_support.h"
@@ -80,9 +81,9 @@ TEST(FitCommand, SectionWeightIsRecordedAndAddsToTheCostNotToAvgD) {
   nlohmann::json runs[2];
   for (int k = 0; k < 2; ++k) {
     const std::string out = k == 0 ? "plain" : "sections";
-    const auto r = runChordfit("fit " + quoted(smallCase()) + " --no-prefit --max-sims 1" +
-                               (k == 0 ? std::string() : " --section-weight 0.5") + " --out " +
-                               quoted(dir / out));
+    const auto r = runChordfit(
+        "fit " + quoted(smallCase()) + " --no-prefit --no-uncertainty --max-sims 1" +
+        (k == 0 ? std::string() : " --section-weight 0.5") + " --out " + quoted(dir / out));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     runs[k] = nlohmann::json::parse(testing::readText(dir / out / "metrics.json"));
   }
@@ -92,6 +93,8 @@ TEST(FitCommand, SectionWeightIsRecordedAndAddsToTheCostNotToAvgD) {
   EXPECT_EQ(runs[1]["initial_mean_mm"].get<double>(), runs[0]["initial_mean_mm"].get<double>());
   EXPECT_NE(testing::readText(dir / "sections" / "report.md").find("section residuals: weight 0.5"),
             std::string::npos);
+  EXPECT_FALSE(runs[1].contains("uncertainty")) << "--no-uncertainty";
+  EXPECT_FALSE(std::filesystem::exists(dir / "sections" / "uncertainty.csv"));
 }
 
 // One free cord (the others locked, as the paper's editor would write them): 1 + 2 + 1 runs.
@@ -139,7 +142,18 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
         << c;
     EXPECT_EQ(fitted["cords"][c]["provenance"], "manual") << c;
   }
+  // The free cord's uncertainty: one parameter row, its SD and sensitivity in the report.
+  const auto& u = metrics["uncertainty"];
+  EXPECT_EQ(u["free_cords"].get<int>(), 1);
+  EXPECT_GE(u["identified_cords"].get<int>(), 0);
+  EXPECT_GT(u["residual_sd_mm"].get<double>(), 0.0);
+  const std::string csv = testing::readText(dir / "fit" / "uncertainty.csv");
+  EXPECT_EQ(csv.rfind("parameter,name,kind,value,sd,", 0), 0u) << csv;
+  EXPECT_NE(csv.find("\n0,\"cord 0\",scale,"), std::string::npos) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 2) << "header + one parameter";
   const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("± SD (%)"), std::string::npos);
+  EXPECT_NE(report.find("of 1 free cords are determined"), std::string::npos);
   EXPECT_NE(report.find("| seed |"), std::string::npos);
   EXPECT_NE(report.find("| fit |"), std::string::npos);
   EXPECT_NE(report.find("Fitted length"), std::string::npos);

@@ -133,6 +133,7 @@ struct FitCommandOptions {
   bool fd_warm_start = false;            // perturbed closures start from the base closed state
   std::string distance = "own-leaflet";  // own-leaflet | surface (inverse/forward_residual.h)
   double section_weight = 0.0;           // ResidualOptions::section_weight
+  bool uncertainty = true;               // FitOptions::uncertainty
   std::string out_dir;
   bool quiet = false;
 };

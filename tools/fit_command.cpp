@@ -35,6 +35,12 @@ std::string joinNames(const std::vector<std::string>& names) {
   return joined;
 }
 
+std::string formatFixed(double value, int digits) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
+  return buffer;
+}
+
 std::string formatWeight(double weight) {
   std::ostringstream text;
   text << weight;
@@ -71,21 +77,78 @@ std::string convergenceSvg(const std::vector<IterationRecord>& history, const st
   return svgLinePlots(panels, 1, 720, 320);
 }
 
-std::string cordTable(const ValveCase& c, const CordSet& seed, const CordSet& fitted) {
-  const std::vector<std::string> groups = inverse::cordGroups(c, seed);
+// A cord's rest-length SD (% of the fitted length) and data sensitivity (mm of residual
+// movement, root sum of squares, per 1 % of its length) from its parameter; empty strings
+// when unknown (locked cord, no uncertainty).
+struct CordUncertaintyText {
+  std::string sd = "–", sensitivity = "–";
+};
+
+CordUncertaintyText cordUncertainty(const inverse::FitOutcome& fit, std::size_t cord) {
+  CordUncertaintyText text;
+  const int p = cord < fit.cord_parameter.size() ? fit.cord_parameter[cord] : -1;
+  if (p < 0 || !fit.uncertainty.ok() || fit.x(p) <= 0.0) return text;
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.1f%s", 100.0 * fit.uncertainty.sd(p) / fit.x(p),
+                fit.uncertainty.at_bound[p] ? " (at bound)" : "");
+  text.sd = buffer;
+  std::snprintf(buffer, sizeof buffer, "%.3f", 0.01 * fit.x(p) * fit.uncertainty.sensitivity(p));
+  text.sensitivity = buffer;
+  return text;
+}
+
+std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
+  const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
   std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Provenance |"
-        " Locked |\n|---:|---|---|---:|---:|---:|---|---|\n";
-  char line[256];
-  for (std::size_t i = 0; i < fitted.cords.size(); ++i) {
-    const Cord& s = seed.cords[i];
-    const Cord& f = fitted.cords[i];
-    std::snprintf(line, sizeof line, "| %zu | %s | %s | %.3f | %.3f | %.4f | %s | %s |\n", i,
-                  groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
-                  toString(f.provenance), f.locked ? "yes" : "no");
+  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | ± SD (%) | "
+        "Sensitivity (mm per 1 %) | Provenance | Locked |\n"
+        "|---:|---|---|---:|---:|---:|---:|---:|---|---|\n";
+  char line[320];
+  for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i) {
+    const Cord& s = fit.seed.cords[i];
+    const Cord& f = fit.fitted.cords[i];
+    const CordUncertaintyText u = cordUncertainty(fit, i);
+    std::snprintf(line, sizeof line, "| %zu | %s | %s | %.3f | %.3f | %.4f | %s | %s | %s | %s |\n",
+                  i, groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
+                  u.sd.c_str(), u.sensitivity.c_str(), toString(f.provenance),
+                  f.locked ? "yes" : "no");
     md << line;
   }
   return md.str();
+}
+
+// Cords whose fitted length the tracings pin down: rest-length SD below 3 % (the issue's
+// recovery tolerance) and not at a bound.
+int identifiedCords(const inverse::FitOutcome& fit) {
+  int count = 0;
+  for (std::size_t c = 0; c < fit.cord_parameter.size(); ++c) {
+    const int p = fit.cord_parameter[c];
+    if (p < 0 || !fit.uncertainty.ok() || fit.uncertainty.at_bound[p]) continue;
+    if (fit.uncertainty.sd(p) < 0.03 * fit.x(p)) ++count;
+  }
+  return count;
+}
+
+int freeCords(const inverse::FitOutcome& fit) {
+  int count = 0;
+  for (int p : fit.cord_parameter) count += p >= 0 ? 1 : 0;
+  return count;
+}
+
+// uncertainty.csv: one row per parameter.
+std::string uncertaintyCsv(const inverse::FitOutcome& fit) {
+  std::ostringstream csv;
+  csv.precision(10);
+  csv << "parameter,name,kind,value,sd,relative_sd_percent,sensitivity_mm_per_unit,at_bound\n";
+  for (Eigen::Index p = 0; p < fit.x.size(); ++p) {
+    const bool scale = fit.parameter_is_scale[p];
+    csv << p << ",\"" << fit.parameter_names[p] << "\"," << (scale ? "scale" : "tip_offset_mm")
+        << "," << fit.x(p) << "," << fit.uncertainty.sd(p) << ",";
+    if (scale && fit.x(p) > 0.0) csv << 100.0 * fit.uncertainty.sd(p) / fit.x(p);
+    csv << "," << fit.uncertainty.sensitivity(p) << ","
+        << (fit.uncertainty.at_bound[p] ? "yes" : "no") << "\n";
+  }
+  return csv.str();
 }
 
 std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse::FitOutcome& fit,
@@ -134,8 +197,19 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
   md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
         "(sections.svg)\n\n";
-  md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic).\n\n"
-     << cordTable(c, fit.seed, fit.fitted);
+  md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic). ± SD: the "
+        "fitted length's standard deviation from the Jacobian at the fit "
+        "(inverse/fit_uncertainty.h; residual SD "
+     << (fit.uncertainty.ok()
+             ? formatFixed(fit.uncertainty.sigma_mm, 2) + " mm, correlated over " +
+                   formatFixed(fit.uncertainty.correlation_time, 1) + " tracing points"
+             : std::string("not computed: ") +
+                   (fit.uncertainty.error.empty() ? "--no-uncertainty" : fit.uncertainty.error))
+     << "); sensitivity: how far the data residuals move (root sum of squares) per 1 % of the "
+        "cord's length. "
+     << identifiedCords(fit) << " of " << freeCords(fit)
+     << " free cords are determined to better than 3 %.\n\n"
+     << cordTable(c, fit);
   return md.str();
 }
 
@@ -202,6 +276,7 @@ int runFit(const FitCommandOptions& o) {
   options.finite_difference.warm_start = o.fd_warm_start;
   options.residual.own_leaflet = o.distance == "own-leaflet";
   options.residual.section_weight = o.section_weight;
+  options.uncertainty = o.uncertainty;
   if (!o.quiet) {
     std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
                 valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
@@ -257,10 +332,24 @@ int runFit(const FitCommandOptions& o) {
   metrics["distance"] = o.distance;  // the data residual the fit minimised
   metrics["section_weight"] = o.section_weight;
   metrics["scale_bounds"] = o.scale_bounds;
+  if (o.uncertainty) {
+    nlohmann::json u = {{"jacobian_sims", fit.uncertainty.jacobian_sims},
+                        {"seconds", fit.uncertainty_seconds}};
+    if (fit.uncertainty.ok()) {
+      u["residual_sd_mm"] = fit.uncertainty.sigma_mm;
+      u["correlation_time"] = fit.uncertainty.correlation_time;
+      u["identified_cords"] = identifiedCords(fit);
+      u["free_cords"] = freeCords(fit);
+    } else {
+      u["error"] = fit.uncertainty.error;
+    }
+    metrics["uncertainty"] = u;
+  }
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;
   writeFileAtomically(out / "metrics.json", metrics.dump(2) + "\n");
   writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
+  if (fit.uncertainty.ok()) writeFileAtomically(out / "uncertainty.csv", uncertaintyCsv(fit));
   writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
   writeFileAtomically(out / "report.md", report(*valve_case, o, fit, seed_metrics, fit_metrics));
   // Replaces simulate's figure of the fitted closure alone: the seed closure beside it.
@@ -280,10 +369,20 @@ int runFit(const FitCommandOptions& o) {
         "the mean over the last steps; docs/performance.md)\n",
         fit.unsettled_sims, fit.forward_sims);
   }
+  if (fit.uncertainty.ok()) {
+    std::printf(
+        "uncertainty: %d of %d free cords determined to better than 3 %% (residual SD %.2f mm, "
+        "correlated over %.1f points; %d extra closures, %.1f s; report.md, uncertainty.csv)\n",
+        identifiedCords(fit), freeCords(fit), fit.uncertainty.sigma_mm,
+        fit.uncertainty.correlation_time, fit.uncertainty.jacobian_sims, fit.uncertainty_seconds);
+  } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
+    std::printf("note: %s\n", fit.uncertainty.error.c_str());
+  }
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
   std::cout << "wrote " << (out / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
-               "sections.svg, report.md\n";
+               "sections.svg, "
+            << (fit.uncertainty.ok() ? "uncertainty.csv, " : "") << "report.md\n";
   return kExitOk;
 }
 

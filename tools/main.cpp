@@ -153,6 +153,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
                   "Weight of the section residuals: closed-mesh sections farther than 1.5 mm "
                   "from the tracings of their plane (0: off; docs/fitting.md)")
       ->capture_default_str();
+  cmd->add_flag("!--no-uncertainty", o.uncertainty,
+                "Skip the per-parameter uncertainty after the fit (uncertainty.csv; up to 2 "
+                "closures per parameter)");
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
