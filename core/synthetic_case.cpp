@@ -222,7 +222,11 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
          {"case_heuristic_rest_length_mm", seed.cords[i].seed_rest_length},
          // What a fitter should recover on the case mesh: the true rest length
          // as a scale of the case's own heuristic seed.
-         {"true_scale_of_case_seed", truth.cords[i].rest_length / seed.cords[i].seed_rest_length}});
+         {"true_scale_of_case_seed", truth.cords[i].rest_length / seed.cords[i].seed_rest_length},
+         // Tension at the true closed state (N; 0 = slack). A cord slack there exerts no force
+         // on the closed valve, so no closed-state data can say more than "at least this
+         // long" about its rest length (docs/fitting.md, "Uncertainty").
+         {"true_closed_tension_n", s.truth_result.cord_force(static_cast<Eigen::Index>(i))}});
   }
   json tips = json::array();
   for (std::size_t t = 0; t < truth.tips.size(); ++t) {

@@ -201,14 +201,18 @@ json cordRecovery(const fs::path& case_dir, const fs::path& cords_file) {
   for (std::size_t i = 0; i < cords.size(); ++i) {
     const double true_length = cords[i].at("true_rest_length_mm").get<double>();
     const double length = fitted.cords[i].rest_length;
-    rows.push_back({{"index", i},
-                    {"segment", cords[i].at("segment")},
-                    {"kind", cords[i].at("kind")},
-                    {"ruptured", cords[i].at("ruptured")},
-                    {"plane_distance_mm", distances[i]},
-                    {"rest_length_mm", length},
-                    {"true_rest_length_mm", true_length},
-                    {"relative_error", length / true_length - 1.0}});
+    json row = {{"index", i},
+                {"segment", cords[i].at("segment")},
+                {"kind", cords[i].at("kind")},
+                {"ruptured", cords[i].at("ruptured")},
+                {"plane_distance_mm", distances[i]},
+                {"rest_length_mm", length},
+                {"true_rest_length_mm", true_length},
+                {"relative_error", length / true_length - 1.0}};
+    // Cases made before truth.json recorded the tension have no such key.
+    if (cords[i].contains("true_closed_tension_n"))
+      row["taut_in_truth"] = cords[i].at("true_closed_tension_n").get<double>() > 0.0;
+    rows.push_back(row);
   }
   return rows;
 }

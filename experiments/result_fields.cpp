@@ -58,10 +58,11 @@ double mean(const std::vector<double>& values) {
   return sum / values.size();
 }
 
-std::vector<double> cordErrors(const json& result, double max_distance) {
+std::vector<double> cordErrors(const json& result, double max_distance, bool taut_only) {
   std::vector<double> errors;
   for (const json& c : result.at("cords")) {
     if (c.at("ruptured").get<bool>()) continue;
+    if (taut_only && !(c.contains("taut_in_truth") && c.at("taut_in_truth").get<bool>())) continue;
     if (std::isfinite(max_distance) && c.at("plane_distance_mm").get<double>() > max_distance) {
       continue;
     }

@@ -30,6 +30,9 @@ double quantile(std::vector<double> values, double q);
 double mean(const std::vector<double>& values);
 // |relative rest-length error| of a result's non-ruptured cords, optionally only those
 // attached within `max_distance` (mm) of a tracing plane.
-std::vector<double> cordErrors(const nlohmann::json& result, double max_distance = kNaN);
+// taut_only: only the cords marked taut in the true closed state ("taut_in_truth"; results
+// without the mark give none).
+std::vector<double> cordErrors(const nlohmann::json& result, double max_distance = kNaN,
+                               bool taut_only = false);
 
 }  // namespace chordfit::experiments

@@ -290,6 +290,17 @@ TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
                            "cross_sections.svg"}) {
     EXPECT_TRUE(fs::exists(caseDir() / "truth" / name)) << name;
   }
+  // Each cord's tension at the true closed state: some taut, none negative (a cord only pulls).
+  const auto truth_json =
+      nlohmann::json::parse(testing::readText(caseDir() / "truth" / "truth.json"));
+  int taut = 0;
+  for (const auto& cord : truth_json["cords"]) {
+    const double tension = cord.at("true_closed_tension_n").get<double>();
+    EXPECT_GE(tension, 0.0);
+    taut += tension > 0.0;
+  }
+  EXPECT_GT(taut, 0);
+  EXPECT_LT(taut, static_cast<int>(truth_json["cords"].size())) << "some cords are slack";
   const auto validated = runChordfit("validate " + quoted(caseDir()));
   EXPECT_EQ(validated.exit_code, 0) << validated.out << validated.err;
 }

@@ -190,7 +190,8 @@ nlohmann::json fixtureResult(const std::string& method, double mean_mm,
                     {"plane_distance_mm", cords[i].first},
                     {"rest_length_mm", 10.0 * (1 + cords[i].second)},
                     {"true_rest_length_mm", 10.0},
-                    {"relative_error", cords[i].second}});
+                    {"relative_error", cords[i].second},
+                    {"taut_in_truth", i % 2 == 0}});  // every other cord taut
   }
   nlohmann::json r = {{"job", "normal-1_s2__" + method},
                       {"case", "normal-1_s2"},
@@ -261,15 +262,18 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = lines(readText(dir / "acceptance.csv"));
   ASSERT_EQ(rows.size(), 2u) << readText(dir / "acceptance.csv");
+  // Taut in the truth: cords 0 and 2, of which only cord 0 lies within 3 mm (2 %).
   EXPECT_EQ(rows[1],
-            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,2,3.00,1");
+            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,2,3.00,1,"
+            "2.00,1");
   const std::string md = readText(dir / "acceptance.md");
-  EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | 3.0 % (2) ✓ |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | 3.0 % (2) ✓ | 2.0 % (1) ✓ |"), std::string::npos)
+      << md;
   // normal-1 is not pathological: the reduction criterion does not apply to it.
   EXPECT_NE(
       md.find("AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
               "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); recovery 1 of "
-              "1 cases"),
+              "1 cases (cords taut in the truth: 1 of 1 cases)"),
       std::string::npos)
       << md;
 }
