@@ -12,20 +12,16 @@ namespace chordfit {
 namespace {
 
 TEST(SectionResidual, AppendsOneResidualPerPlaneAndLeafletWithoutALoss) {
-  const testing::BundledCase bundled = testing::bundledCase("small-normal");
-  const ValveCase& c = bundled.valve_case;
-  ASSERT_TRUE(c.cords);
-  const SimulationResult closed = simulateClosure(c, *c.cords, bundled.settings);
-  ASSERT_TRUE(closed.ok()) << closed.error;
-  ValveCase traced = c;
-  traced.tracings = testing::noiseFreeTracings(c, closed.V, 3);
-  const inverse::FitParameterization parameters(traced, *c.cords, inverse::ParameterMode::kScales,
-                                                inverse::ParameterBounds{});
+  const testing::TracedSeedClosure seed = testing::tracedSeedClosure("small-normal", 3);
+  const ValveCase& traced = seed.traced;
+  const Eigen::MatrixXd& open = traced.mesh.V;
+  const inverse::FitParameterization parameters(
+      traced, *traced.cords, inverse::ParameterMode::kScales, inverse::ParameterBounds{});
   const inverse::ResidualOptions points_only;
   inverse::ResidualOptions with_sections;
   with_sections.section_weight = 0.25;
-  const inverse::ForwardResidual plain(traced, parameters, bundled.settings, points_only);
-  const inverse::ForwardResidual sections(traced, parameters, bundled.settings, with_sections);
+  const inverse::ForwardResidual plain(traced, parameters, seed.settings, points_only);
+  const inverse::ForwardResidual sections(traced, parameters, seed.settings, with_sections);
 
   ASSERT_EQ(plain.sectionCount(), 0);
   ASSERT_EQ(sections.pointCount(), plain.pointCount());
@@ -33,22 +29,22 @@ TEST(SectionResidual, AppendsOneResidualPerPlaneAndLeafletWithoutALoss) {
   ASSERT_EQ(sections.dataCount(), plain.dataCount() + 6);
 
   // The traced closed state: every section lies on its tracings, nothing strays.
-  const Eigen::VectorXd on_traced = sections.dataResiduals(closed.V);
+  const Eigen::VectorXd on_traced = sections.dataResiduals(seed.closed_V);
   EXPECT_EQ(on_traced.tail(6).maxCoeff(), 0.0);
-  EXPECT_EQ(on_traced.head(plain.pointCount()), plain.dataResiduals(closed.V));
+  EXPECT_EQ(on_traced.head(plain.pointCount()), plain.dataResiduals(seed.closed_V));
 
   // The open state strays far: r = sqrt(w E), and the cost adds 1/2 sum r^2 = w/2 sum E
   // (no Huber: E is already tolerant and capped, core/section_mismatch.h).
-  const Eigen::VectorXd open = sections.dataResiduals(c.mesh.V);
-  const Eigen::VectorXd E = SectionMismatch(traced).excess(c.mesh.V);
+  const Eigen::VectorXd on_open = sections.dataResiduals(open);
+  const Eigen::VectorXd E = SectionMismatch(traced).excess(open);
   ASSERT_GT(E.sum(), 0.0);
   for (int k = 0; k < 6; ++k)
-    EXPECT_NEAR(open(plain.pointCount() + k), std::sqrt(0.25 * E(k)), 1e-12);
+    EXPECT_NEAR(on_open(plain.pointCount() + k), std::sqrt(0.25 * E(k)), 1e-12);
   const Eigen::VectorXd no_regularisation;
-  EXPECT_NEAR(sections.cost(open, no_regularisation),
-              plain.cost(plain.dataResiduals(c.mesh.V), no_regularisation) + 0.125 * E.sum(), 1e-9);
-  EXPECT_EQ(sections.meanDeviation(c.mesh.V, open),
-            plain.meanDeviation(c.mesh.V, plain.dataResiduals(c.mesh.V)))
+  EXPECT_NEAR(sections.cost(on_open, no_regularisation),
+              plain.cost(plain.dataResiduals(open), no_regularisation) + 0.125 * E.sum(), 1e-9);
+  EXPECT_EQ(sections.meanDeviation(open, on_open),
+            plain.meanDeviation(open, plain.dataResiduals(open)))
       << "AvgD stays the tracing points' whole-mesh mean";
 }
 

@@ -80,6 +80,16 @@ ValveCase tinyConeCase() {
   return c;
 }
 
+TracedSeedClosure tracedSeedClosure(const std::string& name, int planes) {
+  const BundledCase bundled = bundledCase(name);
+  const SimulationResult closed =
+      simulateClosure(bundled.valve_case, *bundled.valve_case.cords, bundled.settings);
+  if (!closed.ok()) throw std::runtime_error("bundled case " + name + ": " + closed.error);
+  TracedSeedClosure t{bundled.valve_case, bundled.settings, closed.V};
+  t.traced.tracings = noiseFreeTracings(bundled.valve_case, closed.V, planes);
+  return t;
+}
+
 void writeText(const fs::path& path, const std::string& text) {
   if (path.has_parent_path()) fs::create_directories(path.parent_path());
   std::ofstream(path, std::ios::binary) << text;

@@ -49,6 +49,16 @@ BundledCase bundledCase(const std::string& name);
 std::vector<Tracing> noiseFreeTracings(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                                        int planes);
 
+// A bundled case closed with its own (seed) cords and traced there by a perfect reader
+// (noiseFreeTracings on `planes` planes): `traced.tracings` replaced, `closed_V` that closure.
+// Throws when the closure fails.
+struct TracedSeedClosure {
+  ValveCase traced;
+  SimulationSettings settings;
+  Eigen::MatrixXd closed_V;
+};
+TracedSeedClosure tracedSeedClosure(const std::string& name, int planes);
+
 // Writes `text` to `path` (creating directories).
 void writeText(const std::filesystem::path& path, const std::string& text);
 std::string readText(const std::filesystem::path& path);
