@@ -70,6 +70,17 @@ int scaleGroup(CordSet& set, const Eigen::VectorXi& leaflet_labels, int leaflet,
   return changed;
 }
 
+Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed) {
+  Eigen::VectorXd spans(static_cast<Eigen::Index>(set.cords.size()));
+  for (std::size_t c = 0; c < set.cords.size(); ++c) {
+    const Cord& cord = set.cords[c];
+    const PmTip& tip = set.tips.at(cord.tip);
+    const Eigen::Vector3d end = tip.closed_position ? *tip.closed_position : tip.position;
+    spans(static_cast<Eigen::Index>(c)) = (V_closed.row(cord.vertex).transpose() - end).norm();
+  }
+  return spans;
+}
+
 int scaleAllCords(CordSet& set, double scale) {
   int changed = 0;
   for (Cord& cord : set.cords) changed += applyScale(cord, scale) ? 1 : 0;

@@ -53,6 +53,17 @@ std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
                       const std::vector<std::string>& leaflet_names,
                       const std::vector<PmTip>& tips);
 
+// Each cord's span in a closed state: |V_closed(vertex) - tip|, the tip at its closed position
+// (or its open one when it has none, as the simulator keeps it). A cord is slack there when
+// its span is below its rest length (paper eq. 1: no force), and then any rest length down to
+// its span closes the valve the same way: the closed state bounds a slack cord's length from
+// below only. #cords values, mm.
+Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed);
+
+// Slack by more than this at the closed state (mm): an inextensible taut cord ends within the
+// solver's tolerance of its rest length, far inside it.
+constexpr double kSlackMarginMm = 0.01;
+
 // Editing, as in the paper's editor: a scale multiplies the seed rest length. Edited cords
 // become provenance kManual. Locked cords are left alone and counted in the return value.
 // Returns the number of cords changed.

@@ -153,6 +153,9 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 2) << "header + one parameter";
   const std::string report = testing::readText(dir / "fit" / "report.md");
   EXPECT_NE(report.find("± SD (%)"), std::string::npos);
+  EXPECT_NE(report.find("Closed span (mm)"), std::string::npos);
+  EXPECT_GE(metrics["slack_cords"].get<int>(), 0);
+  EXPECT_LE(metrics["slack_cords"].get<std::size_t>(), seed["cords"].size());
   EXPECT_NE(report.find("of 1 free cords are determined"), std::string::npos);
   EXPECT_NE(report.find("| seed |"), std::string::npos);
   EXPECT_NE(report.find("| fit |"), std::string::npos);

@@ -99,22 +99,34 @@ CordUncertaintyText cordUncertainty(const inverse::FitOutcome& fit, std::size_t 
 
 std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
+  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
   std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | ± SD (%) | "
-        "Sensitivity (mm per 1 %) | Provenance | Locked |\n"
-        "|---:|---|---|---:|---:|---:|---:|---:|---|---|\n";
-  char line[320];
+  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Closed span (mm) "
+        "| "
+        "± SD (%) | Sensitivity (mm per 1 %) | Provenance | Locked |\n"
+        "|---:|---|---|---:|---:|---:|---:|---:|---:|---|---|\n";
+  char line[360];
   for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i) {
     const Cord& s = fit.seed.cords[i];
     const Cord& f = fit.fitted.cords[i];
     const CordUncertaintyText u = cordUncertainty(fit, i);
-    std::snprintf(line, sizeof line, "| %zu | %s | %s | %.3f | %.3f | %.4f | %s | %s | %s | %s |\n",
-                  i, groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
-                  u.sd.c_str(), u.sensitivity.c_str(), toString(f.provenance),
-                  f.locked ? "yes" : "no");
+    const double span = spans(static_cast<Eigen::Index>(i));
+    std::snprintf(line, sizeof line,
+                  "| %zu | %s | %s | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
+                  groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
+                  span, span < f.rest_length - kSlackMarginMm ? " (slack)" : "", u.sd.c_str(),
+                  u.sensitivity.c_str(), toString(f.provenance), f.locked ? "yes" : "no");
     md << line;
   }
   return md.str();
+}
+
+int slackCords(const inverse::FitOutcome& fit) {
+  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
+  int count = 0;
+  for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i)
+    count += spans(static_cast<Eigen::Index>(i)) < fit.fitted.cords[i].rest_length - kSlackMarginMm;
+  return count;
 }
 
 // Cords whose fitted length the tracings pin down: rest-length SD below 3 % (the issue's
@@ -206,7 +218,10 @@ std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse
              : std::string("not computed: ") +
                    (fit.uncertainty.error.empty() ? "--no-uncertainty" : fit.uncertainty.error))
      << "); sensitivity: how far the data residuals move (root sum of squares) per 1 % of the "
-        "cord's length. "
+        "cord's length. Closed span: the cord's tip-to-vertex distance in the fitted closure; a "
+        "slack cord (span below its length) pulls on nothing there, so any length down to its "
+        "span closes the valve the same way: the tracings bound it from below only. "
+     << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
      << identifiedCords(fit) << " of " << freeCords(fit)
      << " free cords are determined to better than 3 %.\n\n"
      << cordTable(c, fit);
@@ -345,6 +360,7 @@ int runFit(const FitCommandOptions& o) {
     }
     metrics["uncertainty"] = u;
   }
+  metrics["slack_cords"] = slackCords(fit);
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;
   writeFileAtomically(out / "metrics.json", metrics.dump(2) + "\n");
