@@ -16,10 +16,10 @@
 #include "core/metrics.h"
 #include "core/section_figure.h"
 #include "core/simulator.h"
-#include "core/svg_line_plot.h"
 #include "inverse/fit_cords.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/fit_report.h"
 
 namespace chordfit::cli {
 
@@ -33,199 +33,6 @@ std::string joinNames(const std::vector<std::string>& names) {
   std::string joined;
   for (const std::string& n : names) joined += (joined.empty() ? "" : "|") + n;
   return joined;
-}
-
-std::string formatFixed(double value, int digits) {
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.*f", digits, value);
-  return buffer;
-}
-
-std::string formatWeight(double weight) {
-  std::ostringstream text;
-  text << weight;
-  return text.str();
-}
-
-std::string convergenceCsv(const std::vector<IterationRecord>& history) {
-  std::ostringstream csv;
-  csv.precision(10);
-  csv << "stage,iteration,cost,best_cost,mean_deviation_mm,forward_sims,elapsed_s\n";
-  for (const IterationRecord& r : history) {
-    csv << r.stage << "," << r.iteration << "," << r.cost << "," << r.best_cost << ","
-        << r.mean_deviation_mm << "," << r.forward_sims << "," << r.elapsed_s << "\n";
-  }
-  return csv.str();
-}
-
-std::string convergenceSvg(const std::vector<IterationRecord>& history, const std::string& name) {
-  PlotSeries cost{"cost at the current point", {}, {}, true, true};
-  PlotSeries best{"best cost", {}, {}, false, true};
-  PlotSeries mean{"mean deviation (AvgD)", {}, {}, true, true};
-  for (const IterationRecord& r : history) {
-    cost.x.push_back(r.forward_sims), cost.y.push_back(r.cost);
-    best.x.push_back(r.forward_sims), best.y.push_back(r.best_cost);
-    mean.x.push_back(r.forward_sims), mean.y.push_back(r.mean_deviation_mm);
-  }
-  const std::vector<PlotPanel> panels = {
-      {"Fit cost (" + name + ")", "forward simulations", "cost", {cost, best}, true},
-      {"Mean deviation to the tracings",
-       "forward simulations",
-       "mean deviation (mm)",
-       {mean},
-       false}};
-  return svgLinePlots(panels, 1, 720, 320);
-}
-
-// A cord's rest-length SD (% of the fitted length) and data sensitivity (mm of residual
-// movement, root sum of squares, per 1 % of its length) from its parameter; empty strings
-// when unknown (locked cord, no uncertainty).
-struct CordUncertaintyText {
-  std::string sd = "–", sensitivity = "–";
-};
-
-CordUncertaintyText cordUncertainty(const inverse::FitOutcome& fit, std::size_t cord) {
-  CordUncertaintyText text;
-  const int p = cord < fit.cord_parameter.size() ? fit.cord_parameter[cord] : -1;
-  if (p < 0 || !fit.uncertainty.ok() || fit.x(p) <= 0.0) return text;
-  char buffer[64];
-  std::snprintf(buffer, sizeof buffer, "%.1f%s", 100.0 * fit.uncertainty.sd(p) / fit.x(p),
-                fit.uncertainty.at_bound[p] ? " (at bound)" : "");
-  text.sd = buffer;
-  std::snprintf(buffer, sizeof buffer, "%.3f", 0.01 * fit.x(p) * fit.uncertainty.sensitivity(p));
-  text.sensitivity = buffer;
-  return text;
-}
-
-std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
-  const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
-  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
-  std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Closed span (mm) "
-        "| "
-        "± SD (%) | Sensitivity (mm per 1 %) | Provenance | Locked |\n"
-        "|---:|---|---|---:|---:|---:|---:|---:|---:|---|---|\n";
-  char line[360];
-  for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i) {
-    const Cord& s = fit.seed.cords[i];
-    const Cord& f = fit.fitted.cords[i];
-    const CordUncertaintyText u = cordUncertainty(fit, i);
-    const double span = spans(static_cast<Eigen::Index>(i));
-    std::snprintf(line, sizeof line,
-                  "| %zu | %s | %s | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
-                  groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
-                  span, span < f.rest_length - kSlackMarginMm ? " (slack)" : "", u.sd.c_str(),
-                  u.sensitivity.c_str(), toString(f.provenance), f.locked ? "yes" : "no");
-    md << line;
-  }
-  return md.str();
-}
-
-int slackCords(const inverse::FitOutcome& fit) {
-  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
-  int count = 0;
-  for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i)
-    count += spans(static_cast<Eigen::Index>(i)) < fit.fitted.cords[i].rest_length - kSlackMarginMm;
-  return count;
-}
-
-// Cords whose fitted length the tracings pin down: rest-length SD below 3 % (the issue's
-// recovery tolerance) and not at a bound.
-int identifiedCords(const inverse::FitOutcome& fit) {
-  int count = 0;
-  for (std::size_t c = 0; c < fit.cord_parameter.size(); ++c) {
-    const int p = fit.cord_parameter[c];
-    if (p < 0 || !fit.uncertainty.ok() || fit.uncertainty.at_bound[p]) continue;
-    if (fit.uncertainty.sd(p) < 0.03 * fit.x(p)) ++count;
-  }
-  return count;
-}
-
-int freeCords(const inverse::FitOutcome& fit) {
-  int count = 0;
-  for (int p : fit.cord_parameter) count += p >= 0 ? 1 : 0;
-  return count;
-}
-
-// uncertainty.csv: one row per parameter.
-std::string uncertaintyCsv(const inverse::FitOutcome& fit) {
-  std::ostringstream csv;
-  csv.precision(10);
-  csv << "parameter,name,kind,value,sd,relative_sd_percent,sensitivity_mm_per_unit,at_bound\n";
-  for (Eigen::Index p = 0; p < fit.x.size(); ++p) {
-    const bool scale = fit.parameter_is_scale[p];
-    csv << p << ",\"" << fit.parameter_names[p] << "\"," << (scale ? "scale" : "tip_offset_mm")
-        << "," << fit.x(p) << "," << fit.uncertainty.sd(p) << ",";
-    if (scale && fit.x(p) > 0.0) csv << 100.0 * fit.uncertainty.sd(p) / fit.x(p);
-    csv << "," << fit.uncertainty.sensitivity(p) << ","
-        << (fit.uncertainty.at_bound[p] ? "yes" : "no") << "\n";
-  }
-  return csv.str();
-}
-
-std::string report(const ValveCase& c, const FitCommandOptions& o, const inverse::FitOutcome& fit,
-                   const ValveMetrics& seed_metrics, const ValveMetrics& fit_metrics) {
-  std::ostringstream md;
-  md << "# Cord fit: " << c.name << "\n\n";
-  md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
-     << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
-  md << "- data residual: "
-     << (o.distance == "own-leaflet" ? "each tracing point to its own leaflet's closed surface"
-                                     : "each tracing point to the whole closed mesh")
-     << " (--distance " << o.distance << "); AvgD below is always to the whole mesh\n";
-  md << "- section residuals: "
-     << (o.section_weight > 0.0 ? "weight " + formatWeight(o.section_weight) +
-                                      " (closed-mesh sections straying more than 1.5 mm from "
-                                      "their plane's tracings are charged)"
-                                : std::string("off"))
-     << "\n";
-  md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)")
-     << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
-     << fit.prefit_secondary_factor << "\n";
-  md << "- segment pre-fit: "
-     << (fit.segment_prefit_changes.empty() ? std::string("no change")
-                                            : joinSegments(fit.segment_prefit_changes))
-     << "\n";
-  if (o.tissue_prefit) {
-    md << "- tissue pre-fit (stiffness factor per segment): "
-       << (fit.tissue_prefit_changes.empty() ? std::string("no change (uniform tissue kept)")
-                                             : joinSegments(fit.tissue_prefit_changes) +
-                                                   "; the cords were fitted on this "
-                                                   "tissue (tissue.json)")
-       << "\n";
-  }
-  md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
-     << " s, threads: " << o.threads << "\n";
-  md << "- termination: " << fit.termination << "\n";
-  md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
-     << "\n\n";
-  md << "## Table 1: seed vs fit\n\n"
-     << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics) << "\n";
-  md << "Prolapse segments: tracings " << joinSegments(fit_metrics.tracing_prolapse.segments)
-     << "; in the tracing planes: seed " << joinSegments(seed_metrics.section_prolapse.segments)
-     << ", fit " << joinSegments(fit_metrics.section_prolapse.segments)
-     << " (Table 1 compares these); tissue: seed "
-     << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
-     << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
-  md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
-        "(sections.svg)\n\n";
-  md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic). ± SD: the "
-        "fitted length's standard deviation from the Jacobian at the fit "
-        "(inverse/fit_uncertainty.h; residual SD "
-     << (fit.uncertainty.ok()
-             ? formatFixed(fit.uncertainty.sigma_mm, 2) + " mm, correlated over " +
-                   formatFixed(fit.uncertainty.correlation_time, 1) + " tracing points"
-             : std::string("not computed: ") +
-                   (fit.uncertainty.error.empty() ? "--no-uncertainty" : fit.uncertainty.error))
-     << "); sensitivity: how far the data residuals move (root sum of squares) per 1 % of the "
-        "cord's length. Closed span: the cord's tip-to-vertex distance in the fitted closure; a "
-        "slack cord (span below its length) pulls on nothing there, so any length down to its "
-        "span closes the valve the same way: the tracings bound it from below only. "
-     << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
-     << identifiedCords(fit) << " of " << freeCords(fit)
-     << " free cords are determined to better than 3 %.\n\n"
-     << cordTable(c, fit);
-  return md.str();
 }
 
 }  // namespace
@@ -367,7 +174,7 @@ int runFit(const FitCommandOptions& o) {
   writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
   if (fit.uncertainty.ok()) writeFileAtomically(out / "uncertainty.csv", uncertaintyCsv(fit));
   writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
-  writeFileAtomically(out / "report.md", report(*valve_case, o, fit, seed_metrics, fit_metrics));
+  writeFileAtomically(out / "report.md", fitReport(*valve_case, o, fit, seed_metrics, fit_metrics));
   // Replaces simulate's figure of the fitted closure alone: the seed closure beside it.
   writeFileAtomically(
       out / "sections.svg",

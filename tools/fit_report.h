@@ -1,0 +1,38 @@
+// What `chordfit fit` writes besides the cord set and the closure: the convergence history
+// (CSV, SVG), the per-parameter uncertainty (CSV) and report.md, with the counts of slack and
+// determined cords that report.md, metrics.json and the summary line share.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "core/case_data.h"
+#include "core/metrics.h"
+#include "inverse/fit_cords.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+// convergence.csv and convergence.svg (cost and AvgD against forward simulations).
+std::string convergenceCsv(const std::vector<inverse::IterationRecord>& history);
+std::string convergenceSvg(const std::vector<inverse::IterationRecord>& history,
+                           const std::string& optimizer);
+
+// uncertainty.csv: one row per parameter (fit.uncertainty must be ok()).
+std::string uncertaintyCsv(const inverse::FitOutcome& fit);
+
+// Cords slack in the fitted closure (closed span short of the fitted length, core/cordset.h).
+int slackCords(const inverse::FitOutcome& fit);
+// Cords whose fitted length the tracings pin down: rest-length SD below 3 % (the issue's
+// recovery tolerance) and not at a bound; 0 without an uncertainty.
+int identifiedCords(const inverse::FitOutcome& fit);
+// Cords that are fit parameters (not locked).
+int freeCords(const inverse::FitOutcome& fit);
+
+// report.md: options, pre-fits, Table 1 rows seed vs fit, prolapse segments, the sections
+// figure, and the per-cord table (lengths, closed span, SD, sensitivity, provenance).
+std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
+                      const inverse::FitOutcome& fit, const ValveMetrics& seed_metrics,
+                      const ValveMetrics& fit_metrics);
+
+}  // namespace chordfit::cli
