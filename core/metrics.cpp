@@ -262,19 +262,11 @@ ProlapseResult prolapseOfSections(const ValveCase& valve_case, const ClosedAnnul
                                   const Eigen::MatrixXd& closed_V, double spacing_mm,
                                   const ProlapseOptions& options) {
   const Eigen::VectorXi face_leaflet = faceLeaflets(valve_case.mesh.F, valve_case.mesh.leaflet);
-  std::vector<std::pair<Eigen::Vector3d, Eigen::Vector3d>> planes;  // distinct (origin, normal)
-  for (const Tracing& t : valve_case.tracings) {
-    bool known = false;
-    for (const auto& [origin, normal] : planes) {
-      known |= origin == t.plane_origin && normal == t.plane_normal;
-    }
-    if (!known) planes.emplace_back(t.plane_origin, t.plane_normal);
-  }
   // The sections as tracings (points resampled like the sampler's, leaflet of the cut).
   std::vector<Tracing> sections;
-  for (const auto& [origin, normal] : planes) {
+  for (const ImagePlane& plane : tracingPlanes(valve_case.tracings, annulus.frame)) {
     for (const SectionPolyline& section :
-         planeSection(closed_V, valve_case.mesh.F, face_leaflet, origin, normal)) {
+         planeSection(closed_V, valve_case.mesh.F, face_leaflet, plane.origin, plane.normal)) {
       Tracing t;
       t.points = resamplePolyline(section.points, spacing_mm);
       t.leaflet = section.leaflet;

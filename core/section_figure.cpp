@@ -13,19 +13,12 @@ namespace chordfit {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kSamePlaneTolerance = 1e-6;  // mm (origin offset) and unit-normal difference
 
 const char* const kLeafletColours[] = {"#c0392b", "#1f5fa8", "#27ae60", "#8e44ad", "#b7950b"};
 constexpr const char* kTracingColour = "#111111";
 constexpr const char* kClosedAnnulusColour = "#e67e22";
 constexpr const char* kOpenAnnulusColour = "#f5cba7";
 constexpr const char* kThresholdColour = "#16a085";
-
-bool samePlane(const Eigen::Vector3d& origin_a, const Eigen::Vector3d& normal_a,
-               const Eigen::Vector3d& origin_b, const Eigen::Vector3d& normal_b) {
-  return (normal_a - normal_b).norm() < kSamePlaneTolerance &&
-         std::abs(normal_a.dot(origin_b - origin_a)) < kSamePlaneTolerance;
-}
 
 // The hinge line of heightAboveAnnulus raised by `threshold`: in a long-axis plane the height
 // of a point is its w minus the straight line through the two closed ring crossings (sorted
@@ -41,37 +34,6 @@ Eigen::MatrixXd thresholdLine(const Eigen::MatrixXd& hinges, double threshold) {
 }
 
 }  // namespace
-
-std::vector<ImagePlane> tracingPlanes(const std::vector<Tracing>& tracings,
-                                      const AnnulusFrame& frame) {
-  const Eigen::Vector3d up = frame.plane.normal.normalized();
-  std::vector<ImagePlane> planes;
-  for (const Tracing& t : tracings) {
-    const Eigen::Vector3d normal = t.plane_normal.normalized();
-    const bool known = std::any_of(planes.begin(), planes.end(), [&](const ImagePlane& p) {
-      return samePlane(p.origin, p.normal, t.plane_origin, normal);
-    });
-    if (known) continue;
-    ImagePlane plane;
-    plane.origin = t.plane_origin;
-    plane.normal = normal;
-    Eigen::Vector3d w = up - up.dot(normal) * normal;
-    // A short-axis plane (parallel to the annulus plane) has no "up": use the AP axis.
-    if (w.norm() < 1e-6) w = frame.a - frame.a.dot(normal) * normal;
-    plane.w = w.normalized();
-    plane.u = normal.cross(plane.w).normalized();
-    double angle = std::atan2(plane.u.dot(frame.l), plane.u.dot(frame.a));
-    if (angle < 0.0) angle += kPi;
-    if (angle >= kPi - 1e-9) angle -= kPi;
-    plane.angle = std::max(0.0, angle);
-    planes.push_back(plane);
-  }
-  return planes;
-}
-
-bool tracedOnPlane(const Tracing& t, const ImagePlane& plane) {
-  return samePlane(plane.origin, plane.normal, t.plane_origin, t.plane_normal.normalized());
-}
 
 Eigen::MatrixXd projectToPlane(const ImagePlane& plane, const Eigen::MatrixXd& P) {
   Eigen::MatrixXd Q(P.rows(), 2);

@@ -17,17 +17,6 @@
 
 namespace chordfit {
 
-// The distinct image planes of `tracings` (same origin and normal to 1e-6 mm), in order of
-// first appearance, with in-plane axes w = the component of the closed annulus normal
-// `frame.plane.normal` within the plane (up, toward the atrium) and u = normal x w, and
-// `angle` = the angle of u from the anteroposterior axis frame.a about the annulus normal, in
-// [0, pi). For planes made by longAxisPlanes this returns the same planes (u = d_i).
-std::vector<ImagePlane> tracingPlanes(const std::vector<Tracing>& tracings,
-                                      const AnnulusFrame& frame);
-
-// Whether tracing t was drawn on `plane` (same unit normal and origin offset to 1e-6 mm).
-bool tracedOnPlane(const Tracing& t, const ImagePlane& plane);
-
 // P (#P by 3) in the plane's coordinates (#P by 2): (u . (p - origin), w . (p - origin)).
 Eigen::MatrixXd projectToPlane(const ImagePlane& plane, const Eigen::MatrixXd& P);
 

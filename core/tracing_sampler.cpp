@@ -14,6 +14,15 @@ namespace chordfit {
 
 namespace {
 
+constexpr double kSamePlaneTolerance = 1e-6;  // mm (origin offset) and unit-normal difference
+
+// Unit normals of either sign: a reader's file may orient one plane's polylines both ways.
+bool samePlane(const Eigen::Vector3d& origin_a, const Eigen::Vector3d& normal_a,
+               const Eigen::Vector3d& origin_b, const Eigen::Vector3d& normal_b) {
+  return normal_a.cross(normal_b).norm() < kSamePlaneTolerance &&
+         std::abs(normal_a.dot(origin_b - origin_a)) < kSamePlaneTolerance;
+}
+
 constexpr double kPi = 3.14159265358979323846;
 // Consecutive section points closer than this are one point (a vertex lying on the plane
 // produces zero-length segments).
@@ -53,6 +62,36 @@ std::vector<ImagePlane> longAxisPlanes(const AnnulusFrame& frame, int count) {
     plane.u = (std::cos(plane.angle) * frame.a + std::sin(plane.angle) * frame.l).normalized();
     plane.w = n;
     plane.normal = n.cross(plane.u).normalized();
+    planes.push_back(plane);
+  }
+  return planes;
+}
+
+bool tracedOnPlane(const Tracing& t, const ImagePlane& plane) {
+  return samePlane(plane.origin, plane.normal, t.plane_origin, t.plane_normal);
+}
+
+std::vector<ImagePlane> tracingPlanes(const std::vector<Tracing>& tracings,
+                                      const AnnulusFrame& frame) {
+  const Eigen::Vector3d up = frame.plane.normal.normalized();
+  std::vector<ImagePlane> planes;
+  for (const Tracing& t : tracings) {
+    const Eigen::Vector3d& normal = t.plane_normal;
+    const bool known = std::any_of(planes.begin(), planes.end(),
+                                   [&](const ImagePlane& p) { return tracedOnPlane(t, p); });
+    if (known) continue;
+    ImagePlane plane;
+    plane.origin = t.plane_origin;
+    plane.normal = normal;
+    Eigen::Vector3d w = up - up.dot(normal) * normal;
+    // A short-axis plane (parallel to the annulus plane) has no "up": use the AP axis.
+    if (w.norm() < 1e-6) w = frame.a - frame.a.dot(normal) * normal;
+    plane.w = w.normalized();
+    plane.u = normal.cross(plane.w).normalized();
+    double angle = std::atan2(plane.u.dot(frame.l), plane.u.dot(frame.a));
+    if (angle < 0.0) angle += kPi;
+    if (angle >= kPi - 1e-9) angle -= kPi;
+    plane.angle = std::max(0.0, angle);
     planes.push_back(plane);
   }
   return planes;

@@ -36,6 +36,20 @@ struct ImagePlane {
 // K planes about the frame (step 1). K >= 1.
 std::vector<ImagePlane> longAxisPlanes(const AnnulusFrame& frame, int count);
 
+// The distinct image planes of `tracings` (same plane to 1e-6 mm, normals of either sign), in
+// order of first appearance, with in-plane axes w = the component of the closed annulus normal
+// `frame.plane.normal` within the plane (up, toward the atrium) and u = normal x w, and
+// `angle` = the angle of u from the anteroposterior axis frame.a about the annulus normal, in
+// [0, pi). The origin and normal are the first such tracing's, as given (tracings carry unit
+// normals, case_io.h). For planes made by longAxisPlanes this returns the same planes
+// (u = d_i).
+std::vector<ImagePlane> tracingPlanes(const std::vector<Tracing>& tracings,
+                                      const AnnulusFrame& frame);
+
+// Whether tracing t was drawn on `plane` (parallel unit normals, either sign, and the origin
+// in the plane, to 1e-6 mm).
+bool tracedOnPlane(const Tracing& t, const ImagePlane& plane);
+
 // A polyline cut out of a mesh, with the leaflet of the triangles it crosses.
 struct SectionPolyline {
   Eigen::MatrixXd points;  // #P by 3, #P >= 2

@@ -73,11 +73,13 @@ TEST(TracingPlanes, OneImagePlaneHoldsPolylinesWithDifferentOriginsInIt) {
   const std::vector<Tracing> tracings = {
       tracingOn({0, 0, 0}, normal, P, 0), tracingOn({5, 0, -3}, normal, P, 1),
       tracingOn({0, 0.5, 0}, normal, P, 1),  // parallel, 0.5 mm away: another plane
+      tracingOn({2, 0, 1}, -normal, P, 0),   // the first plane, its normal reversed
       tracingOn({0, 0, 0}, Eigen::Vector3d::UnitZ(), P, 0)};  // short axis: no "up" in it
   const std::vector<ImagePlane> planes = tracingPlanes(tracings, frame);
   ASSERT_EQ(planes.size(), 3u);
   EXPECT_TRUE(tracedOnPlane(tracings[1], planes[0]));
   EXPECT_FALSE(tracedOnPlane(tracings[2], planes[0]));
+  EXPECT_TRUE(tracedOnPlane(tracings[3], planes[0])) << "a reversed normal is the same plane";
   EXPECT_LT((planes[0].w - Eigen::Vector3d::UnitZ()).norm(), kTight);
   EXPECT_LT((planes[0].u - Eigen::Vector3d::UnitX()).norm(), kTight) << "u = normal x w";
   EXPECT_NEAR(planes[0].angle, 0.0, kTight) << "the anteroposterior plane";

@@ -5,6 +5,8 @@
 
 #include <filesystem>
 
+#include <Eigen/Geometry>
+
 #include "core/case_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
@@ -34,6 +36,24 @@ TEST(SectionProlapse, MatchesNoiseFreeTracingsOfTheSameMesh) {
   EXPECT_FALSE(metrics.tracing_prolapse.segments.empty()) << "the case must prolapse somewhere";
   EXPECT_EQ(metrics.section_prolapse.segments, metrics.tracing_prolapse.segments);
   EXPECT_TRUE(metrics.prolapse_reconstructed) << "Table 1's criterion is the like-for-like one";
+}
+
+TEST(SectionProlapse, CutsEachImagePlaneOnceWhateverOriginOrNormalSignItsPolylinesCarry) {
+  const testing::TracedSeedClosure seed = testing::tracedSeedClosure("small-normal", 3);
+  ValveCase varied = seed.traced;
+  // Each polyline again, with its origin moved within its plane and its normal reversed: the
+  // same image planes, as a reader's file may give them.
+  for (const Tracing& t : seed.traced.tracings) {
+    Tracing again = t;
+    again.plane_origin += 3.0 * t.plane_normal.unitOrthogonal();
+    again.plane_normal = -t.plane_normal;
+    varied.tracings.push_back(again);
+  }
+  const ClosedAnnulus annulus = closedAnnulus(seed.traced);
+  const ProlapseResult once = prolapseOfSections(seed.traced, annulus, seed.closed_V);
+  const ProlapseResult twice = prolapseOfSections(varied, annulus, seed.closed_V);
+  EXPECT_EQ(twice.heights.size(), once.heights.size()) << "no plane cut twice";
+  EXPECT_EQ(twice.segments, once.segments);
 }
 
 TEST(SectionProlapse, NoTracingsNoSections) {
