@@ -34,9 +34,10 @@ struct ComparedSet {
   Eigen::MatrixXd closed_V;
 };
 
-// One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008).
-const char* const kSetColours[] = {"#0072b2", "#d55e00", "#009e73", "#cc79a7",
-                                   "#e69f00", "#56b4e9", "#000000"};
+// One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008), the
+// oranges last: the closed annulus hinges are orange.
+const char* const kSetColours[] = {"#0072b2", "#cc79a7", "#009e73", "#56b4e9",
+                                   "#000000", "#d55e00", "#e69f00"};
 
 std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets) {
   std::vector<SectionLayer> layers;
