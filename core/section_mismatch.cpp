@@ -5,7 +5,6 @@
 #include <limits>
 
 #include "core/metrics.h"
-#include "core/section_figure.h"
 #include "core/tracing_sampler.h"
 
 namespace chordfit {

@@ -53,6 +53,7 @@ struct SimulateOptions {
   std::string phase = "close";  // close | open (open = close, then open from the closed state)
   std::string out_dir;
   bool quiet = false;
+  bool sections = true;  // sections.svg (fit writes its own, with the seed closure beside it)
 };
 int runSimulate(const SimulateOptions& options);
 

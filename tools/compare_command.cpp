@@ -45,10 +45,9 @@ std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets
     layers.push_back(
         {sets[i].label, sets[i].closed_V, kSetColours[i % std::size(kSetColours)], false, 1.8});
   }
-  return caseSectionFigureSvg(c, layers,
-                              {"Cord sets compared on case " + c.name +
-                               ": closed valves against "
-                               "the tracings"});
+  const std::string title =
+      "Cord sets compared on case " + c.name + ": closed valves against the tracings";
+  return caseSectionFigureSvg(c, layers, {title});
 }
 
 std::vector<std::string> splitLabels(const std::string& text) {

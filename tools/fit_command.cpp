@@ -128,6 +128,7 @@ int runFit(const FitCommandOptions& o) {
   if (fit.tissue.size() > 0) simulate.tissue_file = (out / "tissue.json").string();
   simulate.out_dir = o.out_dir;
   simulate.quiet = true;
+  simulate.sections = false;  // written below, with the seed closure beside the fitted one
   std::printf("fitted cords: full closure from the open state\n");
   const int simulated = runSimulate(simulate);
   if (simulated != kExitOk) return simulated;
@@ -175,7 +176,6 @@ int runFit(const FitCommandOptions& o) {
   if (fit.uncertainty.ok()) writeFileAtomically(out / "uncertainty.csv", uncertaintyCsv(fit));
   writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
   writeFileAtomically(out / "report.md", fitReport(*valve_case, o, fit, seed_metrics, fit_metrics));
-  // Replaces simulate's figure of the fitted closure alone: the seed closure beside it.
   writeFileAtomically(
       out / "sections.svg",
       caseSectionFigureSvg(*valve_case,

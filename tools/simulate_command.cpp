@@ -134,9 +134,12 @@ int runSimulate(const SimulateOptions& options) {
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
   writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
-  const std::string sections = caseSectionFigureSvg(
-      *valve_case, {{"simulated closed", closed.V, "", false, 2.0}},
-      {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
+  std::string sections;
+  if (options.sections) {
+    sections = caseSectionFigureSvg(
+        *valve_case, {{"simulated closed", closed.V, "", false, 2.0}},
+        {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
+  }
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
 
   std::printf("closure: %s after %d steps, %.2f s%s\n",
