@@ -16,6 +16,7 @@
 #include "core/annulus_plane.h"
 #include "core/carpentier.h"
 #include "core/case_data.h"
+#include "core/orifice_coverage.h"
 
 namespace chordfit {
 
@@ -126,6 +127,9 @@ struct ValveMetrics {
   // tracing_prolapse.segments. A diagnostic: a flap leaning over the valve centre is P2 in
   // the tissue and P1/P3 in the planes, so the truth itself can fail it.
   bool tissue_prolapse_reconstructed = false;
+  // Is the valve closed: the leaflets' projection onto the closed annulus plane against the
+  // orifice the closed annulus vertices of the mesh enclose (orifice_coverage.h).
+  OrificeCoverage orifice;
   Eigen::VectorXd tracing_distances;  // per stacked tracing point
 };
 

@@ -21,6 +21,9 @@ nlohmann::json metricsJson(const ValveMetrics& m) {
   j["area_mm2"] = m.area_mm2;
   j["prolapse_segments"] = m.mesh_prolapse.segments;
   j["prolapse_max_height_mm"] = numberOrNull(m.mesh_prolapse.max_height_mm);
+  j["orifice_coverage"] = numberOrNull(m.orifice.coverage());
+  j["open_orifice_area_mm2"] = m.orifice.open_area_mm2;
+  j["orifice_area_mm2"] = m.orifice.orifice_area_mm2;
   if (m.has_tracings) {
     j["tracing_prolapse_segments"] = m.tracing_prolapse.segments;
     j["section_prolapse_segments"] = m.section_prolapse.segments;

@@ -8,7 +8,6 @@
 //                         prolapse, orifice closed (DISABLED: fails, see the test); P2 cords
 //                         x 1.3 prolapse P2 only; reversed fields reopen it.
 #include <algorithm>
-#include <array>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -192,7 +191,6 @@ TEST(ValveClosure, ReversedFieldsOpenTheClosedValve) {
 constexpr double kCohortEdgeMm = 2.5;
 // The criterion: the leaflets' projection covers the annulus area to within 1 %.
 constexpr double kMinOrificeCoverage = 0.99;
-constexpr double kCoverageGridMm = 0.25;
 
 // Heuristic cords scaled to the cohort's normal scale, times `p2_factor` for the cords of P2.
 CordSet cohortCords(const ParametricValve& valve, double p2_factor) {
@@ -229,58 +227,10 @@ const CohortClosure& normalCohortClosure() {
   return c;
 }
 
-// Fraction of the closed annulus' projected area (onto its least-squares plane) that the
-// projected leaflet triangles cover, sampled on a square grid: 1 = orifice closed.
-double orificeCoverage(const ValveCase& c, const Eigen::MatrixXd& V) {
-  const AnnulusFrame frame =
-      annulusFrameFromRing(c.annulus_closed, c.mesh, openAnnulusFrame(c.mesh));
-  auto project = [&](const Eigen::Vector3d& p) {
-    const Eigen::Vector3d d = p - frame.plane.centre;
-    return Eigen::Vector2d(frame.a.dot(d), frame.l.dot(d));
-  };
-  std::vector<Eigen::Vector2d> ring;
-  for (Eigen::Index i = 0; i < c.annulus_closed.rows(); ++i)
-    ring.push_back(project(c.annulus_closed.row(i).transpose()));
-  std::vector<std::array<Eigen::Vector2d, 3>> triangles;
-  for (Eigen::Index f = 0; f < c.mesh.F.rows(); ++f)
-    triangles.push_back({project(V.row(c.mesh.F(f, 0)).transpose()),
-                         project(V.row(c.mesh.F(f, 1)).transpose()),
-                         project(V.row(c.mesh.F(f, 2)).transpose())});
-  auto inside_ring = [&](const Eigen::Vector2d& q) {  // even-odd rule
-    bool in = false;
-    for (std::size_t i = 0, j = ring.size() - 1; i < ring.size(); j = i++) {
-      if ((ring[i].y() > q.y()) != (ring[j].y() > q.y()) &&
-          q.x() < ring[j].x() + (q.y() - ring[j].y()) * (ring[i].x() - ring[j].x()) /
-                                    (ring[i].y() - ring[j].y()))
-        in = !in;
-    }
-    return in;
-  };
-  auto cross = [](const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& q) {
-    return (b - a).x() * (q - a).y() - (b - a).y() * (q - a).x();
-  };
-  auto covered = [&](const Eigen::Vector2d& q) {
-    for (const auto& t : triangles) {
-      const double d0 = cross(t[0], t[1], q), d1 = cross(t[1], t[2], q), d2 = cross(t[2], t[0], q);
-      if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) return true;
-    }
-    return false;
-  };
-  Eigen::Vector2d lo = ring[0], hi = ring[0];
-  for (const auto& q : ring) {
-    lo = lo.cwiseMin(q);
-    hi = hi.cwiseMax(q);
-  }
-  int inside = 0, hit = 0;
-  for (double x = lo.x(); x <= hi.x(); x += kCoverageGridMm) {
-    for (double y = lo.y(); y <= hi.y(); y += kCoverageGridMm) {
-      const Eigen::Vector2d q(x, y);
-      if (!inside_ring(q)) continue;
-      ++inside;
-      hit += covered(q) ? 1 : 0;
-    }
-  }
-  return inside > 0 ? static_cast<double>(hit) / inside : 0.0;
+// Fraction of the closed annulus' projected area that the leaflets cover (1 = orifice closed).
+double orificeCoverageOf(const ValveCase& c, const Eigen::MatrixXd& V) {
+  const ValveMetrics metrics = computeMetrics(c, V);
+  return metrics.orifice.coverage();
 }
 
 TEST(CohortValveClosure, NormalValveClosesWithoutSelfIntersectionOrProlapse) {
@@ -301,7 +251,7 @@ TEST(CohortValveClosure, NormalValveClosesWithoutSelfIntersectionOrProlapse) {
 TEST(CohortValveClosure, DISABLED_NormalValveCoversTheOrifice) {
   const CohortClosure& c = normalCohortClosure();
   ASSERT_TRUE(c.result.ok()) << c.result.error;
-  const double coverage = orificeCoverage(c.valve.valve_case, c.result.V);
+  const double coverage = orificeCoverageOf(c.valve.valve_case, c.result.V);
   std::printf("[ cohort   ] orifice coverage %.4f\n", coverage);
   EXPECT_GE(coverage, kMinOrificeCoverage);
 }

@@ -1,5 +1,6 @@
 #include "tools/command_support.h"
 
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
@@ -65,7 +66,7 @@ std::string joinSegments(const std::vector<std::string>& segments) {
   return joined;
 }
 
-std::string prolapseSummary(const ValveMetrics& m, const std::string& indent) {
+std::string closedValveSummary(const ValveMetrics& m, const std::string& indent) {
   std::string text;
   if (m.has_tracings) {
     text += indent +
@@ -76,6 +77,13 @@ std::string prolapseSummary(const ValveMetrics& m, const std::string& indent) {
   }
   text +=
       indent + "prolapse (mesh tissue):          " + joinSegments(m.mesh_prolapse.segments) + "\n";
+  if (m.orifice.samples > 0) {
+    char line[160];
+    std::snprintf(
+        line, sizeof line, "orifice covered (en face):       %.1f %% (open %.0f of %.0f mm²)\n",
+        100.0 * m.orifice.coverage(), m.orifice.open_area_mm2, m.orifice.orifice_area_mm2);
+    text += indent + line;
+  }
   return text;
 }
 

@@ -36,8 +36,9 @@ std::string joinSegments(const std::vector<std::string>& segments);
 // The prolapse lines printed after a Table 1 row: what the tracings show, what the closed
 // mesh shows in the tracing planes (Table 1's "Prolapse reconstructed" compares these two)
 // and in its tissue (every vertex, open-state localisation; a diagnostic). `indent` prefixes
-// each line. Without tracings only the tissue line.
-std::string prolapseSummary(const ValveMetrics& metrics, const std::string& indent = "");
+// each line. Without tracings only the tissue line. Then how much of the orifice the leaflets
+// cover seen en face (orifice_coverage.h).
+std::string closedValveSummary(const ValveMetrics& metrics, const std::string& indent = "");
 
 // Multi-line human summary of a case (mesh, leaflets, annulus, tracings, tips, cords).
 std::string caseSummary(const ValveCase& valve_case);

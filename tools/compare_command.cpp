@@ -222,7 +222,7 @@ int runCompare(const CompareOptions& options) {
   }
   for (const ComparedSet& s : sets) {
     std::cout << s.label << (s.converged ? "" : "  [closure NOT converged]") << ":\n"
-              << prolapseSummary(s.metrics, "  ");
+              << closedValveSummary(s.metrics, "  ");
   }
   if (!options.out_dir.empty()) {
     const std::filesystem::path out(options.out_dir);

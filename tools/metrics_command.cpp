@@ -31,7 +31,7 @@ int runMetrics(const MetricsOptions& options) {
   }
   const ValveMetrics metrics = computeMetrics(*valve_case, V);
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
-  std::cout << prolapseSummary(metrics)
+  std::cout << closedValveSummary(metrics)
             << "highest point above the annulus: " << metrics.mesh_prolapse.max_height_mm
             << " mm\n";
   if (!options.out_file.empty()) {

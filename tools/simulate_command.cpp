@@ -154,7 +154,7 @@ int runSimulate(const SimulateOptions& options) {
                 opened.converged ? "converged" : "NOT converged", opened.steps, opened.seconds);
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
-  std::cout << prolapseSummary(metrics);
+  std::cout << closedValveSummary(metrics);
   std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json"
             << (sections.empty() ? "" : ", sections.svg") << "\n";
   return kExitOk;
