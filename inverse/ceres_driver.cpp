@@ -73,7 +73,10 @@ class ProgressAndBudget : public ceres::IterationCallback {
     const auto at = objective_.cached(toVector(x_.data(), static_cast<int>(x_.size())));
     objective_.recordIteration("ceres", summary.iteration, summary.cost,
                                at ? at->mean_deviation_mm : NAN);
-    if (!objective_.budgetAllows(1 + objective_.jacobianSims())) {
+    // The next Jacobian is at a new point; the current point's count of non-slack
+    // parameters is the estimate (jacobian() refuses it exactly if the budget falls short).
+    if (!objective_.budgetAllows(
+            1 + objective_.jacobianSims(toVector(x_.data(), static_cast<int>(x_.size()))))) {
       budget_reached = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
@@ -105,7 +108,8 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   if (n == 0) return "nothing to fit (every cord is locked)";
   std::vector<double> x(parameters.initial().data(), parameters.initial().data() + n);
   const bool start_known = objective.cached(parameters.initial()) != nullptr;
-  if (!objective.budgetAllows((start_known ? 0 : 1) + objective.jacobianSims())) {
+  if (!objective.budgetAllows((start_known ? 0 : 1) +
+                              objective.jacobianSims(parameters.initial()))) {
     return "budget of " + std::to_string(objective.maxSims()) +
            " forward runs is below one Jacobian (" + std::to_string(1 + 2 * n) + " runs)";
   }

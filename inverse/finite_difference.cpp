@@ -22,19 +22,70 @@ void parallelFor(int count, int threads, const std::function<void(int)>& task) {
   for (std::thread& t : pool) t.join();
 }
 
+namespace {
+
+double stepOf(const FitParameterization& parameters, int p,
+              const FiniteDifferenceOptions& options) {
+  return parameters.isScale(p) ? options.scale_step : options.tip_step_mm;
+}
+
+bool sameTip(const PmTip& a, const PmTip& b) {
+  return a.position == b.position && a.closed_position == b.closed_position;
+}
+
+// True when every cord that `perturbed` changes against `base` (rest length or tip) is slack
+// at `closed` by more than `margin`.
+bool onlySlackCordsChange(const CordSet& base, const CordSet& perturbed,
+                          const Eigen::MatrixXd& closed, double margin) {
+  const Eigen::VectorXd spans = closedSpans(perturbed, closed);
+  for (std::size_t c = 0; c < perturbed.cords.size(); ++c) {
+    const Cord& now = perturbed.cords[c];
+    const Cord& before = base.cords[c];
+    const bool changed = now.rest_length != before.rest_length ||
+                         !sameTip(perturbed.tips[now.tip], base.tips[before.tip]);
+    if (changed && !(spans(static_cast<Eigen::Index>(c)) < now.rest_length - margin)) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+std::vector<bool> slackParameters(const FitParameterization& parameters, const Eigen::VectorXd& x,
+                                  const Eigen::MatrixXd& base_closed,
+                                  const FiniteDifferenceOptions& options) {
+  const int n = static_cast<int>(x.size());
+  std::vector<bool> slack(n, false);
+  if (!options.skip_slack || base_closed.rows() == 0) return slack;
+  const CordSet base = parameters.apply(x);
+  for (int p = 0; p < n; ++p) {
+    bool all = true;
+    for (double sign : {1.0, -1.0}) {
+      Eigen::VectorXd xp = x;
+      xp(p) += sign * stepOf(parameters, p, options);
+      all = all &&
+            onlySlackCordsChange(base, parameters.apply(xp), base_closed, options.slack_margin_mm);
+    }
+    slack[p] = all;
+  }
+  return slack;
+}
+
 JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const Eigen::VectorXd& x,
                                          const Eigen::MatrixXd& base_closed,
                                          const FiniteDifferenceOptions& options) {
   const int n = static_cast<int>(x.size());
   const FitParameterization& parameters = residual.parameters();
-  std::vector<Eigen::VectorXd> sides(2 * n);
-  std::vector<std::string> errors(2 * n);
+  const std::vector<bool> slack = slackParameters(parameters, x, base_closed, options);
+  std::vector<int> simulated;  // parameters whose columns need closures
+  for (int p = 0; p < n; ++p)
+    if (!slack[p]) simulated.push_back(p);
+  const int m = static_cast<int>(simulated.size());
+  std::vector<Eigen::VectorXd> sides(2 * m);
+  std::vector<std::string> errors(2 * m);
   const Eigen::MatrixXd* start = options.warm_start ? &base_closed : nullptr;
-  auto step = [&](int p) {
-    return parameters.isScale(p) ? options.scale_step : options.tip_step_mm;
-  };
-  parallelFor(2 * n, options.threads, [&](int task) {
-    const int p = task / 2;
+  auto step = [&](int p) { return stepOf(parameters, p, options); };
+  parallelFor(2 * m, options.threads, [&](int task) {
+    const int p = simulated[task / 2];
     Eigen::VectorXd xp = x;
     xp(p) += (task % 2 == 0 ? 1.0 : -1.0) * step(p);
     ForwardEvaluation e = residual.evaluate(xp, start);
@@ -45,16 +96,18 @@ JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const 
     sides[task] = std::move(e.data);
   });
   JacobianResult result;
-  result.forward_sims = 2 * n;
+  result.forward_sims = 2 * m;
+  result.slack_parameters = n - m;
   for (const std::string& e : errors) {
     if (!e.empty()) {
       result.error = e;
       return result;
     }
   }
-  result.J.resize(residual.dataCount(), n);
-  for (int p = 0; p < n; ++p) {
-    result.J.col(p) = (sides[2 * p] - sides[2 * p + 1]) / (2.0 * step(p));
+  result.J = Eigen::MatrixXd::Zero(residual.dataCount(), n);
+  for (int k = 0; k < m; ++k) {
+    const int p = simulated[k];
+    result.J.col(p) = (sides[2 * k] - sides[2 * k + 1]) / (2.0 * step(p));
   }
   return result;
 }

@@ -14,10 +14,18 @@
 // start from the same state), but a warm-started closure can settle in a different
 // equilibrium than the full closure the reported value comes from (contact, slack cords), so
 // the default is a full closure for every perturbation.
+//
+// Parameters whose perturbations touch only cords that stay slack in the base closed state
+// get a zero column without a closure (skip_slack): a cord exerts no force while its span is
+// below its rest length (paper eq. 1), so the base state is the equilibrium of either
+// perturbation too and the exact derivative is 0; a closure would only add the solver's noise
+// and spend two forward runs. After the pre-fit most cords near no tracing plane are slack
+// (25 of 33 at the end of the quick-start fit), so this is most of a Jacobian's cost.
 #pragma once
 
 #include <functional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -33,12 +41,19 @@ struct FiniteDifferenceOptions {
   // equilibrium is not the one a full closure reaches; docs/fitting.md).
   bool warm_start = false;
   int threads = 2;
+  // Zero columns for parameters that only move slack cords (see above), and the slack a cord
+  // must keep at the base closed state under the perturbation to count: above the step
+  // between the solver's tolerance and the residual motion of a closure that did not settle
+  // (its state is the mean of its last steps, vertices moving ~0.01-0.1 mm; simulator.h).
+  bool skip_slack = true;
+  double slack_margin_mm = 0.1;
 };
 
 struct JacobianResult {
-  Eigen::MatrixXd J;     // #data by #parameters
-  int forward_sims = 0;  // closures run (2 per parameter)
-  std::string error;     // first failed perturbation, if any (J is then unusable)
+  Eigen::MatrixXd J;         // #data by #parameters
+  int forward_sims = 0;      // closures run (2 per parameter that is not slack)
+  int slack_parameters = 0;  // parameters given a zero column without closures
+  std::string error;         // first failed perturbation, if any (J is then unusable)
   bool ok() const { return error.empty(); }
 };
 
@@ -47,6 +62,13 @@ struct JacobianResult {
 JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const Eigen::VectorXd& x,
                                          const Eigen::MatrixXd& base_closed,
                                          const FiniteDifferenceOptions& options);
+
+// Per parameter: true when both of its perturbations (x +- step) change only cords whose span
+// at base_closed stays below their perturbed rest length by more than the margin (closedSpans,
+// cordset.h), so its column is exactly zero. All false without skip_slack.
+std::vector<bool> slackParameters(const FitParameterization& parameters, const Eigen::VectorXd& x,
+                                  const Eigen::MatrixXd& base_closed,
+                                  const FiniteDifferenceOptions& options);
 
 // Runs task(i) for i in [0, count) on `threads` threads (work stealing by an atomic counter).
 // The tasks must write only to their own slots.

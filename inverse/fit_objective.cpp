@@ -1,5 +1,7 @@
 #include "inverse/fit_objective.h"
 
+#include <algorithm>
+
 #include <utility>
 
 namespace chordfit::inverse {
@@ -56,7 +58,7 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::jacobian(const Eigen::Vecto
   }
   Entry* entry = find(x);
   if (entry->jacobian) return entry->jacobian;
-  if (!budgetAllows(jacobianSims())) {
+  if (!budgetAllows(jacobianSims(x))) {
     budget_refused_ = true;
     error = "forward-run budget exhausted";
     return nullptr;
@@ -69,6 +71,13 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::jacobian(const Eigen::Vecto
   }
   entry->jacobian = std::make_shared<const Eigen::MatrixXd>(std::move(result.J));
   return entry->jacobian;
+}
+
+int FitObjective::jacobianSims(const Eigen::VectorXd& x) {
+  const auto base = cached(x);
+  if (!base || !base->ok()) return jacobianSims();
+  const std::vector<bool> slack = slackParameters(residual_.parameters(), x, base->closed_V, fd_);
+  return 2 * static_cast<int>(std::count(slack.begin(), slack.end(), false));
 }
 
 void FitObjective::remember(const ForwardEvaluation& evaluation) {

@@ -49,7 +49,7 @@ class FitObjective {
   // returned with error set and never become the best.
   std::shared_ptr<const ForwardEvaluation> evaluate(const Eigen::VectorXd& x);
   // Data Jacobian (#data by #parameters) at x (evaluates x first if needed); 2 runs per
-  // parameter. nullptr and `error` set when a closure failed.
+  // parameter that moves a taut cord. nullptr and `error` set when a closure failed.
   std::shared_ptr<const Eigen::MatrixXd> jacobian(const Eigen::VectorXd& x, std::string& error);
 
   // The budget is enforced here too: a closure (or Jacobian) that would exceed it is not run;
@@ -58,7 +58,10 @@ class FitObjective {
   int forwardSims() const { return sims_; }
   int maxSims() const { return max_sims_; }
   bool budgetAllows(int more_sims) const { return sims_ + more_sims <= max_sims_; }
+  // Forward runs of a Jacobian: 2 per parameter, at x (when its closure is cached) only for
+  // the parameters that do not move slack cords alone (finite_difference.h).
   int jacobianSims() const { return 2 * parameterCount(); }
+  int jacobianSims(const Eigen::VectorXd& x);
   double elapsedSeconds() const;
 
   std::shared_ptr<const ForwardEvaluation> best() const { return best_; }

@@ -132,6 +132,7 @@ struct FitCommandOptions {
   double fd_scale_step = 0.01;           // central-difference step on a scale
   double fd_tip_step_mm = 0.1;           // ... on a tip offset coordinate
   bool fd_warm_start = false;            // perturbed closures start from the base closed state
+  bool fd_slack_closures = false;        // also close the perturbations of slack-only parameters
   std::string distance = "own-leaflet";  // own-leaflet | surface (inverse/forward_residual.h)
   double section_weight = 0.0;           // ResidualOptions::section_weight
   bool uncertainty = true;               // FitOptions::uncertainty

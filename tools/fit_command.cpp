@@ -96,6 +96,7 @@ int runFit(const FitCommandOptions& o) {
   options.finite_difference.scale_step = o.fd_scale_step;
   options.finite_difference.tip_step_mm = o.fd_tip_step_mm;
   options.finite_difference.warm_start = o.fd_warm_start;
+  options.finite_difference.skip_slack = !o.fd_slack_closures;
   options.residual.own_leaflet = o.distance == "own-leaflet";
   options.residual.section_weight = o.section_weight;
   options.uncertainty = o.uncertainty;

@@ -145,6 +145,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_flag("--fd-warm", o.fd_warm_start,
                 "Warm-start finite-difference closures from the base closed state");
+  cmd->add_flag("--fd-slack-closures", o.fd_slack_closures,
+                "Run the difference closures of parameters that move only slack cords too "
+                "(default: their column is 0, exactly, without closures)");
   cmd->add_option("--distance", o.distance,
                   "Data residual per tracing point: own-leaflet (distance to the surface of the "
                   "point's labelled leaflet) | surface (to the whole closed mesh, as AvgD)")
