@@ -38,7 +38,12 @@ OrificeCoverage orificeCoverage(const Eigen::MatrixXd& ring, const Eigen::Matrix
     lo = lo.cwiseMin(polygon.back());
     hi = hi.cwiseMax(polygon.back());
   }
-  // Samples at lo + (i, j) grid_mm inside the ring's bounding box.
+  // Samples at lo + (i, j) grid_mm inside the ring's bounding box; a ring in other units
+  // (metres, microns) or a wild vertex coarsens the grid to at most kMaxSamples points rather
+  // than allocating without bound.
+  constexpr double kMaxSamples = 4e6;
+  const double box = (hi.x() - lo.x() + grid_mm) * (hi.y() - lo.y() + grid_mm);
+  if (box / (grid_mm * grid_mm) > kMaxSamples) grid_mm = std::sqrt(box / kMaxSamples);
   const int nx = static_cast<int>(std::floor((hi.x() - lo.x()) / grid_mm)) + 1;
   const int ny = static_cast<int>(std::floor((hi.y() - lo.y()) / grid_mm)) + 1;
   auto sample = [&](int i, int j) { return Vec2(lo.x() + i * grid_mm, lo.y() + j * grid_mm); };

@@ -29,7 +29,8 @@ struct OrificeCoverage {
 // V, F      closed mesh (every triangle counts, whatever its leaflet)
 // frame     the closed annulus frame (plane and in-plane axes a, l)
 // grid_mm   sample spacing; the result is exact for the sampled points, and the areas are
-//           sample counts times grid_mm^2
+//           sample counts times the spacing squared. Coarsened when the ring's bounding box
+//           would need more than 4 million samples.
 OrificeCoverage orificeCoverage(const Eigen::MatrixXd& ring, const Eigen::MatrixXd& V,
                                 const Eigen::MatrixXi& F, const AnnulusFrame& frame,
                                 double grid_mm = 0.25);

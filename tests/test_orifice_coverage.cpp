@@ -116,6 +116,16 @@ TEST(OrificeCoverage, FrameAxesDecideTheProjectionPlane) {
   EXPECT_LT(c.coverage(), 0.05);
 }
 
+TEST(OrificeCoverage, AHugeRingCoarsensTheGridInsteadOfExhaustingMemory) {
+  Fan fan = flatFan();
+  fan.V *= 1e4;  // a 100 m valve: 1.6e11 samples at 0.25 mm
+  fan.ring *= 1e4;
+  const OrificeCoverage c = orificeCoverage(fan.ring, fan.V, fan.F, AnnulusFrame{});
+  EXPECT_LE(c.samples, 4'000'000);
+  EXPECT_GT(c.coverage(), 0.999);
+  EXPECT_NEAR(c.orifice_area_mm2, M_PI * 1e10, 0.01 * M_PI * 1e10);
+}
+
 TEST(OrificeCoverage, DegenerateInputGivesNoSamplesNotACrash) {
   const Fan fan = flatFan();
   EXPECT_TRUE(
