@@ -7,6 +7,7 @@
 
 #include "core/cordset.h"
 #include "inverse/finite_difference.h"
+#include "inverse/fit_objective.h"
 #include "inverse/fit_parameters.h"
 #include "inverse/forward_residual.h"
 #include "tests/test_support.h"
@@ -117,6 +118,32 @@ TEST(SlackJacobian, SlackColumnsAreZeroWithoutClosuresAndTheOthersUnchanged) {
       EXPECT_TRUE(skipped.J.col(p) == closed.J.col(p)) << parameters.names()[p];
     }
   }
+}
+
+TEST(SlackJacobian, TheObjectiveCountsAndChargesOnlyTheClosuresItRuns) {
+  const testing::TracedSeedClosure& seed = setUp().seed;
+  const inverse::FitParameterization parameters(
+      seed.traced, *seed.traced.cords, inverse::ParameterMode::kScales, inverse::ParameterBounds{});
+  const inverse::ForwardResidual residual(seed.traced, parameters, seed.settings,
+                                          inverse::ResidualOptions{});
+  inverse::FiniteDifferenceOptions fd;
+  fd.warm_start = true;
+  inverse::FitObjective objective(residual, fd, 1000, 0, inverse::FitObjective::Clock::now(),
+                                  nullptr);
+  const Eigen::VectorXd x = parameters.initial();
+  // Before x is closed the count is the upper bound, 2 per parameter.
+  EXPECT_EQ(objective.jacobianSims(x), 2 * parameters.size());
+  const auto base = objective.evaluate(x);
+  ASSERT_TRUE(base->ok()) << base->error;
+  const std::vector<bool> slack = inverse::slackParameters(parameters, x, base->closed_V, fd);
+  const int taut = static_cast<int>(std::count(slack.begin(), slack.end(), false));
+  EXPECT_EQ(objective.jacobianSims(x), 2 * taut);
+  ASSERT_LT(taut, parameters.size());
+
+  const int before = objective.forwardSims();
+  std::string error;
+  ASSERT_NE(objective.jacobian(x, error), nullptr) << error;
+  EXPECT_EQ(objective.forwardSims() - before, 2 * taut);
 }
 
 }  // namespace
