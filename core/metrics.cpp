@@ -287,9 +287,7 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   m.area_mm2 = surfaceArea(closed_V, valve_case.mesh.F);
   const ClosedAnnulus annulus = closedAnnulus(valve_case);
   m.mesh_prolapse = prolapseOfMesh(valve_case, annulus, closed_V, ProlapseOptions{});
-  Eigen::MatrixXd ring(valve_case.mesh.annulus.size(), 3);
-  for (Eigen::Index k = 0; k < ring.rows(); ++k)
-    ring.row(k) = closed_V.row(valve_case.mesh.annulus(k));
+  const Eigen::MatrixXd ring = closed_V(valve_case.mesh.annulus, Eigen::all);
   m.orifice = orificeCoverage(ring, closed_V, valve_case.mesh.F, annulus.frame);
   if (m.has_tracings) {
     m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});

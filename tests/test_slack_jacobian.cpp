@@ -16,9 +16,12 @@ namespace chordfit {
 namespace {
 
 // The small case closed with its heuristic cords (rest lengths at the heuristic's upper bound,
-// so many hang slack) and traced there.
+// so many hang slack) and traced there, with its per-cord scales and their residual.
 struct SlackSetUp {
   testing::TracedSeedClosure seed = testing::tracedSeedClosure("small-normal", 3);
+  inverse::FitParameterization scales{seed.traced, *seed.traced.cords,
+                                      inverse::ParameterMode::kScales, inverse::ParameterBounds{}};
+  inverse::ForwardResidual residual{seed.traced, scales, seed.settings, inverse::ResidualOptions{}};
 };
 
 const SlackSetUp& setUp() {
@@ -28,8 +31,7 @@ const SlackSetUp& setUp() {
 
 TEST(SlackJacobian, ParametersOfCordsSlackBeyondTheStepAndMarginAreSlack) {
   const testing::TracedSeedClosure& seed = setUp().seed;
-  const inverse::FitParameterization parameters(
-      seed.traced, *seed.traced.cords, inverse::ParameterMode::kScales, inverse::ParameterBounds{});
+  const inverse::FitParameterization& parameters = setUp().scales;
   const inverse::FiniteDifferenceOptions options;
   const Eigen::VectorXd x = parameters.initial();
   const std::vector<bool> slack = inverse::slackParameters(parameters, x, seed.closed_V, options);
@@ -83,10 +85,8 @@ TEST(SlackJacobian, ATipIsSlackOnlyWhenAllItsCordsStaySlackAsItMoves) {
 
 TEST(SlackJacobian, SlackColumnsAreZeroWithoutClosuresAndTheOthersUnchanged) {
   const testing::TracedSeedClosure& seed = setUp().seed;
-  const inverse::FitParameterization parameters(
-      seed.traced, *seed.traced.cords, inverse::ParameterMode::kScales, inverse::ParameterBounds{});
-  const inverse::ForwardResidual residual(seed.traced, parameters, seed.settings,
-                                          inverse::ResidualOptions{});
+  const inverse::FitParameterization& parameters = setUp().scales;
+  const inverse::ForwardResidual& residual = setUp().residual;
   const Eigen::VectorXd x = parameters.initial();
   inverse::FiniteDifferenceOptions skip;
   skip.warm_start = true;
@@ -121,11 +121,8 @@ TEST(SlackJacobian, SlackColumnsAreZeroWithoutClosuresAndTheOthersUnchanged) {
 }
 
 TEST(SlackJacobian, TheObjectiveCountsAndChargesOnlyTheClosuresItRuns) {
-  const testing::TracedSeedClosure& seed = setUp().seed;
-  const inverse::FitParameterization parameters(
-      seed.traced, *seed.traced.cords, inverse::ParameterMode::kScales, inverse::ParameterBounds{});
-  const inverse::ForwardResidual residual(seed.traced, parameters, seed.settings,
-                                          inverse::ResidualOptions{});
+  const inverse::FitParameterization& parameters = setUp().scales;
+  const inverse::ForwardResidual& residual = setUp().residual;
   inverse::FiniteDifferenceOptions fd;
   fd.warm_start = true;
   inverse::FitObjective objective(residual, fd, 1000, 0, inverse::FitObjective::Clock::now(),
