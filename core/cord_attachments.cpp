@@ -8,6 +8,7 @@
 
 #include "core/annulus_plane.h"
 #include "core/carpentier.h"
+#include "core/xpbd_constraints.h"
 
 namespace chordfit {
 
@@ -57,8 +58,12 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
     Column column;
     column.first = mesh.annulus(k);
     column.last = valve.free_edge(k);
+    // The valve's own fraction when it has one: the mesh ring's commissures lie up to half a
+    // ring edge off the curve's, which would move every point attachment with the mesh.
     column.fraction =
-        arcFraction(*arc, annulusAngle(map.frame, mesh.V.row(column.first).transpose()));
+        valve.column_fraction.size() == count
+            ? valve.column_fraction(k)
+            : arcFraction(*arc, annulusAngle(map.frame, mesh.V.row(column.first).transpose()));
     column.arc.push_back(0.0);
     for (int v = column.first + 1; v <= column.last; ++v) {
       column.arc.push_back(column.arc.back() + (mesh.V.row(v) - mesh.V.row(v - 1)).norm());
@@ -238,6 +243,72 @@ std::vector<int> mapAttachments(const ParametricValve& valve,
     vertices.push_back(best);
   }
   return vertices;
+}
+
+std::vector<CordPoint> pointAttachments(const ParametricValve& valve,
+                                        const std::vector<AnatomicalAttachment>& attachments) {
+  const ValveMesh& mesh = valve.valve_case.mesh;
+  const int leaflets = static_cast<int>(mesh.leaflet_names.size());
+  std::vector<LeafletColumns> columns;
+  for (int leaflet = 0; leaflet < leaflets; ++leaflet) {
+    columns.push_back(leafletColumns(valve, leaflet));
+  }
+  // Triangles touching the annulus ring are left out: a weight on a Dirichlet vertex does
+  // not move, so a point near it could reach its rest length only by throwing the free
+  // vertices far (dx_m = b_m w_m n dlambda / sum(b^2 w), xpbd_constraints.h).
+  std::vector<bool> on_ring(mesh.V.rows(), false);
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) on_ring[mesh.annulus(i)] = true;
+  std::vector<CordPoint> points;
+  for (const AnatomicalAttachment& a : attachments) {
+    if (a.leaflet < 0 || a.leaflet >= leaflets) {
+      throw std::invalid_argument("cord attachment: leaflet " + std::to_string(a.leaflet) +
+                                  " does not exist");
+    }
+    const Eigen::Vector3d p =
+        pointOn(mesh.V, requireColumns(columns[a.leaflet], a.leaflet), a.fraction, a.depth_mm);
+    CordPoint best;
+    double best_distance = std::numeric_limits<double>::infinity();
+    for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
+      const Eigen::Vector3i t = mesh.F.row(f).transpose();
+      if (mesh.leaflet(t(0)) != a.leaflet || mesh.leaflet(t(1)) != a.leaflet ||
+          mesh.leaflet(t(2)) != a.leaflet || on_ring[t(0)] || on_ring[t(1)] || on_ring[t(2)]) {
+        continue;
+      }
+      double b[3];
+      const Eigen::Vector3d x0 = mesh.V.row(t(0)).transpose(), x1 = mesh.V.row(t(1)).transpose(),
+                            x2 = mesh.V.row(t(2)).transpose();
+      closestPointOnTriangle(p, x0, x1, x2, b[0], b[1], b[2]);
+      const double d = (b[0] * x0 + b[1] * x1 + b[2] * x2 - p).squaredNorm();
+      if (d < best_distance) {
+        best_distance = d;
+        best.vertices = {t(0), t(1), t(2)};
+        // Clamp the closest-point barycentrics' rounding so the weights are >= 0 and sum to 1.
+        Eigen::Vector3d w(std::max(b[0], 0.0), std::max(b[1], 0.0), std::max(b[2], 0.0));
+        best.weights = w / w.sum();
+      }
+    }
+    if (!std::isfinite(best_distance)) {
+      throw std::invalid_argument("cord attachment: leaflet " + std::to_string(a.leaflet) +
+                                  " has no triangle");
+    }
+    points.push_back(best);
+  }
+  return points;
+}
+
+int largestWeightVertex(const CordPoint& point) {
+  Eigen::Index m = 0;
+  point.weights.maxCoeff(&m);
+  return point.vertices[static_cast<std::size_t>(m)];
+}
+
+CordSet attachmentCordSet(const std::vector<AnatomicalAttachment>& attachments,
+                          const std::vector<CordPoint>& points) {
+  std::vector<int> vertices;
+  for (const CordPoint& p : points) vertices.push_back(largestWeightVertex(p));
+  CordSet set = attachmentCordSet(attachments, vertices);
+  for (std::size_t i = 0; i < set.cords.size(); ++i) set.cords[i].point = points.at(i);
+  return set;
 }
 
 CordSet attachmentCordSet(const std::vector<AnatomicalAttachment>& attachments,

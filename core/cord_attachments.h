@@ -70,9 +70,24 @@ double leafletHeightAt(const ParametricValve& valve, int leaflet, double fractio
 std::vector<int> mapAttachments(const ParametricValve& valve,
                                 const std::vector<AnatomicalAttachment>& attachments);
 
+// One point per attachment, same order: the point of the attachment's leaflet surface
+// (triangles whose three vertices carry its label) nearest to attachmentPoint, as barycentric
+// weights on that triangle; triangles touching the annulus ring are left out. Unlike mapAttachments
+// this carries no snapping error: on meshes of any resolution the cord inserts where the anatomy
+// says, up to the distance between the meshes' surfaces (their chordal sag, well under 0.1 mm).
+// Throws std::invalid_argument when a leaflet has no triangle.
+std::vector<CordPoint> pointAttachments(const ParametricValve& valve,
+                                        const std::vector<AnatomicalAttachment>& attachments);
+
+// The vertex of a point's largest weight (its cord's `vertex`, cordset.h).
+int largestWeightVertex(const CordPoint& point);
+
 // A CordSet skeleton for heuristicCordSet: tips "anterolateral" / "posteromedial" (positions
 // unset) and one cord per attachment with its vertex, kind and tip.
 CordSet attachmentCordSet(const std::vector<AnatomicalAttachment>& attachments,
                           const std::vector<int>& vertices);
+// The same with the cords inserting at `points` (vertex: each point's largest weight).
+CordSet attachmentCordSet(const std::vector<AnatomicalAttachment>& attachments,
+                          const std::vector<CordPoint>& points);
 
 }  // namespace chordfit

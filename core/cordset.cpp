@@ -1,5 +1,7 @@
 #include "core/cordset.h"
 
+#include <cmath>
+
 namespace chordfit {
 
 const char* toString(CordKind kind) { return kind == CordKind::kPrimary ? "primary" : "secondary"; }
@@ -70,13 +72,34 @@ int scaleGroup(CordSet& set, const Eigen::VectorXi& leaflet_labels, int leaflet,
   return changed;
 }
 
+std::string cordPointProblem(const CordPoint& point, int vertex_count) {
+  for (int v : point.vertices) {
+    if (v < 0 || v >= vertex_count) {
+      return "vertex " + std::to_string(v) + " does not exist (mesh has " +
+             std::to_string(vertex_count) + " vertices)";
+    }
+  }
+  if (!point.weights.allFinite() || point.weights.minCoeff() < 0.0)
+    return "weights must be finite and >= 0";
+  if (std::abs(point.weights.sum() - 1.0) > 1e-9) return "weights must sum to 1";
+  return "";
+}
+
+Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V) {
+  if (!cord.point) return V.row(cord.vertex).transpose();
+  const CordPoint& p = *cord.point;
+  return p.weights(0) * V.row(p.vertices[0]).transpose() +
+         p.weights(1) * V.row(p.vertices[1]).transpose() +
+         p.weights(2) * V.row(p.vertices[2]).transpose();
+}
+
 Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed) {
   Eigen::VectorXd spans(static_cast<Eigen::Index>(set.cords.size()));
   for (std::size_t c = 0; c < set.cords.size(); ++c) {
     const Cord& cord = set.cords[c];
     const PmTip& tip = set.tips.at(cord.tip);
     const Eigen::Vector3d end = tip.closed_position ? *tip.closed_position : tip.position;
-    spans(static_cast<Eigen::Index>(c)) = (V_closed.row(cord.vertex).transpose() - end).norm();
+    spans(static_cast<Eigen::Index>(c)) = (insertionPosition(cord, V_closed) - end).norm();
   }
   return spans;
 }

@@ -3,6 +3,7 @@
 // sets of one case can be kept side by side and compared.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -22,9 +23,21 @@ struct PmTip {
   std::optional<Eigen::Vector3d> closed_position;
 };
 
+// A cord's insertion between mesh vertices: the point sum_m weights(m) V(vertices[m]) of a
+// triangle (barycentric weights >= 0, summing to 1). The synthetic cohort attaches its cords
+// at anatomical points this way, so that the same point is meant on meshes of any resolution
+// (core/cord_attachments.h); the paper's editor and the heuristic attach at vertices.
+struct CordPoint {
+  std::array<int, 3> vertices{};
+  Eigen::Vector3d weights = Eigen::Vector3d(1.0, 0.0, 0.0);
+};
+
 struct Cord {
-  int tip = 0;     // index into CordSet::tips
-  int vertex = 0;  // leaflet vertex index into ValveMesh::V
+  int tip = 0;  // index into CordSet::tips
+  // Leaflet vertex index into ValveMesh::V: where the cord inserts, or, with a point, the
+  // point's vertex of largest weight (which then decides the cord's leaflet and segment).
+  int vertex = 0;
+  std::optional<CordPoint> point;  // insertion between vertices; absent = at `vertex`
   CordKind kind = CordKind::kPrimary;
   // Rest length l0 (mm) = seed_rest_length * scale. The seed is what the heuristic (or the
   // user's first definition) gave; a scale multiplies it (paper: "scale cord lengths").
@@ -53,7 +66,14 @@ std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
                       const std::vector<std::string>& leaflet_names,
                       const std::vector<PmTip>& tips);
 
-// Each cord's span in a closed state: |V_closed(vertex) - tip|, the tip at its closed position
+// What is wrong with a point on a mesh of `vertex_count` vertices: a vertex index out of range,
+// a negative or non-finite weight, or weights not summing to 1 (within 1e-9). "" = fine.
+std::string cordPointProblem(const CordPoint& point, int vertex_count);
+
+// Where a cord inserts on a mesh state V (#V by 3): its point, else its vertex.
+Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V);
+
+// Each cord's span in a closed state: |insertion - tip|, the tip at its closed position
 // (or its open one when it has none, as the simulator keeps it). A cord is slack there when
 // its span is below its rest length (paper eq. 1: no force), and then any rest length down to
 // its span closes the valve the same way: the closed state bounds a slack cord's length from

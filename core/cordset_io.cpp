@@ -1,5 +1,8 @@
 #include "core/cordset_io.h"
 
+#include <algorithm>
+#include <cmath>
+
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
@@ -12,6 +15,36 @@ namespace {
 using nlohmann::json;
 
 json vec3Json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z()}); }
+
+// "point": {"vertices": [i, j, k], "weights": [a, b, c]}; `vertex` becomes the vertex of
+// largest weight unless the file names one.
+bool readCordPoint(const json& value, const std::string& where, JsonFields& fields, Cord& cord) {
+  const json* vertices = fields.member(value, where, "vertices", true);
+  const json* weights = fields.member(value, where, "weights", true);
+  if (vertices == nullptr || weights == nullptr) return false;
+  Eigen::VectorXi v;
+  Eigen::Vector3d b;
+  bool ok = fields.integers(*vertices, fieldPath(where, "vertices"), v);
+  ok &= fields.vec3(*weights, fieldPath(where, "weights"), b);
+  if (!ok) return false;
+  if (v.size() != 3) {
+    fields.error(fieldPath(where, "vertices"),
+                 "expected 3 vertex indices, got " + std::to_string(v.size()));
+    return false;
+  }
+  CordPoint p;
+  for (int m = 0; m < 3; ++m) p.vertices[m] = v(m);
+  p.weights = b;
+  if (!b.allFinite() || b.minCoeff() < 0.0 || std::abs(b.sum() - 1.0) > 1e-9) {
+    fields.error(fieldPath(where, "weights"), "weights must be >= 0 and sum to 1");
+    return false;
+  }
+  Eigen::Index largest = 0;
+  b.maxCoeff(&largest);
+  cord.vertex = p.vertices[largest];
+  cord.point = p;
+  return true;
+}
 
 bool readCord(const json& value, const std::string& where, int tip_count, JsonFields& fields,
               Cord& cord) {
@@ -27,9 +60,22 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
   } else {
     ok = false;
   }
-  if (const json* vertex = fields.member(value, where, "vertex", true)) {
-    ok &= fields.integer(*vertex, fieldPath(where, "vertex"), cord.vertex);
-  } else {
+  const json* point = fields.member(value, where, "point", false);
+  if (point != nullptr) ok &= readCordPoint(*point, fieldPath(where, "point"), fields, cord);
+  if (const json* vertex = fields.member(value, where, "vertex", point == nullptr)) {
+    int v = 0;
+    if (fields.integer(*vertex, fieldPath(where, "vertex"), v)) {
+      if (cord.point && std::find(cord.point->vertices.begin(), cord.point->vertices.end(), v) ==
+                            cord.point->vertices.end()) {
+        fields.error(fieldPath(where, "vertex"),
+                     "vertex " + std::to_string(v) + " is not one of the point's vertices");
+        ok = false;
+      }
+      cord.vertex = v;
+    } else {
+      ok = false;
+    }
+  } else if (point == nullptr) {
     ok = false;
   }
   if (const json* kind = fields.member(value, where, "kind", false)) {
@@ -178,12 +224,19 @@ bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& 
                        Diagnostics& diagnostics) {
   bool ok = true;
   for (std::size_t i = 0; i < set.cords.size(); ++i) {
-    const int v = set.cords[i].vertex;
-    if (v < 0 || v >= vertex_count) {
+    const Cord& cord = set.cords[i];
+    if (cord.vertex < 0 || cord.vertex >= vertex_count) {
       diagnostics.error(file, indexPath("cords", i) + ".vertex",
-                        "vertex " + std::to_string(v) + " does not exist (mesh has " +
+                        "vertex " + std::to_string(cord.vertex) + " does not exist (mesh has " +
                             std::to_string(vertex_count) + " vertices)");
       ok = false;
+    }
+    if (cord.point) {
+      const std::string problem = cordPointProblem(*cord.point, vertex_count);
+      if (!problem.empty()) {
+        diagnostics.error(file, indexPath("cords", i) + ".point", problem);
+        ok = false;
+      }
     }
   }
   return ok;
@@ -203,6 +256,11 @@ void writeCordSet(const std::filesystem::path& path, const CordSet& set, const V
   json cords = json::array();
   for (const Cord& cord : set.cords) {
     json c = {{"tip", cord.tip}, {"vertex", cord.vertex}, {"kind", toString(cord.kind)}};
+    if (cord.point) {
+      const CordPoint& p = *cord.point;
+      c["point"] = {{"vertices", {p.vertices[0], p.vertices[1], p.vertices[2]}},
+                    {"weights", vec3Json(p.weights)}};
+    }
     if (mesh != nullptr) c["group"] = groupName(cord, mesh->leaflet, mesh->leaflet_names, set.tips);
     c["seed_rest_length_mm"] = cord.seed_rest_length;
     c["rest_length_mm"] = cord.rest_length;

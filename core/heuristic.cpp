@@ -56,7 +56,7 @@ void placePrimaries(const ValveMesh& mesh, const AnnulusFrame& frame, const std:
     if (i > 0 && (i == n + 1 || target - arc[i - 1] < arc[i] - target)) --i;
     const int vertex = loop[(start + i) % n];
     if (annulus_distance(vertex) < options.min_annulus_distance_mm) continue;
-    if (used.insert(vertex).second) out.push_back({vertex, CordKind::kPrimary});
+    if (used.insert(vertex).second) out.push_back({vertex, CordKind::kPrimary, std::nullopt});
   }
 }
 
@@ -94,7 +94,7 @@ void placeSecondaries(const ValveMesh& mesh, const AnnulusFrame& frame,
     }
   }
   for (int v : best) {
-    if (v >= 0 && used.insert(v).second) out.push_back({v, CordKind::kSecondary});
+    if (v >= 0 && used.insert(v).second) out.push_back({v, CordKind::kSecondary, std::nullopt});
   }
 }
 
@@ -160,11 +160,11 @@ std::vector<int> splitBySide(const ValveMesh& mesh, const AnnulusFrame& frame,
   return subset;
 }
 
-Eigen::Vector3d heuristicTipPosition(const ValveMesh& mesh, const Plane& annulus_plane,
-                                     const std::vector<int>& vertices) {
+Eigen::Vector3d heuristicTipPosition(const Plane& annulus_plane,
+                                     const std::vector<Eigen::Vector3d>& points) {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  for (int v : vertices) centroid += mesh.V.row(v).transpose();
-  centroid /= static_cast<double>(std::max<std::size_t>(1, vertices.size()));
+  for (const Eigen::Vector3d& p : points) centroid += p;
+  centroid /= static_cast<double>(std::max<std::size_t>(1, points.size()));
   const double d = std::abs(annulus_plane.signedDistance(centroid));
   return centroid - d * annulus_plane.normal;  // away from the atrium (normal points to it)
 }
@@ -186,7 +186,7 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
     tip_names.clear();
     for (const PmTip& tip : valve_case.cords->tips) tip_names.push_back(tip.name);
     for (const Cord& cord : valve_case.cords->cords) {
-      attachments.push_back({cord.vertex, cord.kind});
+      attachments.push_back({cord.vertex, cord.kind, cord.point});
       subset.push_back(cord.tip);
       compliance.push_back(cord.compliance);
     }
@@ -205,19 +205,25 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
     compliance.assign(attachments.size(), 0.0);
   }
 
+  std::vector<Eigen::Vector3d> insertions;
+  for (const CordAttachment& a : attachments) {
+    Cord at;
+    at.vertex = a.vertex, at.point = a.point;
+    insertions.push_back(insertionPosition(at, mesh.V));
+  }
   CordSet set;
   const bool tips_given = valve_case.tips && valve_case.tips->size() == tip_names.size();
   for (std::size_t t = 0; t < tip_names.size(); ++t) {
-    std::vector<int> members;
+    std::vector<Eigen::Vector3d> members;
     for (std::size_t i = 0; i < attachments.size(); ++i) {
-      if (subset[i] == static_cast<int>(t)) members.push_back(attachments[i].vertex);
+      if (subset[i] == static_cast<int>(t)) members.push_back(insertions[i]);
     }
     PmTip tip;
     tip.name = tip_names[t];
     if (tips_given) {
       tip = (*valve_case.tips)[t];
     } else {
-      tip.position = heuristicTipPosition(mesh, frame.plane, members);
+      tip.position = heuristicTipPosition(frame.plane, members);
     }
     set.tips.push_back(tip);
   }
@@ -225,9 +231,10 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
     Cord cord;
     cord.tip = subset[i];
     cord.vertex = attachments[i].vertex;
+    cord.point = attachments[i].point;
     cord.kind = attachments[i].kind;
-    cord.seed_rest_length = heuristicRestLength(mesh.V.row(cord.vertex).transpose(), frame.plane,
-                                                set.tips[cord.tip].position);
+    cord.seed_rest_length =
+        heuristicRestLength(insertions[i], frame.plane, set.tips[cord.tip].position);
     cord.rest_length = cord.seed_rest_length;
     cord.compliance = compliance[i];
     cord.provenance = Provenance::kHeuristic;

@@ -9,6 +9,7 @@
 //   - rest length l0 = dist(V_j, AP) + |V_j - tip_i|, in the open state.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "core/annulus_plane.h"
@@ -28,6 +29,7 @@ struct HeuristicOptions {
 struct CordAttachment {
   int vertex = 0;
   CordKind kind = CordKind::kPrimary;
+  std::optional<CordPoint> point;  // a case cord's insertion between vertices (cordset.h)
 };
 
 // Free-edge loops: boundary loops of the mesh other than the annulus ring.
@@ -42,15 +44,15 @@ std::vector<CordAttachment> placeCordAttachments(const ValveMesh& mesh,
 std::vector<int> splitBySide(const ValveMesh& mesh, const AnnulusFrame& frame,
                              const std::vector<int>& vertices);
 
-// Paper's tip: c - d n_AP for the centroid c of `vertices` (d = |dist(c, AP)|).
-Eigen::Vector3d heuristicTipPosition(const ValveMesh& mesh, const Plane& annulus_plane,
-                                     const std::vector<int>& vertices);
+// Paper's tip: c - d n_AP for the centroid c of the insertion `points` (d = |dist(c, AP)|).
+Eigen::Vector3d heuristicTipPosition(const Plane& annulus_plane,
+                                     const std::vector<Eigen::Vector3d>& points);
 
 // Paper's rest length: dist(p, AP) + |p - tip|.
 double heuristicRestLength(const Eigen::Vector3d& p, const Plane& annulus_plane,
                            const Eigen::Vector3d& tip);
 
-// The heuristic cord set of a case. Cord vertices, kinds and tip subsets come from the
+// The heuristic cord set of a case. Cord vertices (and points), kinds and tip subsets come from the
 // case's cords when it has them (the user's choice), else from automatic placement and
 // the side split; tip positions come from the case's pm_tips when given, else from the
 // paper's formula. Rest lengths always from the paper's formula; every cord has

@@ -440,11 +440,16 @@ double leafletHeight(const LeafletLayout& layout, double theta) {
   return layout.knots.back()[1];
 }
 
+// Fraction of angle theta along its leaflet's arc, 0 at the anterolateral commissure.
+double arcFraction(const LeafletLayout& layout, int leaflet, double theta) {
+  const double t = layout.unwrap(theta);
+  return leaflet == 0 ? (layout.theta_al - t) / layout.anteriorSweep()
+                      : (t - layout.theta_al) / layout.posteriorSweep();
+}
+
 // Carpentier index 0..2 within the leaflet, counted from the anterolateral commissure.
 int segmentIndex(const LeafletLayout& layout, int leaflet, double theta) {
-  const double t = layout.unwrap(theta);
-  const double fraction = leaflet == 0 ? (layout.theta_al - t) / layout.anteriorSweep()
-                                       : (t - layout.theta_al) / layout.posteriorSweep();
+  const double fraction = arcFraction(layout, leaflet, theta);
   return std::clamp(static_cast<int>(std::floor(3.0 * fraction)), 0, 2);
 }
 
@@ -452,7 +457,8 @@ struct Column {
   Eigen::Vector3d annulus;
   double height = 0.0;
   int leaflet = 0;
-  int segment = 0;  // global id leaflet * 3 + index
+  int segment = 0;        // global id leaflet * 3 + index
+  double fraction = 0.0;  // along the leaflet's arc (arcFraction)
 };
 
 struct Ring {
@@ -507,6 +513,7 @@ Ring buildRing(const ValveParameters& p, const AnnulusCurve& curve, bool paramet
     const double theta = ring.frame.angle(column.annulus);
     column.height = leafletHeight(layout, theta);
     column.segment = 3 * column.leaflet + segmentIndex(layout, column.leaflet, theta);
+    column.fraction = arcFraction(layout, column.leaflet, theta);
   }
   requireStarShaped(ring);
   return ring;
@@ -587,6 +594,7 @@ void buildMesh(const Ring& ring, double edge, ParametricValve& valve) {
   valve.segment.resize(total);
   mesh.annulus.resize(count);
   valve.free_edge.resize(count);
+  valve.column_fraction.resize(count);
   for (int k = 0; k < count; ++k) {
     const Column& column = ring.columns[k];
     const Eigen::Vector3d inward = -ring.frame.radial(column.annulus);
@@ -603,6 +611,7 @@ void buildMesh(const Ring& ring, double edge, ParametricValve& valve) {
     }
     mesh.annulus(k) = columns[k].first;
     valve.free_edge(k) = columns[k].first + static_cast<int>(columns[k].s.size()) - 1;
+    valve.column_fraction(k) = column.fraction;
   }
 
   std::vector<Eigen::Vector3i> faces;

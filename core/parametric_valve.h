@@ -17,18 +17,18 @@
 namespace chordfit {
 
 struct ValveParameters {
-  double ap_diameter_mm = 28.0;           // anteroposterior (septal-lateral) diameter, open
-  double cc_diameter_mm = 35.0;           // commissure-commissure diameter, open
-  double saddle_height_mm = 5.0;          // annular height (peak to trough), open
-  double closed_contraction = 0.9;        // closed/open ratio of in-plane annulus dimensions
-  double closed_saddle_height_mm = 7.0;   // deeper saddle in systole
-  double anterior_fraction = 1.0 / 3.0;   // share of the annulus circumference (anterior)
-  double anterior_height_mm = 23.0;       // A2 height, annulus to free edge
-  double posterior_height_mm = 14.0;      // P2 height
-  double posterior_side_height_mm = 11.0; // P1 / P3 heights
-  double commissural_height_mm = 8.0;     // leaflet height at the commissures
-  double indentation_depth = 0.5;         // fraction of height lost at the P1/P2, P2/P3 clefts
-  double target_edge_mm = 1.5;            // mesh resolution
+  double ap_diameter_mm = 28.0;            // anteroposterior (septal-lateral) diameter, open
+  double cc_diameter_mm = 35.0;            // commissure-commissure diameter, open
+  double saddle_height_mm = 5.0;           // annular height (peak to trough), open
+  double closed_contraction = 0.9;         // closed/open ratio of in-plane annulus dimensions
+  double closed_saddle_height_mm = 7.0;    // deeper saddle in systole
+  double anterior_fraction = 1.0 / 3.0;    // share of the annulus circumference (anterior)
+  double anterior_height_mm = 23.0;        // A2 height, annulus to free edge
+  double posterior_height_mm = 14.0;       // P2 height
+  double posterior_side_height_mm = 11.0;  // P1 / P3 heights
+  double commissural_height_mm = 8.0;      // leaflet height at the commissures
+  double indentation_depth = 0.5;          // fraction of height lost at the P1/P2, P2/P3 clefts
+  double target_edge_mm = 1.5;             // mesh resolution
   // Optional user annulus (#P by 3, ordered, closed loop implied) replacing the parametric
   // ellipse/saddle for the open state. The closed annulus is derived from it by contraction
   // about its centroid and saddle deepening.
@@ -36,9 +36,14 @@ struct ValveParameters {
 };
 
 struct ParametricValve {
-  ValveCase valve_case;           // mesh (open), labels, annulus ring, closed annulus; no tracings
-  Eigen::VectorXi segment;        // #V Carpentier segment id = leaflet * 3 + (0..2)
-  Eigen::VectorXi free_edge;      // ordered loop of free-edge vertex indices
+  ValveCase valve_case;       // mesh (open), labels, annulus ring, closed annulus; no tracings
+  Eigen::VectorXi segment;    // #V Carpentier segment id = leaflet * 3 + (0..2)
+  Eigen::VectorXi free_edge;  // ordered loop of free-edge vertex indices
+  // Per annulus column (mesh.annulus(k) .. free_edge(k)): its position along its leaflet's
+  // arc, 0 at the anterolateral commissure, 1 at the posteromedial one, as the polar angle
+  // between the commissures of the annulus curve (not of the mesh ring), so the same on
+  // meshes of any resolution.
+  Eigen::VectorXd column_fraction;
 };
 
 // Builds the valve. Throws std::invalid_argument naming the parameter if one is out of range.

@@ -3,11 +3,11 @@
 //
 // Model: leaflet membrane (edge distance, dihedral bending and triangle area constraints with
 // compliances from material.h, optionally scaled per region: tissue_stiffness), cords (paper
-// eq. 1: a distance constraint PM tip -> leaflet vertex, active only when stretched),
-// Dirichlet annulus ring and PM tips (interpolated from their start to their end positions
-// during the ramp), systolic pressure along the area-weighted vertex normals (ventricle ->
-// atrium), a velocity field along the annulus-plane normal n_AP with viscous drag toward it,
-// and vertex-triangle contact (contact.h).
+// eq. 1: a distance constraint PM tip -> leaflet vertex or a point between vertices, active
+// only when stretched), Dirichlet annulus ring and PM tips (interpolated from their start to
+// their end positions during the ramp), systolic pressure along the area-weighted vertex
+// normals (ventricle -> atrium), a velocity field along the annulus-plane normal n_AP with
+// viscous drag toward it, and vertex-triangle contact (contact.h).
 // Units: mm, g, ms, N, MPa (material.h).
 //
 // Time step (simulator.cpp, Stepper): predict (v += dt f/m, drag, x~ = x + dt v + w impulse),
@@ -179,8 +179,9 @@ struct SimulationModel {
   Eigen::MatrixXd tip_end;      // #tips by 3 PM tip positions from the end of the ramp on
   struct Cord {
     int tip = 0, vertex = 0;
-    double rest_length = 0.0;  // mm
-    double compliance = 0.0;   // mm/N
+    double rest_length = 0.0;        // mm
+    double compliance = 0.0;         // mm/N
+    std::optional<CordPoint> point;  // insertion between vertices (then `vertex` is unused)
   };
   std::vector<Cord> cords;
   Eigen::Vector3d flow_direction = Eigen::Vector3d::UnitZ();  // unit; velocity field direction

@@ -132,17 +132,29 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
 
   // 3. Cords: one anatomical layout, decided on the fine mesh, mapped to both.
   s.attachments = layoutAttachments(truth_valve, options.layout);
-  s.case_vertices = mapAttachments(case_valve, s.attachments);
-  s.truth_vertices = mapAttachments(truth_valve, s.attachments);
+  if (options.attach_at_vertices) {
+    s.case_vertices = mapAttachments(case_valve, s.attachments);
+    s.truth_vertices = mapAttachments(truth_valve, s.attachments);
+  } else {
+    s.case_points = pointAttachments(case_valve, s.attachments);
+    s.truth_points = pointAttachments(truth_valve, s.attachments);
+    for (const CordPoint& p : s.case_points) s.case_vertices.push_back(largestWeightVertex(p));
+    for (const CordPoint& p : s.truth_points) s.truth_vertices.push_back(largestWeightVertex(p));
+  }
+  const auto skeleton = [&s](const std::vector<CordPoint>& points,
+                             const std::vector<int>& vertices) {
+    return points.empty() ? attachmentCordSet(s.attachments, vertices)
+                          : attachmentCordSet(s.attachments, points);
+  };
 
   s.valve_case = case_valve.valve_case;
   s.valve_case.name = caseName(options);
-  s.valve_case.cords = attachmentCordSet(s.attachments, s.case_vertices);
+  s.valve_case.cords = skeleton(s.case_points, s.case_vertices);
   s.valve_case.cords = heuristicCordSet(s.valve_case);
 
   s.truth_case = truth_valve.valve_case;
   s.truth_case.name = caseName(options) + "-truth";
-  s.truth_case.cords = attachmentCordSet(s.attachments, s.truth_vertices);
+  s.truth_case.cords = skeleton(s.truth_points, s.truth_vertices);
   CordSet truth_cords = heuristicCordSet(s.truth_case);
   SeededRandom cord_random = SeededRandom::stream(options.seed, kCordStream);
   s.true_scales = trueCordScales(s.preset, s.attachments, cord_random, &s.ruptured);
@@ -193,6 +205,15 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   return s;
 }
 
+namespace {
+json pointJson(const std::vector<CordPoint>& points, std::size_t i) {
+  if (points.empty()) return nullptr;
+  const CordPoint& p = points.at(i);
+  return {{"vertices", {p.vertices[0], p.vertices[1], p.vertices[2]}},
+          {"weights", {p.weights(0), p.weights(1), p.weights(2)}}};
+}
+}  // namespace
+
 std::string syntheticTruthJson(const SyntheticCase& s) {
   const ValveParameters& a = s.anatomy;
   const SyntheticCaseOptions& o = s.options;
@@ -215,6 +236,10 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
          {"tip", truth.tips.at(att.tip).name},
          {"case_vertex", s.case_vertices[i]},
          {"truth_vertex", s.truth_vertices[i]},
+         // Where the cord inserts on each mesh: a point between vertices (barycentric), or
+         // null when the cohort attaches at vertices (attach_at_vertices).
+         {"case_point", pointJson(s.case_points, i)},
+         {"truth_point", pointJson(s.truth_points, i)},
          {"true_scale", s.true_scales[i]},
          {"ruptured", static_cast<bool>(s.ruptured[i])},
          {"true_rest_length_mm", truth.cords[i].rest_length},

@@ -44,6 +44,10 @@ struct SyntheticCaseOptions {
   double tip_offset_sd_mm = 0.5;  // per-axis SD of the true PM tips' offset from the heuristic
   TracingSamplerOptions tracing;
   AttachmentLayoutOptions layout;
+  // Cords insert at their anatomical points on both meshes (pointAttachments, the default),
+  // or at the vertex nearest to that point on each mesh (mapAttachments, what the cohort did
+  // before it had points): then truth and case cords pull on places up to half an edge apart.
+  bool attach_at_vertices = false;
   // Solver settings of the truth closure; default truthSimulationSettings().
   std::optional<SimulationSettings> truth_settings;
   // Stage messages ("building meshes", ...) and simulator progress; both optional.
@@ -60,9 +64,10 @@ struct SyntheticCase {
   // tight solver settings (so `chordfit simulate truth/case` reproduces the truth).
   ValveCase truth_case;
   std::vector<AnatomicalAttachment> attachments;
-  std::vector<int> case_vertices, truth_vertices;  // per attachment
-  std::vector<double> true_scales;                 // per cord: true rest / heuristic seed
-  std::vector<bool> ruptured;                      // per cord
+  std::vector<int> case_vertices, truth_vertices;    // per attachment (a point's largest weight)
+  std::vector<CordPoint> case_points, truth_points;  // per attachment; empty at vertices
+  std::vector<double> true_scales;                   // per cord: true rest / heuristic seed
+  std::vector<bool> ruptured;                        // per cord
   SimulationSettings truth_settings;
   SimulationResult truth_result;  // V: the true closed state of truth_case.mesh
   ValveMetrics truth_metrics;     // true closed mesh vs tracings: the noise floor

@@ -269,9 +269,18 @@ void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, c
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const CordConstraint& k = constraints[c];
-    const double wv = w[k.vertex];
-    if (wv == 0.0) continue;
-    Map3 xv = at(x, k.vertex);
+    double denominator = 0.0;
+    Vec3 xv = Vec3::Zero();
+    if (k.count == 1) {
+      denominator = w[k.vertices[0]];
+      xv = at(x, k.vertices[0]);
+    } else {
+      for (int m = 0; m < k.count; ++m) {
+        denominator += k.weights[m] * k.weights[m] * w[k.vertices[m]];
+        xv += k.weights[m] * at(x, k.vertices[m]);
+      }
+    }
+    if (denominator == 0.0) continue;
     const CMap3 tip(tips + 3 * static_cast<long>(k.tip));
     const Vec3 d = xv - tip;
     const double len = d.norm();
@@ -279,14 +288,21 @@ void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, c
     const double C = len - k.rest;
     if (C < 0.0 && lambda[c] == 0.0) continue;  // slack: k^CT = 0 (paper eq. 1)
     const double alpha = k.compliance * inv_dt2;
-    double dl = (-C - alpha * lambda[c]) / (wv + alpha);
+    double dl = (-C - alpha * lambda[c]) / (denominator + alpha);
     // A cord only pulls: accumulated lambda stays <= 0.
     const double total = std::min(lambda[c] + dl, 0.0);
     dl = total - lambda[c];
     lambda[c] = total;
     const Vec3 g = d / len;
-    xv += (wv * dl) * g;
-    if (kAcc) accumulate(acc, k.vertex, g, total);
+    if (k.count == 1) {
+      at(x, k.vertices[0]) += (w[k.vertices[0]] * dl) * g;
+      if (kAcc) accumulate(acc, k.vertices[0], g, total);
+      continue;
+    }
+    for (int m = 0; m < k.count; ++m) {
+      at(x, k.vertices[m]) += (k.weights[m] * w[k.vertices[m]] * dl) * g;
+      if (kAcc) accumulate(acc, k.vertices[m], k.weights[m] * g, total);
+    }
   }
 }
 

@@ -66,9 +66,16 @@ struct AreaConstraint {
 //
 // Paper eq. 1: C = |x_v - tip| - rest, active only when C >= 0 (the cord pulls, never
 // pushes). The tip is Dirichlet: its position is read from a separate array, never moved.
+// The insertion x_v is a leaflet vertex or a point between vertices, x_v = sum_m b_m x_m
+// (barycentric, core/cordset.h CordPoint); then grad_m C = b_m n, n = (x_v - tip) / |x_v - tip|,
+// and the XPBD update (Macklin et al. 2016, eq. 18) is
+//   dlambda = (-C - alpha lambda) / (sum_m b_m^2 w_m + alpha),  dx_m = b_m w_m n dlambda,
+// which is the one-vertex update when the insertion is a vertex (count 1, b_0 = 1).
 struct CordConstraint {
-  int tip = 0;     // index into the tip position array
-  int vertex = 0;  // leaflet vertex
+  int tip = 0;                      // index into the tip position array
+  int count = 1;                    // 1: at vertices[0]; 3: between vertices[0..2]
+  std::array<int, 3> vertices{};    // leaflet vertices
+  std::array<double, 3> weights{};  // b_m >= 0, sum 1
   double rest = 0.0;
   double compliance = 0.0;
 };

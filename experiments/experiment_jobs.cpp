@@ -170,7 +170,16 @@ std::vector<double> attachmentPlaneDistances(const fs::path& case_dir, const jso
   }
   std::vector<double> distances;
   for (const json& cord : truth.at("cords")) {
-    const Eigen::Vector3d p = V.row(cord.at("truth_vertex").get<int>()).transpose();
+    // The cord's insertion on the true closed mesh: its point when the cohort has one.
+    Eigen::Vector3d p = V.row(cord.at("truth_vertex").get<int>()).transpose();
+    if (cord.contains("truth_point") && cord.at("truth_point").is_object()) {
+      const json& point = cord.at("truth_point");
+      p.setZero();
+      for (int m = 0; m < 3; ++m) {
+        p += point.at("weights").at(m).get<double>() *
+             V.row(point.at("vertices").at(m).get<int>()).transpose();
+      }
+    }
     double nearest = std::numeric_limits<double>::infinity();
     for (const Tracing& t : valve_case->tracings) {
       nearest = std::min(nearest, std::abs(t.plane_normal.dot(p - t.plane_origin)));

@@ -24,7 +24,7 @@ std::vector<std::pair<int, int>> neighbouringCords(const ValveCase& valve_case,
   for (std::size_t c = 0; c < start.cords.size(); ++c) {
     if (parameters.cordParameter()[c] < 0) continue;
     const Cord& cord = start.cords[c];
-    const double angle = annulusAngle(frame, valve_case.mesh.V.row(cord.vertex).transpose());
+    const double angle = annulusAngle(frame, insertionPosition(cord, valve_case.mesh.V));
     chains[{groups[c], static_cast<int>(cord.kind)}].push_back({angle, static_cast<int>(c)});
   }
   for (auto& [key, chain] : chains) {

@@ -31,7 +31,7 @@ TEST(SimulatorCords, StretchedInextensibleCordHoldsItsVertexAtRestLengthUnderFul
   SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
   // Without the cord the centre bulges ~1.6 mm toward +z; the cord from the tip 10 mm below
   // allows 0.5 mm.
-  model.cords.push_back({0, 0, 10.5, 0.0});
+  model.cords.push_back({0, 0, 10.5, 0.0, std::nullopt});
   const SimulationResult result = simulate(model, discSettings());
   ASSERT_TRUE(result.ok()) << result.error;
   EXPECT_TRUE(result.converged);
@@ -43,7 +43,7 @@ TEST(SimulatorCords, StretchedInextensibleCordHoldsItsVertexAtRestLengthUnderFul
 TEST(SimulatorCords, ElasticCordStretchesByForceTimesCompliance) {
   SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
   constexpr double kCompliance = 0.5;  // mm/N
-  model.cords.push_back({0, 0, 10.5, kCompliance});
+  model.cords.push_back({0, 0, 10.5, kCompliance, std::nullopt});
   SimulationSettings settings = discSettings();
   settings.tolerance_mm = 1e-6;
   const SimulationResult result = simulate(model, settings);
@@ -56,7 +56,8 @@ TEST(SimulatorCords, ElasticCordStretchesByForceTimesCompliance) {
 TEST(SimulatorCords, SlackCordExertsNoForceAndChangesNothing) {
   const SimulationModel without = testing::clampedDiscModel(kDiscRadius, kDiscRings);
   SimulationModel with = without;
-  with.cords.push_back({0, 0, 20.0, 0.0});  // longer than the centre ever gets from the tip
+  with.cords.push_back(
+      {0, 0, 20.0, 0.0, std::nullopt});  // longer than the centre ever gets from the tip
   const SimulationResult a = simulate(without, discSettings());
   const SimulationResult b = simulate(with, discSettings());
   ASSERT_TRUE(a.ok() && b.ok());
@@ -67,7 +68,7 @@ TEST(SimulatorCords, SlackCordExertsNoForceAndChangesNothing) {
 
 TEST(SimulatorDeterminism, TwoRunsAreBitIdenticalAlsoWhenRunConcurrently) {
   SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
-  model.cords.push_back({0, 0, 10.5, 0.0});
+  model.cords.push_back({0, 0, 10.5, 0.0, std::nullopt});
   const SimulationResult first = simulate(model, discSettings());
   SimulationResult second, third;
   std::thread t1([&] { second = simulate(model, discSettings()); });
@@ -113,7 +114,7 @@ TEST(SimulatorValidation, RejectsNonFiniteStartAndBadSettings) {
   settings.dt_ms = -1.0;
   EXPECT_FALSE(simulate(model, settings).ok());
   SimulationModel bad = model;
-  bad.cords.push_back({3, 0, 10.0, 0.0});  // no tip 3
+  bad.cords.push_back({3, 0, 10.0, 0.0, std::nullopt});  // no tip 3
   EXPECT_FALSE(simulate(bad, discSettings()).ok());
 }
 

@@ -84,16 +84,46 @@ TEST(ProjectDistances, InextensibleEdgeReachesRestLengthInOneProjection) {
   EXPECT_NEAR(-(x[3] - 2.0) / x[0], 3.0, 1e-12);
 }
 
+CordConstraint vertexCord(int vertex, double rest) {
+  CordConstraint c;
+  c.count = 1, c.vertices = {vertex, vertex, vertex}, c.weights = {1.0, 0.0, 0.0};
+  c.rest = rest;
+  return c;
+}
+
 TEST(ProjectCords, SlackCordDoesNothingAndStretchedCordPullsToRestLength) {
   const std::vector<double> tips{0, 0, -10};
   const std::vector<double> w{1.0};
   std::vector<double> x{0, 0, 0}, lambda{0.0};
-  projectCords({{0, 0, 12.0, 0.0}}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
+  projectCords({vertexCord(0, 12.0)}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
   EXPECT_EQ(x[2], 0.0);
   EXPECT_EQ(lambda[0], 0.0);
-  projectCords({{0, 0, 8.0, 0.0}}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
+  projectCords({vertexCord(0, 8.0)}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
   EXPECT_NEAR(x[2], -2.0, 1e-12);
   EXPECT_LT(lambda[0], 0.0);  // pulling
+}
+
+// A cord inserting between vertices: grad_m C = b_m n, so one projection of a hard cord
+// moves each vertex by b_m w_m / sum(b^2 w) times the violation and puts the insertion point
+// exactly at its rest length from the tip; the unweighted vertex stays where it was.
+TEST(ProjectCords, CordBetweenVerticesPullsItsPointToRestLengthSharedByWeight) {
+  const std::vector<double> tips{0, 0, -10};
+  const std::vector<double> w{1.0, 1.0, 1.0};
+  std::vector<double> x{-1, 0, 0, 1, 0, 0, 0, 5, 0}, lambda{0.0};
+  CordConstraint c;
+  c.count = 3, c.vertices = {0, 1, 2}, c.weights = {0.75, 0.25, 0.0}, c.rest = 8.0;
+  const double before = std::hypot(-0.5, 10.0);  // insertion (-0.5, 0, 0)
+  projectCords({c}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
+  const Eigen::Vector3d a(x[0], x[1], x[2]), b(x[3], x[4], x[5]);
+  const Eigen::Vector3d point = 0.75 * a + 0.25 * b;
+  EXPECT_NEAR((point - Eigen::Vector3d(0, 0, -10)).norm(), 8.0, 1e-12);
+  // Displacements along n in the ratio b_0 : b_1 = 3 : 1, summing (weighted) to C.
+  const double C = before - 8.0;
+  EXPECT_NEAR((a - Eigen::Vector3d(-1, 0, 0)).norm(), 0.75 / 0.625 * C, 1e-12);
+  EXPECT_NEAR((b - Eigen::Vector3d(1, 0, 0)).norm(), 0.25 / 0.625 * C, 1e-12);
+  EXPECT_EQ(x[6], 0.0);
+  EXPECT_EQ(x[7], 5.0);
+  EXPECT_LT(lambda[0], 0.0);
 }
 
 TEST(ProjectContacts, PushesAVertexOutToTheThicknessOnItsOwnSide) {

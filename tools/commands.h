@@ -72,7 +72,8 @@ struct MakeCaseOptions {
   double noise_mm = 0.3;
   double dropout = 0.1;
   double edge_mm = 1.5;
-  bool list = false;  // print the presets and exit
+  bool attach_at_vertices = false;  // cords at the nearest vertex of each mesh (older cohorts)
+  bool list = false;                // print the presets and exit
   bool quiet = false;
 };
 int runMakeCase(const MakeCaseOptions& options);

@@ -96,6 +96,10 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
       ->capture_default_str();
   cmd->add_option("--edge", o.edge_mm, "Case mesh edge length, mm (truth: edge / 2)")
       ->capture_default_str();
+  cmd->add_flag("--attach-at-vertices", o.attach_at_vertices,
+                "Cords insert at the vertex nearest their anatomical point on each mesh (up to "
+                "half an edge off it; the cohort before point attachments) instead of at the "
+                "point");
   cmd->add_flag("--list", o.list, "List the presets and what each models");
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }

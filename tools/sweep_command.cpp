@@ -39,7 +39,7 @@ int defaultP2PrimaryCord(const ValveCase& c, const CordSet& cords) {
   double best_offset = 1e9;
   for (std::size_t i = 0; i < cords.cords.size(); ++i) {
     const Cord& cord = cords.cords[i];
-    const Eigen::Vector3d p = c.mesh.V.row(cord.vertex).transpose();
+    const Eigen::Vector3d p = insertionPosition(cord, c.mesh.V);
     if (cord.kind != CordKind::kPrimary ||
         segmentOf(segments, p, c.mesh.leaflet(cord.vertex)) != kP2) {
       continue;
@@ -131,7 +131,7 @@ int runSweepCord(const SweepCordOptions& options) {
       p.converged = r.converged;
       p.steps = r.steps;
       if (r.ok()) {
-        p.vertex = r.V.row(vertex).transpose();
+        p.vertex = insertionPosition(cords->cords[cord], r.V);
         p.height = annulus.frame.plane.signedDistance(p.vertex);
         if (tracing_points.rows() > 0) {
           p.mean_deviation =
