@@ -206,25 +206,43 @@ std::vector<AnatomicalAttachment> layoutAttachments(const ParametricValve& valve
   return out;
 }
 
-std::vector<int> mapAttachments(const ParametricValve& valve,
-                                const std::vector<AnatomicalAttachment>& attachments) {
+namespace {
+
+// Where each attachment lies on the valve's own surface (attachmentPoint, for many at once).
+// Throws std::invalid_argument for a leaflet the valve does not have.
+std::vector<Eigen::Vector3d> surfacePoints(const ParametricValve& valve,
+                                           const std::vector<AnatomicalAttachment>& attachments) {
   const ValveMesh& mesh = valve.valve_case.mesh;
   const int leaflets = static_cast<int>(mesh.leaflet_names.size());
   std::vector<LeafletColumns> columns;
   for (int leaflet = 0; leaflet < leaflets; ++leaflet) {
     columns.push_back(leafletColumns(valve, leaflet));
   }
-  std::vector<bool> taken(mesh.V.rows(), false);
-  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) taken[mesh.annulus(i)] = true;
-
-  std::vector<int> vertices;
+  std::vector<Eigen::Vector3d> points;
   for (const AnatomicalAttachment& a : attachments) {
     if (a.leaflet < 0 || a.leaflet >= leaflets) {
       throw std::invalid_argument("cord attachment: leaflet " + std::to_string(a.leaflet) +
                                   " does not exist");
     }
-    const Eigen::Vector3d p =
-        pointOn(mesh.V, requireColumns(columns[a.leaflet], a.leaflet), a.fraction, a.depth_mm);
+    points.push_back(
+        pointOn(mesh.V, requireColumns(columns[a.leaflet], a.leaflet), a.fraction, a.depth_mm));
+  }
+  return points;
+}
+
+}  // namespace
+
+std::vector<int> mapAttachments(const ParametricValve& valve,
+                                const std::vector<AnatomicalAttachment>& attachments) {
+  const ValveMesh& mesh = valve.valve_case.mesh;
+  const std::vector<Eigen::Vector3d> targets = surfacePoints(valve, attachments);
+  std::vector<bool> taken(mesh.V.rows(), false);
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) taken[mesh.annulus(i)] = true;
+
+  std::vector<int> vertices;
+  for (std::size_t i = 0; i < attachments.size(); ++i) {
+    const AnatomicalAttachment& a = attachments[i];
+    const Eigen::Vector3d& p = targets[i];
     int best = -1;
     double best_distance = std::numeric_limits<double>::infinity();
     for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
@@ -248,24 +266,16 @@ std::vector<int> mapAttachments(const ParametricValve& valve,
 std::vector<CordPoint> pointAttachments(const ParametricValve& valve,
                                         const std::vector<AnatomicalAttachment>& attachments) {
   const ValveMesh& mesh = valve.valve_case.mesh;
-  const int leaflets = static_cast<int>(mesh.leaflet_names.size());
-  std::vector<LeafletColumns> columns;
-  for (int leaflet = 0; leaflet < leaflets; ++leaflet) {
-    columns.push_back(leafletColumns(valve, leaflet));
-  }
+  const std::vector<Eigen::Vector3d> targets = surfacePoints(valve, attachments);
   // Triangles touching the annulus ring are left out: a weight on a Dirichlet vertex does
   // not move, so a point near it could reach its rest length only by throwing the free
   // vertices far (dx_m = b_m w_m n dlambda / sum(b^2 w), xpbd_constraints.h).
   std::vector<bool> on_ring(mesh.V.rows(), false);
   for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) on_ring[mesh.annulus(i)] = true;
   std::vector<CordPoint> points;
-  for (const AnatomicalAttachment& a : attachments) {
-    if (a.leaflet < 0 || a.leaflet >= leaflets) {
-      throw std::invalid_argument("cord attachment: leaflet " + std::to_string(a.leaflet) +
-                                  " does not exist");
-    }
-    const Eigen::Vector3d p =
-        pointOn(mesh.V, requireColumns(columns[a.leaflet], a.leaflet), a.fraction, a.depth_mm);
+  for (std::size_t i = 0; i < attachments.size(); ++i) {
+    const AnatomicalAttachment& a = attachments[i];
+    const Eigen::Vector3d& p = targets[i];
     CordPoint best;
     double best_distance = std::numeric_limits<double>::infinity();
     for (Eigen::Index f = 0; f < mesh.F.rows(); ++f) {
