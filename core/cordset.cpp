@@ -85,12 +85,14 @@ std::string cordPointProblem(const CordPoint& point, int vertex_count) {
   return "";
 }
 
-Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V) {
-  if (!cord.point) return V.row(cord.vertex).transpose();
-  const CordPoint& p = *cord.point;
+Eigen::Vector3d pointPosition(const CordPoint& p, const Eigen::MatrixXd& V) {
   return p.weights(0) * V.row(p.vertices[0]).transpose() +
          p.weights(1) * V.row(p.vertices[1]).transpose() +
          p.weights(2) * V.row(p.vertices[2]).transpose();
+}
+
+Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V) {
+  return cord.point ? pointPosition(*cord.point, V) : Eigen::Vector3d(V.row(cord.vertex));
 }
 
 Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed) {

@@ -70,7 +70,10 @@ std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
 // a negative or non-finite weight, or weights not summing to 1 (within 1e-9). "" = fine.
 std::string cordPointProblem(const CordPoint& point, int vertex_count);
 
-// Where a cord inserts on a mesh state V (#V by 3): its point, else its vertex.
+// A point on a mesh state V (#V by 3): sum_m weights(m) V(vertices[m]).
+Eigen::Vector3d pointPosition(const CordPoint& point, const Eigen::MatrixXd& V);
+
+// Where a cord inserts on a mesh state V: its point, else its vertex.
 Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V);
 
 // Each cord's span in a closed state: |insertion - tip|, the tip at its closed position

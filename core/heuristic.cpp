@@ -207,9 +207,8 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
 
   std::vector<Eigen::Vector3d> insertions;
   for (const CordAttachment& a : attachments) {
-    Cord at;
-    at.vertex = a.vertex, at.point = a.point;
-    insertions.push_back(insertionPosition(at, mesh.V));
+    insertions.push_back(a.point ? pointPosition(*a.point, mesh.V)
+                                 : Eigen::Vector3d(mesh.V.row(a.vertex)));
   }
   CordSet set;
   const bool tips_given = valve_case.tips && valve_case.tips->size() == tip_names.size();

@@ -55,8 +55,8 @@ std::string validate(const SimulationModel& m, const SimulationSettings& s) {
   for (const auto& c : m.cords) {
     if (c.tip < 0 || c.tip >= m.tip_start.rows()) return "model: cord tip index out of range";
     if (c.vertex < 0 || c.vertex >= n) return "model: cord vertex index out of range";
-    if (c.point && !cordPointProblem(*c.point, n).empty())
-      return "model: cord point: " + cordPointProblem(*c.point, n);
+    const std::string point_problem = c.point ? cordPointProblem(*c.point, n) : "";
+    if (!point_problem.empty()) return "model: cord point: " + point_problem;
     if (!(c.rest_length > 0.0) || !std::isfinite(c.rest_length))
       return "model: cord rest length must be positive";
     if (!(c.compliance >= 0.0)) return "model: cord compliance must be >= 0";
@@ -579,8 +579,9 @@ bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhas
       error = "cords[" + std::to_string(c) + "]: tip or vertex index out of range";
       return false;
     }
-    if (cord.point && !cordPointProblem(*cord.point, n).empty()) {
-      error = "cords[" + std::to_string(c) + "].point: " + cordPointProblem(*cord.point, n);
+    const std::string point_problem = cord.point ? cordPointProblem(*cord.point, n) : "";
+    if (!point_problem.empty()) {
+      error = "cords[" + std::to_string(c) + "].point: " + point_problem;
       return false;
     }
     if (!(cord.rest_length > 0.0)) {

@@ -193,12 +193,6 @@ double median(std::vector<double> values) {
   return values[values.size() / 2];
 }
 
-Eigen::Vector3d pointPosition(const CordPoint& point, const Eigen::MatrixXd& V) {
-  Cord cord;
-  cord.point = point;
-  return insertionPosition(cord, V);
-}
-
 // The point of an attachment is the same anatomical place on both meshes, to within the
 // meshes' difference in shape, where the nearest vertices are up to half an edge apart.
 TEST(PointAttachments, PutACordAtTheSamePlaceOnMeshesOfAnyResolution) {
