@@ -37,6 +37,11 @@ std::string formatNumber(double value) {
   return buffer;
 }
 
+// "LO,HI" for `fit --scale-bounds` (the bounds as %g prints them).
+std::string scaleBoundsArgument(const ExperimentConfig& config) {
+  return formatNumber(config.scale_bounds->first) + "," + formatNumber(config.scale_bounds->second);
+}
+
 // The command as a reader would type it from the source root: paths inside the source tree
 // are shown relative to it (results record no machine-specific prefix).
 std::string commandLine(const std::vector<std::string>& args) {
@@ -368,6 +373,9 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
                                            "--threads",   std::to_string(config.fit_threads)};
       if (config.fd_warm) fit_args.push_back("--fd-warm");
       if (job.tissue_prefit) fit_args.push_back("--tissue-prefit");
+      if (config.scale_bounds) {
+        fit_args.insert(fit_args.end(), {"--scale-bounds", scaleBoundsArgument(config)});
+      }
       fit_args.insert(fit_args.end(), {"--out", run_dir.string()});
       if (!runChordfit(paths, fit_args, log, error, &command)) {
         return failure("job " + job.id + ": " + error);
@@ -378,6 +386,9 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       result["max_sims"] = config.max_sims;
       result["fd_warm"] = config.fd_warm;
       result["tissue_prefit"] = job.tissue_prefit;
+      if (config.scale_bounds) {
+        result["scale_bounds"] = {config.scale_bounds->first, config.scale_bounds->second};
+      }
     } else {
       cords_file = case_dir / "cords.json";
       if (job.method == Method::kTruth) {

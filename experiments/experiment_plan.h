@@ -5,7 +5,9 @@
 // in the same order and picks its own share by index.
 #pragma once
 
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace chordfit::experiments {
@@ -41,6 +43,8 @@ struct ExperimentConfig {
   double dropout = 0.1;
   int max_sims = 300;  // forward-simulation budget of every fit (equal for all optimisers)
   int fit_threads = 2;
+  // Scale bounds of every fit (`fit --scale-bounds`); unset: the fit's default [0.7, 1.5].
+  std::optional<std::pair<double, double>> scale_bounds;
   // Finite-difference perturbations warm-start from the base closed state (`fit --fd-warm`):
   // about 10x cheaper per Jacobian; the reported value is still a full closure.
   bool fd_warm = true;

@@ -9,10 +9,12 @@
 #include <cstdlib>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "core/csv_text.h"
@@ -57,6 +59,8 @@ options:
   --edge MM          case mesh edge length (default 2.5; the truth mesh is half of it).
                      Case ids do not name the edge: use separate --work and --results
   --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 16)
+  --scale-bounds LO,HI  scale bounds of every fit (fit --scale-bounds; default the fit's
+                     [0.7, 1.5]); use separate --work and --results
   --methods LIST     only jobs whose method starts with one of these comma-separated
                      names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
@@ -75,6 +79,7 @@ struct Arguments {
   fs::path results, work, chordfit, case_source;
   int max_sims = -1;
   double edge_mm = -1.0;
+  std::optional<std::pair<double, double>> scale_bounds;
   std::vector<std::string> methods;  // empty: all
   std::vector<int> seeds;            // empty: all
   std::vector<std::string> presets;  // empty: all
@@ -156,6 +161,15 @@ int parseArguments(int argc, char** argv, Arguments& a) {
           a.max_sims < 1) {
         return usageError("--max-sims: expected a positive integer, got \"" + text + "\"");
       }
+    } else if (arg == "--scale-bounds") {
+      double lo = 0.0, hi = 0.0;
+      char comma = 0, trailing = 0;
+      if (!value(text) ||
+          std::sscanf(text.c_str(), "%lf%c%lf%c", &lo, &comma, &hi, &trailing) != 3 ||
+          comma != ',' || !(lo > 0.0) || !(hi > lo)) {
+        return usageError("--scale-bounds: expected LO,HI with 0 < LO < HI, got \"" + text + "\"");
+      }
+      a.scale_bounds = std::make_pair(lo, hi);
     } else if (!arg.empty() && arg[0] != '-' && a.command.empty()) {
       a.command = arg;
     } else {
@@ -402,6 +416,7 @@ int main(int argc, char** argv) {
                                                   : fullConfig();
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
+  if (a.scale_bounds) config.scale_bounds = a.scale_bounds;
   try {
     const ExperimentPlan plan =
         restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);

@@ -148,6 +148,11 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   r = runRunner("list --plan most");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--plan: expected full, reduced or smoke"), std::string::npos) << r.err;
+  for (const char* bounds : {"0.6", "1.5,0.7", "0,1.5", "0.6,1.5x"}) {
+    r = runRunner(std::string("list --scale-bounds ") + bounds);
+    EXPECT_EQ(r.exit_code, 2) << bounds;
+    EXPECT_NE(r.err.find("--scale-bounds: expected LO,HI"), std::string::npos) << r.err;
+  }
   r = runRunner("list --cases no-such-case_s1");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--cases"), std::string::npos) << r.err;
