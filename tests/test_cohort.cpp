@@ -429,11 +429,9 @@ TEST(CohortCalibration, P3TruthProlapsesInP3Only) {
   EXPECT_GT(s.truth_metrics.mesh_prolapse.max_height_mm, 3.0) << describe(s);
 }
 
-// Every preset, seeds 1-3 (~10 s). Known failures are listed in experiments/README.md
-// "Calibration": prolapse-P3 seed 1 (A3 as well) and, since 2faadd7 (cords at points),
-// normal-2 seeds 1-2 (A2 at 2.4 and 2.0 mm; shorter normal cords would settle them but put
-// the true secondaries below the fit's lower scale bound). Bileaflet passes since its truth
-// has soft A2/P2 tissue.
+// Every preset, seeds 1-3 (~20 s). The one known failure is prolapse-P3 seed 1, which lifts A3
+// as well (experiments/README.md "Calibration"); bileaflet (soft A2/P2 tissue) and normal-2
+// (flatter saddle, A2 24 mm) pass since 2026-11-25.
 TEST(CohortSlow, DISABLED_EveryPresetAndSeedProlapsesOnlyInItsSegments) {
   for (const CohortPreset& preset : cohortPresets()) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
