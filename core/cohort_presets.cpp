@@ -38,12 +38,14 @@ constexpr double kElongatedP3 = 2.5;
 // seed 1, and softer than 0.1 changed nothing but the convergence.
 constexpr double kLesionStiffnessA2 = 0.05;
 constexpr double kLesionStiffnessP3 = 0.1;
-// Barlow's disease is a diffuse myxomatous degeneration (Anyanwu & Adams 2007), so the
-// bileaflet truth has lesion tissue in A2 and P2 too, at the A2 factor. Its A2 cords alone
-// cannot lift A2, for the reason above: at 2.5, 3.0 and 3.5 x l0 the closure is the same
-// (2026-11-25, edge 3 mm, seeds 1-3: A2 at 1.98 / 2.20 / 1.05 mm). With the soft tissue A2
-// rises to 3.3 / 3.4 / 2.2 mm; 0.1-0.15 left seed 3 below 2 mm; a taller or shorter anterior
-// leaflet or a deeper saddle spread it to A3 or left it below (experiments/README.md).
+// Barlow's disease is a myxomatous degeneration (Anyanwu & Adams 2007), so the bileaflet
+// truth has lesion tissue in A2, at the A2 factor. Its A2 cords alone cannot lift A2, for the
+// reason above: at 2.5, 3.0 and 3.5 x l0 the closure is the same (2026-11-25, edge 3 mm, seeds
+// 1-3: A2 at 1.98 / 2.20 / 1.05 mm). With the soft A2 it rises to 3.3 / 3.4 / 2.2 mm; 0.1-0.15
+// left seed 3 below 2 mm; a taller or shorter anterior leaflet or a deeper saddle spread it to
+// A3 or left it below. P2 prolapses through its cords alone and keeps healthy tissue: soft P2
+// as well made the fine truth of seed 3 at the default edge diverge (step 3,828 of its flap;
+// experiments/README.md "Calibration").
 constexpr double kLesionStiffnessBarlow = 0.05;
 // Degenerative (myxomatous) anatomy: deep indentations between the posterior scallops
 // (fraction of the scallop height, normal 0.5) and an enlarged prolapsing scallop.
@@ -160,11 +162,12 @@ std::vector<CohortPreset> buildPresets() {
     p.name = "bileaflet";
     p.summary =
         "Barlow-like bileaflet prolapse: dilated flat annulus, enlarged leaflets, elongated A2 "
-        "and P2 cords, soft (myxomatous) A2 and P2 tissue";
+        "and P2 cords, soft (myxomatous) A2 tissue";
     p.anatomy = barlowAnatomy();
     p.segment_scale = {0, kElongatedBarlow, 0, 0, kElongatedBarlow, 0};
     p.pathology_width = 0.5;
     p.lesion_stiffness = kLesionStiffnessBarlow;
+    p.lesion_segments = {false, true, false, false, false, false};  // A2
     p.intended_prolapse = {"A2", "P2"};
     presets.push_back(p);
   }
@@ -347,6 +350,13 @@ std::vector<double> trueCordScales(const CohortPreset& preset,
   return scales;
 }
 
+bool hasLesionTissue(const CohortPreset& preset, int segment) {
+  const bool every_segment = std::none_of(preset.lesion_segments.begin(),
+                                          preset.lesion_segments.end(), [](bool on) { return on; });
+  return preset.lesion_stiffness != 1.0 && preset.segment_scale[segment] > 0.0 &&
+         (every_segment || preset.lesion_segments[segment]);
+}
+
 Eigen::VectorXd lesionTissueStiffness(const CohortPreset& preset, const ValveMesh& mesh) {
   if (preset.lesion_stiffness == 1.0) return {};
   const SegmentMap map = openStateSegmentMap(mesh);
@@ -356,7 +366,7 @@ Eigen::VectorXd lesionTissueStiffness(const CohortPreset& preset, const ValveMes
     if (at.leaflet < 0 || at.leaflet > 1) continue;  // mitral presets: two leaflets
     double weight = 0.0;                             // the strongest lesion reaching this vertex
     for (int segment = at.leaflet * 3; segment < at.leaflet * 3 + 3; ++segment) {
-      if (preset.segment_scale[segment] > 0.0)
+      if (hasLesionTissue(preset, segment))
         weight = std::max(weight, lesionProfile(preset, segment, at.fraction));
     }
     factors(v) = std::pow(preset.lesion_stiffness, weight);

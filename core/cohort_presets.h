@@ -90,6 +90,9 @@ struct CohortPreset {
   // / w)) inside the profile and 1 outside. Only the truth has it; the case and the fit assume
   // uniform tissue (a model error the fitter must live with, as with a patient).
   double lesion_stiffness = 1.0;
+  // Which pathological segments have the lesion tissue (A1..P3); all false = every segment
+  // with a segment_scale.
+  std::array<bool, 6> lesion_segments{false, false, false, false, false, false};
   // Flail: this many of the primary cords nearest the middle of `ruptured_segment` rupture
   // (the seed picks a number in [min, max]).
   std::string ruptured_segment;
@@ -110,6 +113,10 @@ std::string cohortPresetNames();
 // Segment id (leaflet * 3 + 0..2) of "A1".."P3"; -1 when not a mitral segment name.
 int mitralSegmentId(const std::string& name);
 
+// Whether Carpentier segment `segment` (0..5 = A1..P3) of the preset's truth has lesion tissue:
+// lesion_stiffness != 1, the segment is pathological (segment_scale > 0) and listed in
+// lesion_segments (or that list is empty).
+bool hasLesionTissue(const CohortPreset& preset, int segment);
 // Per-vertex tissue stiffness factors of a valve mesh for the preset's lesion (see
 // lesion_stiffness; vertices localised by their open-state arc position on their leaflet, as
 // the Carpentier segments). Empty when the preset has no lesion tissue.

@@ -215,6 +215,12 @@ json pointJson(const std::vector<CordPoint>& points, std::size_t i) {
 }  // namespace
 
 std::string syntheticTruthJson(const SyntheticCase& s) {
+  std::vector<std::string> lesion_segments;  // "A2", ...: where the truth has lesion tissue
+  for (int segment = 0; segment < 6; ++segment) {
+    if (hasLesionTissue(s.preset, segment)) {
+      lesion_segments.push_back(segmentName({"anterior", "posterior"}, segment));
+    }
+  }
   const ValveParameters& a = s.anatomy;
   const SyntheticCaseOptions& o = s.options;
   json segment_scale = json::object();
@@ -296,6 +302,7 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                     {{"segment_peak_scale", segment_scale},
                      {"pathology_width", s.preset.pathology_width},
                      {"lesion_stiffness", s.preset.lesion_stiffness},
+                     {"lesion_segments", lesion_segments},
                      {"scale_spread", s.preset.scale_spread},
                      {"ruptured_segment", s.preset.ruptured_segment},
                      {"ruptured_cords", std::count(s.ruptured.begin(), s.ruptured.end(), true)}}},

@@ -374,6 +374,33 @@ TEST(LesionTissue, SoftAtTheLesionCentreHealthyElsewhereAndOnlyInTheTruth) {
   EXPECT_EQ(lesionTissueStiffness(*findCohortPreset("normal-1"), mesh).size(), 0);
 }
 
+// bileaflet elongates A2 and P2 cords but has lesion tissue in A2 only (lesion_segments).
+TEST(LesionTissue, OnlyInTheListedSegments) {
+  const CohortPreset& preset = *findCohortPreset("bileaflet");
+  ValveParameters anatomy = preset.anatomy;
+  anatomy.target_edge_mm = 2.5;
+  const ValveMesh mesh = makeParametricValve(anatomy).valve_case.mesh;
+  const Eigen::VectorXd factors = lesionTissueStiffness(preset, mesh);
+  ASSERT_EQ(factors.size(), mesh.V.rows());
+  double softest_a2 = 1.0;
+  for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
+    if (mesh.leaflet(v) == 1) {
+      EXPECT_EQ(factors(v), 1.0) << "posterior vertex " << v;
+    }
+    if (mesh.leaflet(v) == 0) softest_a2 = std::min(softest_a2, factors(v));
+  }
+  EXPECT_LT(softest_a2, 1.5 * preset.lesion_stiffness);
+  // Without the list every elongated segment gets the tissue.
+  CohortPreset every = preset;
+  every.lesion_segments = {};
+  const Eigen::VectorXd both = lesionTissueStiffness(every, mesh);
+  double softest_posterior = 1.0;
+  for (Eigen::Index v = 0; v < mesh.V.rows(); ++v) {
+    if (mesh.leaflet(v) == 1) softest_posterior = std::min(softest_posterior, both(v));
+  }
+  EXPECT_LT(softest_posterior, 1.5 * preset.lesion_stiffness);
+}
+
 // ---------------------------------------------------------------------------------------
 // Calibration: the truths prolapse exactly where the preset says.
 // ---------------------------------------------------------------------------------------
