@@ -10,6 +10,8 @@
 #include <filesystem>
 #include <map>
 #include <set>
+#include <string>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -456,14 +458,22 @@ TEST(CohortCalibration, P3TruthProlapsesInP3Only) {
   EXPECT_GT(s.truth_metrics.mesh_prolapse.max_height_mm, 3.0) << describe(s);
 }
 
-// Every preset, seeds 1-3 (~20 s). The one known failure is prolapse-P3 seed 1, which lifts A3
-// as well (experiments/README.md "Calibration"); bileaflet (soft A2/P2 tissue) and normal-2
-// (flatter saddle, A2 24 mm) pass since 2026-11-25.
-TEST(CohortSlow, DISABLED_EveryPresetAndSeedProlapsesOnlyInItsSegments) {
+// Every preset, seeds 1-3 (~10-20 s): the calibration of experiments/README.md holds. Guards it
+// against simulator and generator changes. The one known miss, prolapse-P3 seed 1, lifts A3
+// as well as P3; for it the intended segment must still be among the prolapsing ones.
+TEST(CohortCalibration, EveryPresetAndSeedProlapsesWhereIntended) {
+  const std::set<std::pair<std::string, std::uint64_t>> lifts_a_neighbour = {{"prolapse-P3", 1}};
   for (const CohortPreset& preset : cohortPresets()) {
     for (std::uint64_t seed = 1; seed <= 3; ++seed) {
       const SyntheticCase s = coarseTruth(preset, seed, 3000);
-      EXPECT_EQ(s.truth_metrics.mesh_prolapse.segments, preset.intended_prolapse) << describe(s);
+      const std::vector<std::string>& found = s.truth_metrics.mesh_prolapse.segments;
+      if (lifts_a_neighbour.count({preset.name, seed})) {
+        EXPECT_TRUE(std::includes(found.begin(), found.end(), preset.intended_prolapse.begin(),
+                                  preset.intended_prolapse.end()))
+            << describe(s);
+      } else {
+        EXPECT_EQ(found, preset.intended_prolapse) << describe(s);
+      }
     }
   }
 }
