@@ -501,6 +501,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
     if (disp < 0.0 || (disp > max_jump && step > 1)) {
       result.error = "simulation diverged (non-finite or exploding positions) at step " +
                      std::to_string(step) + "; reduce dt_ms or check the input";
+      result.diverged = true;
       break;
     }
     // Kinetic damping: past the ramp, a drop of the kinetic energy means the motion passed

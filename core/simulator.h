@@ -210,6 +210,7 @@ struct SimulationResult {
   int kinetic_stops = 0;             // velocity resets by kinetic damping
   int averaged_steps = 0;            // > 0: not settled, V is the mean over this many final steps
   std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
+  bool diverged = false;             // the error is a divergence (not invalid input)
   bool ok() const { return error.empty(); }
 };
 

@@ -110,6 +110,29 @@ SimulationSettings truthSimulationSettings() {
   return s;
 }
 
+SimulationSettings halvedTimeStep(SimulationSettings settings) {
+  if (settings.dt_ms > 0.0) {
+    settings.dt_ms *= 0.5;
+  } else {
+    settings.stiffness_ratio *= 0.25;  // dt ~ sqrt(ratio m / k)
+  }
+  settings.max_steps *= 2;
+  return settings;
+}
+
+SimulationResult closeTruthWithRetries(
+    const std::function<SimulationResult(const SimulationSettings&)>& close,
+    SimulationSettings& settings, int& retries) {
+  retries = 0;
+  SimulationResult result = close(settings);
+  while (result.diverged && retries < kTruthRetries) {
+    settings = halvedTimeStep(settings);
+    ++retries;
+    result = close(settings);
+  }
+  return result;
+}
+
 SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   validateOptions(options);
   const auto start = std::chrono::steady_clock::now();
@@ -172,7 +195,6 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
 
   // 4. Truth closure.
   s.truth_settings = options.truth_settings ? *options.truth_settings : truthSimulationSettings();
-  s.truth_case.simulation_json = settingsJson(s.truth_settings).dump();
   if (options.simulation_progress) {
     s.truth_settings.progress_every = 50;
     s.truth_settings.progress = options.simulation_progress;
@@ -180,11 +202,20 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   std::snprintf(text, sizeof text, "closing the true valve (%d vertices, %zu cords)",
                 static_cast<int>(s.truth_case.mesh.V.rows()), truth_cords.cords.size());
   say(options, text);
-  s.truth_result = simulateClosure(s.truth_case, truth_cords, s.truth_settings);
+  const auto close = [&](const SimulationSettings& settings) {
+    if (s.truth_retries > 0)
+      say(options, "the truth closure diverged; again with half the time step");
+    return simulateClosure(s.truth_case, truth_cords, settings);
+  };
+  s.truth_result = closeTruthWithRetries(close, s.truth_settings, s.truth_retries);
   s.truth_settings.progress = nullptr;
   s.truth_settings.progress_every = 0;
+  s.truth_case.simulation_json = settingsJson(s.truth_settings).dump();
   if (!s.truth_result.ok()) {
-    throw std::runtime_error("truth simulation failed: " + s.truth_result.error);
+    throw std::runtime_error("truth simulation failed: " + s.truth_result.error +
+                             (s.truth_retries > 0 ? " (after " + std::to_string(s.truth_retries) +
+                                                        " retries with half the time step each)"
+                                                  : std::string()));
   }
   std::snprintf(text, sizeof text, "truth closure %s after %d steps, %.1f s",
                 s.truth_result.converged ? "converged" : "did NOT converge", s.truth_result.steps,
@@ -319,6 +350,8 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                     {{"settings", settingsJson(s.truth_settings)},
                      {"converged", s.truth_result.converged},
                      {"steps", s.truth_result.steps},
+                     // time-step halvings after a divergence (closeTruthWithRetries)
+                     {"time_step_halvings", s.truth_retries},
                      {"vertices", s.truth_case.mesh.V.rows()}}},
                    {"tips", tips},
                    {"cords", cords},

@@ -69,6 +69,7 @@ struct SyntheticCase {
   std::vector<double> true_scales;                   // per cord: true rest / heuristic seed
   std::vector<bool> ruptured;                        // per cord
   SimulationSettings truth_settings;
+  int truth_retries = 0;          // time-step halvings the truth closure needed (0: none)
   SimulationResult truth_result;  // V: the true closed state of truth_case.mesh
   ValveMetrics truth_metrics;     // true closed mesh vs tracings: the noise floor
   std::string cross_sections_svg;
@@ -78,6 +79,21 @@ struct SyntheticCase {
 // The tight solver settings of the truth: the simulator defaults with a 4x smaller
 // equilibrium tolerance and a 2x longer window, capped at 6000 steps.
 SimulationSettings truthSimulationSettings();
+
+// The same settings with half the time step and twice the step cap (the same simulated time):
+// dt_ms halved when set, else stiffness_ratio / 4 (the automatic dt goes with its square root).
+SimulationSettings halvedTimeStep(SimulationSettings settings);
+
+// The truth closure: `close(settings)`, and when it diverges up to kTruthRetries more times
+// with halvedTimeStep each time (a soft lesion in a fine truth mesh can grow a slow
+// instability at the default step; bileaflet with soft A2 and P2 tissue, seed 3, default
+// edge, diverged at step 3,828 and closes at half the step). `settings` receives the settings
+// of the returned run, `retries` how many halvings it took. The returned result still carries
+// the error when the last attempt diverged too, or at once for any other error.
+constexpr int kTruthRetries = 2;
+SimulationResult closeTruthWithRetries(
+    const std::function<SimulationResult(const SimulationSettings&)>& close,
+    SimulationSettings& settings, int& retries);
 
 // Builds a synthetic case. Throws std::invalid_argument naming the option for bad options
 // (unknown preset, edge, planes, noise, dropout) and std::runtime_error when the truth

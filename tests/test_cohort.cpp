@@ -376,6 +376,54 @@ TEST(LesionTissue, SoftAtTheLesionCentreHealthyElsewhereAndOnlyInTheTruth) {
   EXPECT_EQ(lesionTissueStiffness(*findCohortPreset("normal-1"), mesh).size(), 0);
 }
 
+// The truth closure retries a divergence with half the time step, at most kTruthRetries
+// times, and gives up at once on any other error.
+TEST(TruthClosure, RetriesADivergenceWithHalfTheTimeStep) {
+  const auto diverging = [](int failures, std::vector<SimulationSettings>* seen) {
+    return [failures, seen](const SimulationSettings& settings) {
+      seen->push_back(settings);
+      SimulationResult r;
+      if (static_cast<int>(seen->size()) <= failures) {
+        r.error = "simulation diverged";
+        r.diverged = true;
+      }
+      return r;
+    };
+  };
+  std::vector<SimulationSettings> seen;
+  SimulationSettings settings = truthSimulationSettings();
+  int retries = -1;
+  SimulationResult r = closeTruthWithRetries(diverging(1, &seen), settings, retries);
+  EXPECT_TRUE(r.ok());
+  EXPECT_EQ(retries, 1);
+  ASSERT_EQ(seen.size(), 2u);
+  EXPECT_DOUBLE_EQ(seen[1].stiffness_ratio, 0.25 * seen[0].stiffness_ratio) << "dt halves";
+  EXPECT_EQ(seen[1].max_steps, 2 * seen[0].max_steps) << "the same simulated time";
+  EXPECT_DOUBLE_EQ(settings.stiffness_ratio, seen[1].stiffness_ratio) << "what was used";
+
+  seen.clear();
+  settings = truthSimulationSettings();
+  settings.dt_ms = 0.01;
+  r = closeTruthWithRetries(diverging(100, &seen), settings, retries);
+  EXPECT_TRUE(r.diverged);
+  EXPECT_EQ(retries, kTruthRetries);
+  ASSERT_EQ(seen.size(), static_cast<std::size_t>(kTruthRetries + 1));
+  EXPECT_DOUBLE_EQ(seen.back().dt_ms, 0.01 / (1 << kTruthRetries)) << "an explicit dt halves";
+
+  seen.clear();
+  settings = truthSimulationSettings();
+  const auto invalid = [&seen](const SimulationSettings& s) {
+    seen.push_back(s);
+    SimulationResult bad;
+    bad.error = "settings: pressure_mmhg: out of range";
+    return bad;
+  };
+  r = closeTruthWithRetries(invalid, settings, retries);
+  EXPECT_FALSE(r.ok());
+  EXPECT_EQ(retries, 0);
+  EXPECT_EQ(seen.size(), 1u) << "bad input is not retried";
+}
+
 // bileaflet elongates A2 and P2 cords but has lesion tissue in A2 only (lesion_segments).
 TEST(LesionTissue, OnlyInTheListedSegments) {
   const CohortPreset& preset = *findCohortPreset("bileaflet");
