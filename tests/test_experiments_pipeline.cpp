@@ -5,9 +5,9 @@
 #include <filesystem>
 #include <set>
 #include <sstream>
+#include <string>
+#include <utility>
 #include <vector>
-
-#include <sys/wait.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -30,16 +30,7 @@ fs::path runnerPath() {
 using testing::quoted;
 
 testing::CommandResult runRunner(const std::string& arguments) {
-  TempDir capture;
-  const std::string command = quoted(runnerPath()) + " " + arguments + " >" +
-                              quoted(capture / "out") + " 2>" + quoted(capture / "err") +
-                              " </dev/null";
-  const int status = std::system(command.c_str());
-  testing::CommandResult r;
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  r.out = readText(capture / "out");
-  r.err = readText(capture / "err");
-  return r;
+  return testing::runProgram(runnerPath(), arguments);
 }
 
 std::vector<std::string> lines(const std::string& text) {
@@ -325,6 +316,28 @@ TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
   EXPECT_NE(index.find("Machine(s) the jobs ran on: `" + job.at("machine").get<std::string>()),
             std::string::npos)
       << index;
+}
+
+// calibrate_cohort (experiments/README.md "Calibration"): one preset and seed at a coarse edge,
+// with a changed preset value; bad keys, presets and values exit 2 naming the problem.
+TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
+  const fs::path tool = runnerPath().parent_path() / "calibrate_cohort";
+  auto r = testing::runProgram(tool, "normal-1 --seeds 1 --edge 3 --max-steps 1500 normal=0.8");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = lines(r.out);
+  ASSERT_EQ(rows.size(), 3u) << r.out;
+  EXPECT_EQ(rows[0].rfind("| Seed | Mesh prolapse | Tracing prolapse | A1 |", 0), 0u) << rows[0];
+  EXPECT_EQ(rows[2].rfind("| 1 | – | ", 0), 0u) << "normal-1 seed 1 does not prolapse: " << rows[2];
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"normal-1 foo=1", "unknown key \"foo\""},
+           {"normal-1 lesion=soft", "lesion: expected a number"},
+           {"normal-1 lesion_segments=A4", "\"A4\" is not A1..P3"},
+           {"normal-3", "unknown preset \"normal-3\""},
+           {"normal-1 --edge 0", "--edge: expected a positive length"}}) {
+    r = testing::runProgram(tool, arguments);
+    EXPECT_EQ(r.exit_code, 2) << arguments;
+    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
+  }
 }
 
 }  // namespace

@@ -102,18 +102,22 @@ std::string readText(const fs::path& path) {
   return ss.str();
 }
 
-CommandResult runChordfit(const std::string& arguments) {
+CommandResult runProgram(const fs::path& program, const std::string& arguments) {
   TempDir capture;
   const fs::path out = capture / "stdout.txt";
   const fs::path err = capture / "stderr.txt";
-  const std::string command = std::string("'") + CHORDFIT_EXE + "' " + arguments + " >'" +
-                              out.string() + "' 2>'" + err.string() + "' </dev/null";
+  const std::string command =
+      quoted(program) + " " + arguments + " >" + quoted(out) + " 2>" + quoted(err) + " </dev/null";
   const int status = std::system(command.c_str());
   CommandResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   result.out = readText(out);
   result.err = readText(err);
   return result;
+}
+
+CommandResult runChordfit(const std::string& arguments) {
+  return runProgram(CHORDFIT_EXE, arguments);
 }
 
 }  // namespace chordfit::testing

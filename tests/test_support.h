@@ -72,6 +72,9 @@ struct CommandResult {
 // A path in single quotes for a shell command line (test paths hold no single quote).
 inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
+// Runs `program` with `arguments` (already shell-quoted where needed), stdin empty.
+CommandResult runProgram(const std::filesystem::path& program, const std::string& arguments);
+
 // Runs build/tools/chordfit with `arguments` (already shell-quoted where needed).
 CommandResult runChordfit(const std::string& arguments);
 

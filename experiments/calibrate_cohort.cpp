@@ -1,0 +1,181 @@
+// calibrate_cohort: closes a cohort preset's truths, optionally with changed preset values, and
+// prints what the calibration of experiments/README.md ("Calibration") reads: the mesh and
+// tracing prolapse, the highest point of each Carpentier segment above the closed annulus,
+// and the truth closure's convergence. No files are written. Arguments are parsed by hand
+// (CLI11 is confined to tools/main.cpp for build time).
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "core/cohort_presets.h"
+#include "core/synthetic_case.h"
+
+namespace {
+
+using namespace chordfit;
+
+constexpr int kExitOk = 0;
+constexpr int kExitFailed = 1;
+constexpr int kExitUsage = 2;
+
+const char* kUsage = R"(usage: calibrate_cohort PRESET [options] [KEY=VALUE ...]
+
+Closes the truths of PRESET (chordfit make-case --list) for each seed, with the truth
+settings of make-case, and prints per seed: mesh prolapse, tracing prolapse, the highest point
+of each segment (mm above the closed annulus, open-state localisation), convergence.
+
+options:
+  --seeds LIST       patient seeds, comma-separated (default 1,2,3)
+  --edge MM          case mesh edge; the truth mesh is half of it (default 3)
+  --max-steps N      truth step cap (default that of make-case, 6000)
+
+KEY=VALUE changes the preset before the cases are made:
+  normal=S           normal cord scale (kNormalCordScale)
+  secondary=F        secondary cord factor (kSecondaryCordFactor)
+  A1=S ... P3=S      peak scale of a segment's cords (0 = normal)
+  width=W            pathology profile width (fraction of the leaflet)
+  lesion=F           lesion tissue stiffness factor (1 = none)
+  lesion_segments=A2,P2   segments with lesion tissue (empty = every pathological one)
+  anterior_height=MM, posterior_height=MM, saddle=MM (open; the closed saddle keeps its
+  ratio), indentation=F    anatomy
+)";
+
+int usageError(const std::string& message) {
+  std::cerr << "calibrate_cohort: error: " << message << "\n(calibrate_cohort --help)\n";
+  return kExitUsage;
+}
+
+bool parseNumber(const std::string& text, double& value) {
+  char* end = nullptr;
+  value = std::strtod(text.c_str(), &end);
+  return !text.empty() && *end == '\0';
+}
+
+// Applies KEY=VALUE to the preset; an empty string when it worked, else the problem.
+std::string applySetting(const std::string& setting, CohortPreset& preset) {
+  const std::size_t eq = setting.find('=');
+  if (eq == std::string::npos) return "expected KEY=VALUE, got \"" + setting + "\"";
+  const std::string key = setting.substr(0, eq), text = setting.substr(eq + 1);
+  if (key == "lesion_segments") {
+    preset.lesion_segments = {false, false, false, false, false, false};
+    std::istringstream in(text);
+    for (std::string name; std::getline(in, name, ',');) {
+      const int segment = mitralSegmentId(name);
+      if (segment < 0) return "lesion_segments: \"" + name + "\" is not A1..P3";
+      preset.lesion_segments[segment] = true;
+    }
+    return "";
+  }
+  double value = 0.0;
+  if (!parseNumber(text, value)) return key + ": expected a number, got \"" + text + "\"";
+  ValveParameters& a = preset.anatomy;
+  if (key == "normal") {
+    preset.normal_cord_scale = value;
+  } else if (key == "secondary") {
+    preset.secondary_cord_factor = value;
+  } else if (mitralSegmentId(key) >= 0) {
+    preset.segment_scale[mitralSegmentId(key)] = value;
+  } else if (key == "width") {
+    preset.pathology_width = value;
+  } else if (key == "lesion") {
+    preset.lesion_stiffness = value;
+  } else if (key == "anterior_height") {
+    a.anterior_height_mm = value;
+  } else if (key == "posterior_height") {
+    a.posterior_height_mm = value;
+  } else if (key == "saddle") {
+    a.closed_saddle_height_mm *= value / a.saddle_height_mm;
+    a.saddle_height_mm = value;
+  } else if (key == "indentation") {
+    a.indentation_depth = value;
+  } else {
+    return "unknown key \"" + key + "\"";
+  }
+  return "";
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
+  return text.empty() ? "–" : text;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) return usageError("no preset");
+  const std::string first = argv[1];
+  if (first == "--help" || first == "-h") {
+    std::cout << kUsage;
+    return kExitOk;
+  }
+  const CohortPreset* named = findCohortPreset(first);
+  if (!named) return usageError("unknown preset \"" + first + "\" (" + cohortPresetNames() + ")");
+  CohortPreset preset = *named;
+  std::vector<std::uint64_t> seeds = {1, 2, 3};
+  double edge = 3.0;
+  SimulationSettings settings = truthSimulationSettings();
+  for (int i = 2; i < argc; ++i) {
+    const std::string arg = argv[i];
+    const bool has_value = i + 1 < argc;
+    double value = 0.0;
+    if (arg == "--seeds") {
+      if (!has_value) return usageError("--seeds: expected a list");
+      seeds.clear();
+      std::istringstream in(argv[++i]);
+      for (std::string seed; std::getline(in, seed, ',');) {
+        if (!parseNumber(seed, value) || value < 1) return usageError("--seeds: bad seed");
+        seeds.push_back(static_cast<std::uint64_t>(value));
+      }
+    } else if (arg == "--edge") {
+      if (!has_value || !parseNumber(argv[++i], edge) || !(edge > 0.0)) {
+        return usageError("--edge: expected a positive length in mm");
+      }
+    } else if (arg == "--max-steps") {
+      if (!has_value || !parseNumber(argv[++i], value) || value < 1) {
+        return usageError("--max-steps: expected a positive integer");
+      }
+      settings.max_steps = static_cast<int>(value);
+    } else if (const std::string problem = applySetting(arg, preset); !problem.empty()) {
+      return usageError(problem);
+    }
+  }
+  std::printf(
+      "| Seed | Mesh prolapse | Tracing prolapse | A1 | A2 | A3 | P1 | P2 | P3 | Converged "
+      "(steps) | Time-step halvings |\n|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|\n");
+  for (const std::uint64_t seed : seeds) {
+    SyntheticCaseOptions options;
+    options.preset = preset.name;
+    options.custom_preset = preset;
+    options.seed = seed;
+    options.edge_mm = edge;
+    options.truth_settings = settings;
+    try {
+      const SyntheticCase s = makeSyntheticCase(options);
+      const ProlapseResult& mesh = s.truth_metrics.mesh_prolapse;
+      std::printf("| %llu | %s | %s |", static_cast<unsigned long long>(seed),
+                  joined(mesh.segments).c_str(),
+                  joined(s.truth_metrics.tracing_prolapse.segments).c_str());
+      for (const char* name : {"A1", "A2", "A3", "P1", "P2", "P3"}) {
+        const auto it = mesh.segment_max_height_mm.find(name);
+        if (it == mesh.segment_max_height_mm.end()) {
+          std::printf(" – |");
+        } else {
+          std::printf(" %.2f |", it->second);
+        }
+      }
+      std::printf(" %s (%d) | %d |\n", s.truth_result.converged ? "yes" : "no",
+                  s.truth_result.steps, s.truth_retries);
+      std::fflush(stdout);
+    } catch (const std::exception& e) {
+      std::cerr << "calibrate_cohort: " << preset.name << " seed " << seed << ": " << e.what()
+                << "\n";
+      return kExitFailed;
+    }
+  }
+  return kExitOk;
+}
