@@ -355,11 +355,16 @@ TEST(MakeCase, AnotherSeedIsAnotherPatient) {
   EXPECT_TRUE(!same_size || !ma.V.isApprox(mb.V)) << "different seed, same geometry";
 }
 
+// The open mesh of a preset's mean anatomy at the given edge length.
+ValveMesh presetMesh(const CohortPreset& preset, double edge_mm) {
+  ValveParameters anatomy = preset.anatomy;
+  anatomy.target_edge_mm = edge_mm;
+  return makeParametricValve(anatomy).valve_case.mesh;
+}
+
 TEST(LesionTissue, SoftAtTheLesionCentreHealthyElsewhereAndOnlyInTheTruth) {
   const CohortPreset& preset = *findCohortPreset("prolapse-A2");
-  ValveParameters anatomy = preset.anatomy;
-  anatomy.target_edge_mm = 2.0;
-  const ValveMesh mesh = makeParametricValve(anatomy).valve_case.mesh;
+  const ValveMesh mesh = presetMesh(preset, 2.0);
   const Eigen::VectorXd factors = lesionTissueStiffness(preset, mesh);
   ASSERT_EQ(factors.size(), mesh.V.rows());
   const Eigen::VectorXi segments = openStateSegments(mesh);
@@ -427,9 +432,7 @@ TEST(TruthClosure, RetriesADivergenceWithHalfTheTimeStep) {
 // bileaflet elongates A2 and P2 cords but has lesion tissue in A2 only (lesion_segments).
 TEST(LesionTissue, OnlyInTheListedSegments) {
   const CohortPreset& preset = *findCohortPreset("bileaflet");
-  ValveParameters anatomy = preset.anatomy;
-  anatomy.target_edge_mm = 2.5;
-  const ValveMesh mesh = makeParametricValve(anatomy).valve_case.mesh;
+  const ValveMesh mesh = presetMesh(preset, 2.5);
   const Eigen::VectorXd factors = lesionTissueStiffness(preset, mesh);
   ASSERT_EQ(factors.size(), mesh.V.rows());
   double softest_a2 = 1.0;
