@@ -3,6 +3,7 @@
 // tracing prolapse, the highest point of each Carpentier segment above the closed annulus,
 // and the truth closure's convergence. No files are written. Arguments are parsed by hand
 // (CLI11 is confined to tools/main.cpp for build time).
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
@@ -53,6 +54,11 @@ bool parseNumber(const std::string& text, double& value) {
   char* end = nullptr;
   value = std::strtod(text.c_str(), &end);
   return !text.empty() && *end == '\0';
+}
+
+// A whole number >= 1 (seeds, step caps): "1.5" or "0" is an error, not rounded.
+bool parsePositiveInteger(const std::string& text, double& value) {
+  return parseNumber(text, value) && value >= 1.0 && value == std::floor(value) && value < 1e9;
 }
 
 // Applies KEY=VALUE to the preset; an empty string when it worked, else the problem.
@@ -128,7 +134,9 @@ int main(int argc, char** argv) {
       seeds.clear();
       std::istringstream in(argv[++i]);
       for (std::string seed; std::getline(in, seed, ',');) {
-        if (!parseNumber(seed, value) || value < 1) return usageError("--seeds: bad seed");
+        if (!parsePositiveInteger(seed, value)) {
+          return usageError("--seeds: expected positive integers, got \"" + seed + "\"");
+        }
         seeds.push_back(static_cast<std::uint64_t>(value));
       }
     } else if (arg == "--edge") {
@@ -136,7 +144,7 @@ int main(int argc, char** argv) {
         return usageError("--edge: expected a positive length in mm");
       }
     } else if (arg == "--max-steps") {
-      if (!has_value || !parseNumber(argv[++i], value) || value < 1) {
+      if (!has_value || !parsePositiveInteger(argv[++i], value)) {
         return usageError("--max-steps: expected a positive integer");
       }
       settings.max_steps = static_cast<int>(value);

@@ -333,7 +333,9 @@ TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
            {"normal-1 lesion=soft", "lesion: expected a number"},
            {"normal-1 lesion_segments=A4", "\"A4\" is not A1..P3"},
            {"normal-3", "unknown preset \"normal-3\""},
-           {"normal-1 --edge 0", "--edge: expected a positive length"}}) {
+           {"normal-1 --edge 0", "--edge: expected a positive length"},
+           {"normal-1 --seeds 1,1.5", "--seeds: expected positive integers, got \"1.5\""},
+           {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"}}) {
     r = testing::runProgram(tool, arguments);
     EXPECT_EQ(r.exit_code, 2) << arguments;
     EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
