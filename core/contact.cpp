@@ -37,15 +37,7 @@ ContactDetector::ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::Mat
   sorted_.assign(n, 0);
   cell_.assign(n, 0);
   sorted_x_.assign(3 * static_cast<size_t>(n), 0.0);
-}
-
-bool ContactDetector::excluded(int p, int a, int b, int c) const {
-  if (p == a || p == b || p == c) return true;
-  const double r2 = options_.exclusion_radius_mm * options_.exclusion_radius_mm;
-  const CMap3 xp(&rest_[3 * p]);
-  for (int v : {a, b, c})
-    if ((CMap3(&rest_[3 * v]) - xp).squaredNorm() < r2) return true;
-  return false;
+  sorted_rest_.assign(3 * static_cast<size_t>(n), 0.0);
 }
 
 void ContactDetector::buildCandidates(const double* x, const double* w) {
@@ -89,16 +81,21 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
     for (int i = 0; i < n; ++i) {  // vertices of a cell end up in index order
       const int slot = fill[cell_[i]]++;
       sorted_[slot] = i;
-      for (int d = 0; d < 3; ++d) sorted_x_[3 * slot + d] = x[3 * i + d];
+      for (int d = 0; d < 3; ++d) {
+        sorted_x_[3 * slot + d] = x[3 * i + d];
+        sorted_rest_[3 * slot + d] = rest_[3 * i + d];
+      }
     }
   }
 
   const double reach = options_.thickness_mm + options_.margin_mm + options_.skin_mm;
+  const double exclusion2 = options_.exclusion_radius_mm * options_.exclusion_radius_mm;
   for (int f = 0; f < F_.rows(); ++f) {
     const int ia = F_(f, 0), ib = F_(f, 1), ic = F_(f, 2);
     const CMap3 a(x + 3 * ia), b(x + 3 * ib), c(x + 3 * ic);
     const bool triangle_fixed = w[ia] == 0.0 && w[ib] == 0.0 && w[ic] == 0.0;
-    // Bounding sphere (centroid, radius) for a cheap first distance test.
+    // Bounding sphere (centroid, radius) for a cheap first distance test; the box picks the
+    // grid cells to scan.
     const Vec3 centroid = (a + b + c) / 3.0;
     const double sphere =
         std::sqrt(std::max({(a - centroid).squaredNorm(), (b - centroid).squaredNorm(),
@@ -112,21 +109,37 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
       clo[d] = cellOf(blo(d), lo(d), inv_cell, dims[d]);
       chi[d] = cellOf(bhi(d), lo(d), inv_cell, dims[d]);
     }
+    const double *ra = &rest_[3 * ia], *rb = &rest_[3 * ib], *rc = &rest_[3 * ic];
     hits_.clear();
     for (int iz = clo[2]; iz <= chi[2]; ++iz)
       for (int iy = clo[1]; iy <= chi[1]; ++iy) {
         const long row = static_cast<long>(dims[0]) * (iy + static_cast<long>(dims[1]) * iz);
         const int begin = cell_start_[row + clo[0]], end = cell_start_[row + chi[0] + 1];
+        // First pass, branch-free (the branchy version mispredicted on most vertices): keep
+        // the row's vertices inside the bounding sphere and not excluded, i.e. at least the
+        // exclusion radius from each of the triangle's vertices in the rest state. Most
+        // vertices near a triangle are its own sheet's neighbours and fail the second test.
+        if (static_cast<int>(near_.size()) < end - begin) near_.resize(end - begin);
+        int count = 0;
         for (int e = begin; e < end; ++e) {
           const double* xp = &sorted_x_[3 * e];
-          if (xp[0] < blo(0) || xp[0] > bhi(0) || xp[1] < blo(1) || xp[1] > bhi(1) ||
-              xp[2] < blo(2) || xp[2] > bhi(2))
-            continue;
-          const CMap3 xpm(xp);
-          if ((xpm - centroid).squaredNorm() > sphere2) continue;
+          const double dx = xp[0] - centroid(0), dy = xp[1] - centroid(1), dz = xp[2] - centroid(2);
+          const double* rp = &sorted_rest_[3 * e];
+          const double ax = rp[0] - ra[0], ay = rp[1] - ra[1], az = rp[2] - ra[2];
+          const double bx = rp[0] - rb[0], by = rp[1] - rb[1], bz = rp[2] - rb[2];
+          const double cx = rp[0] - rc[0], cy = rp[1] - rc[1], cz = rp[2] - rc[2];
+          near_[count] = e;
+          count += (dx * dx + dy * dy + dz * dz <= sphere2) &
+                   (ax * ax + ay * ay + az * az >= exclusion2) &
+                   (bx * bx + by * by + bz * bz >= exclusion2) &
+                   (cx * cx + cy * cy + cz * cz >= exclusion2);
+        }
+        for (int k = 0; k < count; ++k) {
+          const int e = near_[k];
+          const CMap3 xpm(&sorted_x_[3 * e]);
           const int p = sorted_[e];
           if (triangle_fixed && w[p] == 0.0) continue;
-          if (excluded(p, ia, ib, ic)) continue;
+          if (p == ia || p == ib || p == ic) continue;  // only reached with exclusion radius 0
           double ba, bb, bc;
           closestPointOnTriangle(xpm, a, b, c, ba, bb, bc);
           const double dist2 = (xpm - (ba * a + bb * b + bc * c)).squaredNorm();

@@ -69,7 +69,6 @@ class ContactDetector {
   int candidates() const { return static_cast<int>(candidates_.size()); }
 
  private:
-  bool excluded(int p, int a, int b, int c) const;
   void buildCandidates(const double* x, const double* w);
 
   ContactOptions options_;
@@ -77,14 +76,16 @@ class ContactDetector {
   std::vector<double> rest_;  // 3 #V rest positions
   double min_cell_size_ = 1.0;
   // Dense grid of the last build: cell_start_ (#cells + 1) into sorted_ (#V vertex ids sorted
-  // by cell), sorted_x_ their positions (3 #V, same order), cell_ each vertex's cell id.
+  // by cell), sorted_x_ their positions and sorted_rest_ their rest positions (3 #V each, same
+  // order), cell_ each vertex's cell id.
   std::vector<int> cell_start_, sorted_, cell_;
-  std::vector<double> sorted_x_;
+  std::vector<double> sorted_x_, sorted_rest_;
   // Verlet list: (triangle, vertex) pairs, their distance at the build, and the positions
   // they were built from; moved_ is each vertex's displacement since the build (per step).
   std::vector<std::pair<int, int>> candidates_;
   std::vector<double> candidate_distance_;
   std::vector<double> x_built_, moved_;
+  std::vector<int> near_;  // one grid row's vertices inside the triangle's sphere, build scratch
   std::vector<std::pair<int, double>> hits_;  // one triangle's (vertex, distance), build scratch
   int rebuilds_ = 0;
 };
