@@ -103,6 +103,21 @@ TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
   EXPECT_NE(r.err.find("does not have the case mesh's topology"), std::string::npos) << r.err;
 }
 
+TEST(ChordfitCli, HeuristicRejectsANonPositiveSpacingOrDepth) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  for (const std::string option :
+       {"--primary-spacing -1", "--secondary-spacing 0", "--secondary-depth -3"}) {
+    const auto r = runChordfit("heuristic " + quoted(small) + " " + option + " --out " +
+                               quoted(dir / "cords.json"));
+    EXPECT_EQ(r.exit_code, 2) << option;
+    EXPECT_NE(r.err.find("error: heuristic: " + option.substr(0, option.find(' '))),
+              std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "cords.json"));
+}
+
 TEST(ChordfitCli, UnknownCommandsAndMissingArgumentsAreUsageErrors) {
   EXPECT_EQ(runChordfit("frobnicate").exit_code, 2);
   EXPECT_EQ(runChordfit("heuristic").exit_code, 2);

@@ -235,6 +235,9 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --dropout 1.5");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: --dropout"), std::string::npos) << r.err;
+  r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --seed -1");
+  EXPECT_EQ(r.exit_code, 2) << "an unsigned seed must not wrap -1 to 2^64 - 1";
+  EXPECT_NE(r.err.find("--seed: must be a non-negative integer"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "c" / "case.json"));
 }
 

@@ -73,6 +73,20 @@ TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
+  TempDir dir;
+  for (const std::string option :
+       {"--max-sims 0", "--threads 0", "--tip-box -1", "--fd-step 0", "--fd-tip-step -0.5"}) {
+    const auto r =
+        runChordfit("fit " + quoted(smallCase()) + " " + option + " --out " + quoted(dir / "fit"));
+    EXPECT_EQ(r.exit_code, 2) << option;
+    const std::string name = option.substr(0, option.find(' '));
+    EXPECT_NE(r.err.find("error: fit: " + name + ": must be a positive number"), std::string::npos)
+        << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 // The section residuals (--section-weight) reach the fit: recorded in metrics.json and
 // report.md, and the data cost of the start changes (the seed's sections stray from the
 // tracings), while AvgD, the tracing points' mean, does not.

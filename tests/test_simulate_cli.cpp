@@ -1,4 +1,9 @@
-// `chordfit simulate` and `chordfit sweep-cord` end to end on a coarse parametric valve.
+// `chordfit simulate` and `chordfit sweep-cord` end to end on a coarse parametric valve and the
+// bundled small case.
+#include <algorithm>
+#include <string>
+#include <utility>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -125,6 +130,42 @@ TEST_F(SimulateCommand, ADivergingRunExitsWith3AndWritesNoOutput) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.vtk"));
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+}
+
+// sweep-cord over a short range: one row per scale, the same bytes with 1 or 2 threads.
+TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const std::string args = "sweep-cord " + quoted(small) + " --range 0.02 --step 0.005 --window 2";
+  const auto one = runChordfit(args + " --threads 1 --out " + quoted(dir / "one"));
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const auto two = runChordfit(args + " --threads 2 --out " + quoted(dir / "two"));
+  ASSERT_EQ(two.exit_code, 0) << two.err;
+  const std::string csv = testing::readText(dir / "one" / "sweep.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 9) << "header + scales 0.98..1.02";
+  EXPECT_EQ(csv, testing::readText(dir / "two" / "sweep.csv"));
+  const auto summary = nlohmann::json::parse(testing::readText(dir / "one" / "sweep.json"));
+  EXPECT_GT(summary["vertex_height"]["change_over_0.5_percent"].get<double>(), 0.0);
+  EXPECT_TRUE(std::filesystem::exists(dir / "one" / "sweep.svg"));
+}
+
+TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const std::pair<std::string, std::string> cases[] = {
+      {"--cord -2", "--cord"},
+      {"--cord 9999", "--cord: no such cord"},
+      {"--threads 0", "--threads"},
+      {"--window 1", "--window"},
+      {"--range 0.02 --step 0.005", "--window 5 needs at least 11 scales"},
+      {"--step 0", "--range/--step"}};
+  for (const auto& [options, message] : cases) {
+    const auto r = runChordfit("sweep-cord " + quoted(small) + " " + options + " --out " +
+                               quoted(dir / "sweep"));
+    EXPECT_EQ(r.exit_code, 2) << options;
+    EXPECT_NE(r.err.find(message), std::string::npos) << options << ": " << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "sweep" / "sweep.csv"));
 }
 
 }  // namespace

@@ -89,6 +89,13 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_option("--preset", o.preset, "Cohort preset (see --list)");
   cmd->add_option("--out", o.out_dir, "Output case directory");
   cmd->add_option("--seed", o.seed, "Patient seed (same seed => identical files)")
+      ->check(CLI::Validator(  // the unsigned option would wrap "-1" silently
+          [](std::string& value) {
+            return value.find('-') == std::string::npos
+                       ? std::string()
+                       : "must be a non-negative integer, got " + value;
+          },
+          "UINT"))
       ->capture_default_str();
   cmd->add_option("--planes", o.planes, "Long-axis tracing planes")->capture_default_str();
   cmd->add_option("--noise", o.noise_mm, "Tracing noise SD, mm (in-plane)")->capture_default_str();

@@ -93,6 +93,26 @@ int runSweepCord(const SweepCordOptions& options) {
     std::cerr << "error: sweep-cord: --range/--step: need 0 < step <= range < 0.5\n";
     return kExitBadInput;
   }
+  // A quadratic through fewer than 5 points (window 2) leaves no residual to call noise;
+  // --cord -1 is the default (the P2 primary cord, see defaultP2PrimaryCord).
+  const struct {
+    const char* option;
+    int value, minimum;
+  } counts[] = {{"--window", options.window, 2},
+                {"--threads", options.threads, 1},
+                {"--cord", options.cord, -1}};
+  for (const auto& count : counts)
+    if (count.value < count.minimum) {
+      std::cerr << "error: sweep-cord: " << count.option << ": must be >= " << count.minimum
+                << ", got " << count.value << "\n";
+      return kExitBadInput;
+    }
+  const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
+  if (count < 2 * options.window + 1) {  // no full window: no noise to report
+    std::cerr << "error: sweep-cord: --window " << options.window << " needs at least "
+              << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
+    return kExitBadInput;
+  }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   const auto cords = resolveCords(*valve_case, options.cords_file);
@@ -107,7 +127,6 @@ int runSweepCord(const SweepCordOptions& options) {
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
-  const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
   std::vector<SweepPoint> points(count);
   const ClosedAnnulus annulus = closedAnnulus(*valve_case);
   const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case->tracings);
