@@ -1,8 +1,8 @@
 // calibrate_cohort: closes a cohort preset's truths, optionally with changed preset values, and
 // prints what the calibration of experiments/README.md ("Calibration") reads: the mesh and
-// tracing prolapse, the highest point of each Carpentier segment above the closed annulus,
-// and the truth closure's convergence. No files are written. Arguments are parsed by hand
-// (CLI11 is confined to tools/main.cpp for build time).
+// tracing prolapse, the highest point of each Carpentier segment above the closed annulus, the
+// orifice coverage (orifice_coverage.h) and the truth closure's convergence. No files are
+// written. Arguments are parsed by hand (CLI11 is confined to tools/main.cpp for build time).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -27,7 +27,8 @@ const char* kUsage = R"(usage: calibrate_cohort PRESET [options] [KEY=VALUE ...]
 
 Closes the truths of PRESET (chordfit make-case --list) for each seed, with the truth
 settings of make-case, and prints per seed: mesh prolapse, tracing prolapse, the highest point
-of each segment (mm above the closed annulus, open-state localisation), convergence.
+of each segment (mm above the closed annulus, open-state localisation), the fraction of the
+orifice the leaflets cover seen en face, convergence.
 
 options:
   --seeds LIST       patient seeds, comma-separated (default 1,2,3)
@@ -153,8 +154,9 @@ int main(int argc, char** argv) {
     }
   }
   std::printf(
-      "| Seed | Mesh prolapse | Tracing prolapse | A1 | A2 | A3 | P1 | P2 | P3 | Converged "
-      "(steps) | Time-step halvings |\n|---|---|---|---:|---:|---:|---:|---:|---:|---|---:|\n");
+      "| Seed | Mesh prolapse | Tracing prolapse | A1 | A2 | A3 | P1 | P2 | P3 | Orifice covered "
+      "| Converged (steps) | Time-step halvings |\n"
+      "|---|---|---|---:|---:|---:|---:|---:|---:|---:|---|---:|\n");
   for (const std::uint64_t seed : seeds) {
     SyntheticCaseOptions options;
     options.preset = preset.name;
@@ -176,6 +178,7 @@ int main(int argc, char** argv) {
           std::printf(" %.2f |", it->second);
         }
       }
+      std::printf(" %.1f %% |", 100.0 * s.truth_metrics.orifice.coverage());
       std::printf(" %s (%d) | %d |\n", s.truth_result.converged ? "yes" : "no",
                   s.truth_result.steps, s.truth_retries);
       std::fflush(stdout);
