@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/cgal_backend.h"
+#include "core/simulator.h"
 #include "core/tracing_sampler.h"
 
 namespace chordfit {
@@ -288,7 +289,14 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   const ClosedAnnulus annulus = closedAnnulus(valve_case);
   m.mesh_prolapse = prolapseOfMesh(valve_case, annulus, closed_V, ProlapseOptions{});
   const Eigen::MatrixXd ring = closed_V(valve_case.mesh.annulus, Eigen::all);
-  m.orifice = orificeCoverage(ring, closed_V, valve_case.mesh.F, annulus.frame);
+  // The leaflets as tissue: the mid-surface grown by half the contact thickness of the case's
+  // settings (orifice_coverage.h). Bad overrides were reported when the case was loaded; here
+  // they only fall back to the defaults.
+  Diagnostics ignored;
+  const double half_thickness =
+      0.5 * contactThicknessMm(settingsFromJson(valve_case.simulation_json, ignored));
+  m.orifice =
+      orificeCoverage(ring, closed_V, valve_case.mesh.F, annulus.frame, 0.25, half_thickness);
   if (m.has_tracings) {
     m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});
     m.section_prolapse = prolapseOfSections(valve_case, annulus, closed_V);

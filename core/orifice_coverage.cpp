@@ -15,6 +15,14 @@ double cross(const Vec2& a, const Vec2& b, const Vec2& q) {
   return (b - a).x() * (q - a).y() - (b - a).y() * (q - a).x();
 }
 
+// Squared distance from q to the segment a-b.
+double squaredDistanceToSegment(const Vec2& a, const Vec2& b, const Vec2& q) {
+  const Vec2 ab = b - a;
+  const double length2 = ab.squaredNorm();
+  const double t = length2 > 0.0 ? std::clamp((q - a).dot(ab) / length2, 0.0, 1.0) : 0.0;
+  return (q - a - t * ab).squaredNorm();
+}
+
 }  // namespace
 
 double OrificeCoverage::coverage() const {
@@ -23,9 +31,12 @@ double OrificeCoverage::coverage() const {
 }
 
 OrificeCoverage orificeCoverage(const Eigen::MatrixXd& ring, const Eigen::MatrixXd& V,
-                                const Eigen::MatrixXi& F, const AnnulusFrame& frame,
-                                double grid_mm) {
+                                const Eigen::MatrixXi& F, const AnnulusFrame& frame, double grid_mm,
+                                double tissue_radius_mm) {
   OrificeCoverage result;
+  const double r = std::isfinite(tissue_radius_mm) ? std::max(tissue_radius_mm, 0.0) : 0.0;
+  const double r2 = r * r;
+  result.tissue_radius_mm = r;
   if (ring.rows() < 3 || !ring.allFinite() || !(grid_mm > 0.0)) return result;
   auto project = [&](const Eigen::Vector3d& p) {
     const Eigen::Vector3d d = p - frame.plane.centre;
@@ -68,13 +79,14 @@ OrificeCoverage orificeCoverage(const Eigen::MatrixXd& ring, const Eigen::Matrix
     }
   }
 
-  // Covered: each triangle marks the samples of its bounding box that lie in it (edges
-  // included, either winding).
+  // Covered: each triangle marks the samples of its bounding box (grown by r) that lie in it
+  // (edges included, either winding) or within r of one of its edges.
   std::vector<char> covered(inside.size(), 0);
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     const Vec2 t0 = project(V.row(F(f, 0)).transpose()), t1 = project(V.row(F(f, 1)).transpose()),
                t2 = project(V.row(F(f, 2)).transpose());
-    const Vec2 tlo = t0.cwiseMin(t1).cwiseMin(t2), thi = t0.cwiseMax(t1).cwiseMax(t2);
+    const Vec2 tlo = t0.cwiseMin(t1).cwiseMin(t2) - Vec2::Constant(r),
+               thi = t0.cwiseMax(t1).cwiseMax(t2) + Vec2::Constant(r);
     if (!tlo.allFinite() || !thi.allFinite()) continue;
     const int i0 = std::max(0, static_cast<int>(std::ceil((tlo.x() - lo.x()) / grid_mm)));
     const int i1 = std::min(nx - 1, static_cast<int>(std::floor((thi.x() - lo.x()) / grid_mm)));
@@ -86,7 +98,11 @@ OrificeCoverage orificeCoverage(const Eigen::MatrixXd& ring, const Eigen::Matrix
         if (!inside[cell] || covered[cell]) continue;
         const Vec2 q = sample(i, j);
         const double d0 = cross(t0, t1, q), d1 = cross(t1, t2, q), d2 = cross(t2, t0, q);
-        if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0)) covered[cell] = 1;
+        if ((d0 >= 0 && d1 >= 0 && d2 >= 0) || (d0 <= 0 && d1 <= 0 && d2 <= 0) ||
+            (r > 0.0 && (squaredDistanceToSegment(t0, t1, q) <= r2 ||
+                         squaredDistanceToSegment(t1, t2, q) <= r2 ||
+                         squaredDistanceToSegment(t2, t0, q) <= r2)))
+          covered[cell] = 1;
       }
   }
 

@@ -459,8 +459,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
       }
     }
   }
-  const double thickness = settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
-                                                               : settings.material.thickness_mm;
+  const double thickness = contactThicknessMm(settings);
   const double max_step = settings.max_step_mm > 0.0 ? settings.max_step_mm : 0.25 * thickness;
   const double sign = settings.phase == ClosurePhase::kClose ? 1.0 : -1.0;
   const double pressure = sign * mmHgToMpa(settings.pressure_mmhg);
@@ -709,6 +708,11 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
     }
   }
   return problems;
+}
+
+double contactThicknessMm(const SimulationSettings& settings) {
+  return settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
+                                             : settings.material.thickness_mm;
 }
 
 SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,

@@ -165,6 +165,10 @@ struct SettingsProblem {
 };
 std::vector<SettingsProblem> settingsProblems(const SimulationSettings& settings);
 
+// The separation contact keeps between a vertex and a triangle of the mid-surface:
+// contact_thickness_mm, or the material thickness when that is <= 0.
+double contactThicknessMm(const SimulationSettings& settings);
+
 // A simulation problem in plain arrays. simulateClosure builds one from a case; tests and
 // benchmarks may build their own (e.g. a clamped disc).
 struct SimulationModel {

@@ -72,31 +72,69 @@ TEST(OrificeCoverage, AMissingHalfLeavesHalfTheOrificeOpen) {
   EXPECT_NEAR(c.open_area_mm2, 0.5 * c.orifice_area_mm2, 0.01 * c.orifice_area_mm2);
 }
 
-TEST(OrificeCoverage, ASlitBetweenTwoLeafletsIsItsArea) {
-  // Two "leaflets", the squares of a 0.5 mm grid at x <= -1 and at x >= 1, leave a 2 mm slit
-  // across the ring: open area = 2 * integral_{-1}^{1} sqrt(R^2 - x^2) dx.
+// Two "leaflets", the squares of a 0.5 mm grid at x <= -1 and at x >= 1: a 2 mm slit across
+// the ring.
+struct Sheet {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+};
+
+Sheet twoLeafletsWithASlit() {
   constexpr double kStep = 0.5;
   const int n = static_cast<int>(2 * (kRadius + 1) / kStep) + 1;
-  Eigen::MatrixXd V(n * n, 3);
+  Sheet sheet;
+  sheet.V.resize(n * n, 3);
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i)
-      V.row(j * n + i) << -kRadius - 1 + i * kStep, -kRadius - 1 + j * kStep, 0.0;
+      sheet.V.row(j * n + i) << -kRadius - 1 + i * kStep, -kRadius - 1 + j * kStep, 0.0;
   std::vector<Eigen::Vector3i> faces;
   for (int j = 0; j + 1 < n; ++j)
     for (int i = 0; i + 1 < n; ++i) {
-      const double x0 = V(j * n + i, 0), x1 = x0 + kStep;
+      const double x0 = sheet.V(j * n + i, 0), x1 = x0 + kStep;
       if (x1 > -1.0 && x0 < 1.0) continue;
       const int a = j * n + i, b = a + 1, c = a + n + 1, d = a + n;
       faces.emplace_back(a, b, c);
       faces.emplace_back(a, c, d);
     }
-  Eigen::MatrixXi F(static_cast<Eigen::Index>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) F.row(f) = faces[f].transpose();
+  sheet.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) sheet.F.row(f) = faces[f].transpose();
+  return sheet;
+}
+
+// Area of the ring's disc between x = -h and x = h: 2 * integral_{-h}^{h} sqrt(R^2 - x^2) dx.
+double slitArea(double h) {
+  return 2.0 *
+         (h * std::sqrt(kRadius * kRadius - h * h) + kRadius * kRadius * std::asin(h / kRadius));
+}
+
+TEST(OrificeCoverage, ASlitBetweenTwoLeafletsIsItsArea) {
+  const Sheet sheet = twoLeafletsWithASlit();
   const Fan fan = flatFan();
-  const OrificeCoverage c = orificeCoverage(fan.ring, V, F, AnnulusFrame{}, 0.05);
-  const double slit =
-      2.0 * (std::sqrt(kRadius * kRadius - 1.0) + kRadius * kRadius * std::asin(1.0 / kRadius));
-  EXPECT_NEAR(c.open_area_mm2, slit, 0.03 * slit);
+  const OrificeCoverage c = orificeCoverage(fan.ring, sheet.V, sheet.F, AnnulusFrame{}, 0.05);
+  EXPECT_NEAR(c.open_area_mm2, slitArea(1.0), 0.03 * slitArea(1.0));
+  EXPECT_EQ(c.tissue_radius_mm, 0.0);
+}
+
+// The mesh is a mid-surface: with the tissue half a thickness to either side, the slit
+// narrows by the thickness, and mid-surfaces one thickness apart (coapting leaflets, as
+// contact keeps them) leave nothing open.
+TEST(OrificeCoverage, TissueThicknessNarrowsTheSlitBetweenMidSurfaces) {
+  const Sheet sheet = twoLeafletsWithASlit();
+  const Fan fan = flatFan();
+  const OrificeCoverage half =
+      orificeCoverage(fan.ring, sheet.V, sheet.F, AnnulusFrame{}, 0.05, 0.5);
+  EXPECT_EQ(half.tissue_radius_mm, 0.5);
+  // Samples exactly on the grown edges count as covered: the sampled slit is one grid step
+  // (0.05 mm) narrower than 1 mm.
+  EXPECT_NEAR(half.open_area_mm2, slitArea(0.475), 0.02 * slitArea(0.475));
+  const OrificeCoverage touching =
+      orificeCoverage(fan.ring, sheet.V, sheet.F, AnnulusFrame{}, 0.05, 1.0);
+  EXPECT_GT(touching.coverage(), 0.9995);
+  // A sheet spanning the ring is not covered any further beyond it: the orifice is the ring's.
+  const OrificeCoverage spanning =
+      orificeCoverage(fan.ring, fan.V, fan.F, AnnulusFrame{}, 0.1, 2.0);
+  EXPECT_NEAR(spanning.orifice_area_mm2,
+              orificeCoverage(fan.ring, fan.V, fan.F, AnnulusFrame{}, 0.1).orifice_area_mm2, 1e-9);
 }
 
 TEST(OrificeCoverage, FrameAxesDecideTheProjectionPlane) {

@@ -186,13 +186,14 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
      << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
   if (seed_metrics.orifice.samples > 0 && fit_metrics.orifice.samples > 0) {
-    char line[200];
+    char line[260];
     std::snprintf(line, sizeof line,
-                  "Orifice covered seen en face (orifice_coverage in metrics.json): seed %.1f %% "
-                  "(open %.0f mm²), fit %.1f %% (open %.0f mm²) of %.0f mm².\n\n",
-                  100.0 * seed_metrics.orifice.coverage(), seed_metrics.orifice.open_area_mm2,
-                  100.0 * fit_metrics.orifice.coverage(), fit_metrics.orifice.open_area_mm2,
-                  fit_metrics.orifice.orifice_area_mm2);
+                  "Orifice covered seen en face (orifice_coverage in metrics.json; the leaflets "
+                  "as tissue, mid-surface +- %.2g mm): seed %.1f %% (open %.0f mm²), fit %.1f %% "
+                  "(open %.0f mm²) of %.0f mm².\n\n",
+                  fit_metrics.orifice.tissue_radius_mm, 100.0 * seed_metrics.orifice.coverage(),
+                  seed_metrics.orifice.open_area_mm2, 100.0 * fit_metrics.orifice.coverage(),
+                  fit_metrics.orifice.open_area_mm2, fit_metrics.orifice.orifice_area_mm2);
     md << line;
   }
   md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
