@@ -42,8 +42,9 @@ KEY=VALUE changes the preset before the cases are made:
   width=W            pathology profile width (fraction of the leaflet)
   lesion=F           lesion tissue stiffness factor (1 = none)
   lesion_segments=A2,P2   segments with lesion tissue (empty = every pathological one)
-  anterior_height=MM, posterior_height=MM, saddle=MM (open; the closed saddle keeps its
-  ratio), indentation=F    anatomy
+  anterior_height=MM, posterior_height=MM (P2), posterior_side_height=MM (P1, P3),
+  commissural_height=MM, saddle=MM (open; the closed saddle keeps its ratio),
+  indentation=F      anatomy
 )";
 
 int usageError(const std::string& message) {
@@ -94,6 +95,10 @@ std::string applySetting(const std::string& setting, CohortPreset& preset) {
     a.anterior_height_mm = value;
   } else if (key == "posterior_height") {
     a.posterior_height_mm = value;
+  } else if (key == "posterior_side_height") {
+    a.posterior_side_height_mm = value;
+  } else if (key == "commissural_height") {
+    a.commissural_height_mm = value;
   } else if (key == "saddle") {
     a.closed_saddle_height_mm *= value / a.saddle_height_mm;
     a.saddle_height_mm = value;
