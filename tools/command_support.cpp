@@ -81,7 +81,7 @@ std::string closedValveSummary(const ValveMetrics& m, const std::string& indent)
     char line[160];
     std::snprintf(
         line, sizeof line,
-        "orifice covered (en face):       %.1f %% (open %.0f of %.0f mm²; leaflets +- %.2g mm)\n",
+        "orifice covered (en face):       %.1f %% (open %.0f of %.0f mm²; leaflets ± %.2g mm)\n",
         100.0 * m.orifice.coverage(), m.orifice.open_area_mm2, m.orifice.orifice_area_mm2,
         m.orifice.tissue_radius_mm);
     text += indent + line;

@@ -189,7 +189,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
     char line[260];
     std::snprintf(line, sizeof line,
                   "Orifice covered seen en face (orifice_coverage in metrics.json; the leaflets "
-                  "as tissue, mid-surface +- %.2g mm): seed %.1f %% (open %.0f mm²), fit %.1f %% "
+                  "as tissue, mid-surface ± %.2g mm): seed %.1f %% (open %.0f mm²), fit %.1f %% "
                   "(open %.0f mm²) of %.0f mm².\n\n",
                   fit_metrics.orifice.tissue_radius_mm, 100.0 * seed_metrics.orifice.coverage(),
                   seed_metrics.orifice.open_area_mm2, 100.0 * fit_metrics.orifice.coverage(),
