@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "core/svg_text.h"
+
 namespace chordfit {
 
 namespace {
@@ -17,29 +19,6 @@ constexpr double kMarginRight = 12.0;
 constexpr double kFigureTitle = 30.0;   // px
 constexpr double kLegendRow = 20.0;     // px per legend row
 constexpr double kLegendEntry = 210.0;  // px per legend entry
-
-std::string escapeXml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string number(double value) {
   char buffer[32];

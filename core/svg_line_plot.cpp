@@ -6,6 +6,8 @@
 #include <limits>
 #include <sstream>
 
+#include "core/svg_text.h"
+
 namespace chordfit {
 
 namespace {
@@ -13,20 +15,6 @@ namespace {
 // Colour-blind-safe palette (Okabe & Ito, "Color Universal Design", 2008).
 const char* const kPalette[] = {"#0072B2", "#D55E00", "#009E73", "#CC79A7",
                                 "#E69F00", "#56B4E9", "#000000", "#F0E442"};
-
-std::string escapeXml(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '&': out += "&amp;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
-    }
-  }
-  return out;
-}
 
 std::string formatTick(double value, double step) {
   char buffer[32];
@@ -77,21 +65,21 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
 
   svg << "<text x='" << left + width / 2 << "' y='" << top + 18
       << "' text-anchor='middle' font-weight='bold'>" << escapeXml(panel.title) << "</text>\n";
-  svg << "<rect x='" << left + margin_left << "' y='" << top + margin_top << "' width='"
-      << plot_w << "' height='" << plot_h << "' fill='none' stroke='#444'/>\n";
+  svg << "<rect x='" << left + margin_left << "' y='" << top + margin_top << "' width='" << plot_w
+      << "' height='" << plot_h << "' fill='none' stroke='#444'/>\n";
   const double x_step = xt.size() > 1 ? xt[1] - xt[0] : 1.0;
   const double y_step = yt.size() > 1 ? yt[1] - yt[0] : 1.0;
   for (double x : xt) {
-    svg << "<line x1='" << px(x) << "' y1='" << top + margin_top << "' x2='" << px(x)
-        << "' y2='" << top + margin_top + plot_h << "' stroke='#ddd'/>\n";
+    svg << "<line x1='" << px(x) << "' y1='" << top + margin_top << "' x2='" << px(x) << "' y2='"
+        << top + margin_top + plot_h << "' stroke='#ddd'/>\n";
     svg << "<text x='" << px(x) << "' y='" << top + margin_top + plot_h + 16
         << "' text-anchor='middle' font-size='11'>" << formatTick(x, x_step) << "</text>\n";
   }
   for (double y : yt) {
     svg << "<line x1='" << left + margin_left << "' y1='" << py(y) << "' x2='"
         << left + margin_left + plot_w << "' y2='" << py(y) << "' stroke='#ddd'/>\n";
-    const std::string label = panel.log_y ? formatTick(std::pow(10.0, y), std::pow(10.0, y))
-                                          : formatTick(y, y_step);
+    const std::string label =
+        panel.log_y ? formatTick(std::pow(10.0, y), std::pow(10.0, y)) : formatTick(y, y_step);
     svg << "<text x='" << left + margin_left - 6 << "' y='" << py(y) + 4
         << "' text-anchor='end' font-size='11'>" << label << "</text>\n";
   }
@@ -164,9 +152,8 @@ std::string svgLinePlots(const std::vector<PlotPanel>& panels, int columns, int 
   columns = std::max(1, columns);
   const int rows = static_cast<int>((panels.size() + columns - 1) / columns);
   std::ostringstream svg;
-  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << columns * panel_width
-      << "' height='" << std::max(1, rows) * panel_height
-      << "' font-family='Helvetica, Arial, sans-serif'>\n"
+  svg << "<svg xmlns='http://www.w3.org/2000/svg' width='" << columns * panel_width << "' height='"
+      << std::max(1, rows) * panel_height << "' font-family='Helvetica, Arial, sans-serif'>\n"
       << "<rect width='100%' height='100%' fill='white'/>\n";
   for (std::size_t i = 0; i < panels.size(); ++i) {
     drawPanel(svg, panels[i], static_cast<double>((i % columns) * panel_width),

@@ -18,12 +18,7 @@ namespace {
 
 constexpr double kTight = 1e-9;
 
-std::size_t occurrences(const std::string& text, const std::string& what) {
-  std::size_t count = 0;
-  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
-    ++count;
-  return count;
-}
+using testing::occurrences;
 
 Tracing tracingOn(const Eigen::Vector3d& origin, const Eigen::Vector3d& normal,
                   const Eigen::MatrixXd& points, int leaflet) {

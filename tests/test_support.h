@@ -72,6 +72,14 @@ struct CommandResult {
 // A path in single quotes for a shell command line (test paths hold no single quote).
 inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
+// How often `what` occurs in `text` (overlapping occurrences counted).
+inline std::size_t occurrences(const std::string& text, const std::string& what) {
+  std::size_t count = 0;
+  for (std::size_t at = text.find(what); at != std::string::npos; at = text.find(what, at + 1))
+    ++count;
+  return count;
+}
+
 // Runs `program` with `arguments` (already shell-quoted where needed), stdin empty.
 CommandResult runProgram(const std::filesystem::path& program, const std::string& arguments);
 

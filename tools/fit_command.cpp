@@ -210,7 +210,7 @@ int runFit(const FitCommandOptions& o) {
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
   std::cout << "wrote " << (out / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
-               "sections.svg, "
+               "sections.svg, enface.svg, "
             << (fit.uncertainty.ok() ? "uncertainty.csv, " : "") << "report.md\n";
   return kExitOk;
 }

@@ -198,6 +198,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   }
   md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
         "(sections.svg)\n\n";
+  md << "![The fitted closed valve from the atrium, the open orifice in red](enface.svg)\n\n";
   md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic). ± SD: the "
         "fitted length's standard deviation from the Jacobian at the fit "
         "(inverse/fit_uncertainty.h; residual SD "

@@ -7,6 +7,7 @@
 
 #include "core/atomic_file.h"
 #include "core/case_io.h"
+#include "core/enface_figure.h"
 #include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "core/metrics_json.h"
@@ -141,6 +142,16 @@ int runSimulate(const SimulateOptions& options) {
         {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
   }
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
+  char enface_title[200];
+  std::snprintf(
+      enface_title, sizeof enface_title,
+      "%s: closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f mm\xC2\xB2 "
+      "open)",
+      valve_case->name.c_str(), 100.0 * metrics.orifice.coverage(), metrics.orifice.open_area_mm2,
+      metrics.orifice.orifice_area_mm2);
+  writeFileAtomically(
+      out / "enface.svg",
+      enfaceFigureSvg(*valve_case, closed.V, {enface_title, metrics.orifice.tissue_radius_mm}));
 
   std::printf("closure: %s after %d steps, %.2f s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
@@ -155,7 +166,7 @@ int runSimulate(const SimulateOptions& options) {
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << closedValveSummary(metrics);
-  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json"
+  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json, enface.svg"
             << (sections.empty() ? "" : ", sections.svg") << "\n";
   return kExitOk;
 }

@@ -1,0 +1,137 @@
+#include "core/enface_figure.h"
+
+#include <algorithm>
+#include <cstdio>
+#include <numeric>
+#include <sstream>
+#include <vector>
+
+#include "core/metrics.h"
+#include "core/svg_text.h"
+
+namespace chordfit {
+namespace {
+
+constexpr double kMarginMm = 4.0;     // around the projected ring
+constexpr double kTitlePx = 28.0;     // title row
+constexpr double kLegendPx = 44.0;    // two legend rows
+constexpr double kLightestMm = 4.0;   // heights mapped to the lightest shade and above
+constexpr double kDarkestMm = -12.0;  // ... to the darkest and below
+constexpr const char* kOpenColour = "#e0301e";
+constexpr const char* kRingColour = "#222222";
+// Leaflet colours (Okabe & Ito palette, as the other figures): anterior blue, posterior green.
+constexpr int kLeafletRgb[2][3] = {{0x00, 0x72, 0xB2}, {0x00, 0x9E, 0x73}};
+
+// The leaflet colour mixed with white by `lightness` in [0, 1].
+std::string shade(int leaflet, double lightness) {
+  const int* rgb = kLeafletRgb[leaflet == 0 ? 0 : 1];
+  const double t = 0.75 * std::clamp(lightness, 0.0, 1.0);
+  char colour[8];
+  std::snprintf(
+      colour, sizeof colour, "#%02x%02x%02x", static_cast<int>(rgb[0] + t * (255 - rgb[0])),
+      static_cast<int>(rgb[1] + t * (255 - rgb[1])), static_cast<int>(rgb[2] + t * (255 - rgb[2])));
+  return colour;
+}
+
+}  // namespace
+
+std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                            const EnfaceFigureOptions& options) {
+  const ValveMesh& mesh = valve_case.mesh;
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  const AnnulusFrame& frame = annulus.frame;
+  const double s = options.pixels_per_mm;
+  // Screen coordinates of the atrial view: +a (anterior) up, +l (anterolateral) left.
+  auto project = [&](const Eigen::Vector3d& p) {
+    const Eigen::Vector3d d = p - frame.plane.centre;
+    return Eigen::Vector2d(-frame.l.dot(d), -frame.a.dot(d));
+  };
+  const Eigen::MatrixXd ring = closed_V(mesh.annulus, Eigen::all);
+  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
+  std::vector<Eigen::Vector2d> ring_points;
+  for (Eigen::Index i = 0; i < ring.rows(); ++i) {
+    ring_points.push_back(project(ring.row(i).transpose()));
+    lo = lo.cwiseMin(ring_points.back());
+    hi = hi.cwiseMax(ring_points.back());
+  }
+  if (ring_points.empty()) lo = hi = Eigen::Vector2d::Zero();
+  lo -= Eigen::Vector2d::Constant(kMarginMm);
+  hi += Eigen::Vector2d::Constant(kMarginMm);
+  // Wide enough for the title (about 7 px per character at 13 px).
+  const double width =
+      std::max({320.0, (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
+  const double height = (hi.y() - lo.y()) * s;
+  const double left = 0.5 * (width - (hi.x() - lo.x()) * s);
+  auto px = [&](const Eigen::Vector2d& q) {
+    return Eigen::Vector2d(left + (q.x() - lo.x()) * s, kTitlePx + (q.y() - lo.y()) * s);
+  };
+  auto points = [&](const std::vector<Eigen::Vector2d>& polygon) {
+    std::ostringstream out;
+    out.precision(1);
+    out << std::fixed;
+    for (const Eigen::Vector2d& q : polygon) out << px(q).x() << "," << px(q).y() << " ";
+    return out.str();
+  };
+
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << static_cast<int>(width)
+      << "\" height=\"" << static_cast<int>(kTitlePx + height + kLegendPx)
+      << "\" font-family=\"sans-serif\">\n<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      << "<text x=\"" << width / 2 << "\" y=\"18\" text-anchor=\"middle\" font-size=\"13\">"
+      << escapeXml(options.title) << "</text>\n";
+  svg << "<polygon class=\"orifice\" points=\"" << points(ring_points) << "\" fill=\""
+      << kOpenColour << "\"/>\n";
+
+  // Lowest first: the atrial view shows the highest tissue.
+  const Eigen::Index faces = mesh.F.rows();
+  std::vector<double> heights(faces);
+  for (Eigen::Index f = 0; f < faces; ++f) {
+    const Eigen::Vector3d centroid =
+        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2)))
+            .transpose() /
+        3.0;
+    heights[f] = frame.plane.signedDistance(centroid);
+  }
+  std::vector<Eigen::Index> order(faces);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](Eigen::Index x, Eigen::Index y) { return heights[x] < heights[y]; });
+  // The outline grows each triangle by the tissue radius; at least half a pixel so that
+  // anti-aliased seams between neighbours do not show the red beneath.
+  const double outline_px = std::max(2.0 * options.tissue_radius_mm * s, 0.5);
+  svg << "<g class=\"leaflets\" stroke-linejoin=\"round\" stroke-width=\"" << outline_px << "\">\n";
+  for (const Eigen::Index f : order) {
+    std::vector<Eigen::Vector2d> triangle;
+    for (int k = 0; k < 3; ++k) triangle.push_back(project(closed_V.row(mesh.F(f, k)).transpose()));
+    const int leaflet = mesh.leaflet(mesh.F(f, 0));
+    const std::string colour =
+        shade(leaflet, (heights[f] - kDarkestMm) / (kLightestMm - kDarkestMm));
+    svg << "<polygon points=\"" << points(triangle) << "\" fill=\"" << colour << "\" stroke=\""
+        << colour << "\"/>\n";
+  }
+  svg << "</g>\n<polygon class=\"annulus\" points=\"" << points(ring_points)
+      << "\" fill=\"none\" stroke=\"" << kRingColour << "\" stroke-width=\"1.5\"/>\n";
+
+  // Legend: two rows under the drawing.
+  const double y0 = kTitlePx + height + 16.0;
+  auto swatch = [&](double x, double y, const std::string& fill, const std::string& label) {
+    svg << "<rect x=\"" << x << "\" y=\"" << y - 10 << "\" width=\"14\" height=\"12\" fill=\""
+        << fill << "\"/><text x=\"" << x + 20 << "\" y=\"" << y << "\" font-size=\"11\">"
+        << escapeXml(label) << "</text>\n";
+  };
+  const std::string anterior = mesh.leaflet_names.empty() ? "anterior" : mesh.leaflet_names[0];
+  const std::string posterior = mesh.leaflet_names.size() < 2 ? "posterior" : mesh.leaflet_names[1];
+  swatch(10, y0, shade(0, 0.5), anterior + " leaflet");
+  swatch(150, y0, shade(1, 0.5), posterior + " leaflet");
+  swatch(290, y0, kOpenColour, "open orifice");
+  char note[200];
+  std::snprintf(note, sizeof note,
+                "atrial view, anterior up; lighter = higher (%.0f to %+.0f mm from the annulus "
+                "plane); leaflets drawn \xC2\xB1 %.2g mm (tissue)",
+                kDarkestMm, kLightestMm, options.tissue_radius_mm);
+  svg << "<text x=\"10\" y=\"" << y0 + 18 << "\" font-size=\"11\" fill=\"#444\">" << note
+      << "</text>\n</svg>\n";
+  return svg.str();
+}
+
+}  // namespace chordfit

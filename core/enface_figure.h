@@ -1,0 +1,30 @@
+// The closed valve seen from the atrium, the surgeon's view (anterior leaflet up, the
+// anterolateral commissure on the viewer's left, annulus_plane.h): where a closed valve
+// leaves its orifice open. Every leaflet triangle is projected onto the closed annulus plane
+// and drawn over the orifice, which is filled red; triangles are drawn from the lowest to the
+// highest (signed distance toward the atrium), so the picture shows the atrial surface, and
+// each is lighter the higher it lies. Each triangle is drawn grown by the tissue radius of the
+// orifice measure (a round-joined outline of twice that width: the projection of the
+// triangle swept by a ball of that radius), so the red left visible is what
+// orifice_coverage.h counts as open, up to its 0.25 mm sampling.
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/case_data.h"
+
+namespace chordfit {
+
+struct EnfaceFigureOptions {
+  std::string title;
+  double tissue_radius_mm = 0.0;  // OrificeCoverage::tissue_radius_mm of the measure shown
+  double pixels_per_mm = 12.0;
+};
+
+// closed_V  #V by 3 closed positions of valve_case.mesh (its annulus ring included)
+std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                            const EnfaceFigureOptions& options);
+
+}  // namespace chordfit
