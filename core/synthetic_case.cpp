@@ -12,6 +12,7 @@
 #include "core/carpentier.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
+#include "core/enface_figure.h"
 #include "core/heuristic.h"
 #include "core/mesh_io.h"
 #include "core/metrics_json.h"
@@ -360,7 +361,8 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
                      {"cords", "truth/cords.json"},
                      {"closed", "truth/closed.ply, truth/closed.vtk"},
                      {"metrics", "truth/metrics.json (true closed mesh vs tracings: noise floor)"},
-                     {"figure", "truth/cross_sections.svg"}}}};
+                     {"figure", "truth/cross_sections.svg"},
+                     {"enface", "truth/enface.svg (the true closed valve from the atrium)"}}}};
   return document.dump(2) + "\n";
 }
 
@@ -389,6 +391,15 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   writeFileAtomically(truth / "metrics.json", metrics.dump(2) + "\n");
   writeFileAtomically(truth / "truth.json", syntheticTruthJson(s));
   writeFileAtomically(truth / "cross_sections.svg", s.cross_sections_svg);
+  char title[200];
+  std::snprintf(title, sizeof title,
+                "%s: true closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f "
+                "mm\xC2\xB2 open)",
+                s.truth_case.name.c_str(), 100.0 * s.truth_metrics.orifice.coverage(),
+                s.truth_metrics.orifice.open_area_mm2, s.truth_metrics.orifice.orifice_area_mm2);
+  writeFileAtomically(
+      truth / "enface.svg",
+      enfaceFigureSvg(s.truth_case, V, {title, s.truth_metrics.orifice.tissue_radius_mm}));
 
   writeCase(directory, s.valve_case);
 }

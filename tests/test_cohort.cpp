@@ -292,7 +292,7 @@ TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
   // Lesion tissue (none in prolapse-P2) would be in the truth case only.
   EXPECT_EQ(c->tissue_stiffness.size(), 0);
   for (const char* name : {"cords.json", "closed.ply", "closed.vtk", "metrics.json", "truth.json",
-                           "cross_sections.svg"}) {
+                           "cross_sections.svg", "enface.svg"}) {
     EXPECT_TRUE(fs::exists(caseDir() / "truth" / name)) << name;
   }
   // Each cord's tension at the true closed state: some taut, none negative (a cord only pulls).
