@@ -93,6 +93,11 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
   const std::string svg = readText(out / "sections.svg");
   EXPECT_NE(svg.find(">heuristic<"), std::string::npos);
   EXPECT_NE(svg.find(">loose<"), std::string::npos);
+  // And one atrial view per set, in the order given.
+  EXPECT_NE(readText(out / "enface_1.svg").find(", heuristic: closed valve from the atrium"),
+            std::string::npos);
+  EXPECT_NE(readText(out / "enface_2.svg").find(", loose: closed valve from the atrium"),
+            std::string::npos);
 }
 
 TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {

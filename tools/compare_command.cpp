@@ -13,6 +13,7 @@
 
 #include "core/atomic_file.h"
 #include "core/case_io.h"
+#include "core/enface_figure.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
 #include "core/simulator.h"
@@ -230,8 +231,23 @@ int runCompare(const CompareOptions& options) {
     writeFileAtomically(out / "compare.csv", compareCsv(sets));
     const std::string sections = sectionsSvg(*valve_case, sets);
     if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
+    // One atrial view per set, numbered in the order given (labels need not be file names).
+    for (std::size_t i = 0; i < sets.size(); ++i) {
+      const ComparedSet& s = sets[i];
+      char title[240];
+      std::snprintf(title, sizeof title,
+                    "%s, %s: closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f "
+                    "mm\xC2\xB2 open)",
+                    valve_case->name.c_str(), s.label.c_str(), 100.0 * s.metrics.orifice.coverage(),
+                    s.metrics.orifice.open_area_mm2, s.metrics.orifice.orifice_area_mm2);
+      writeFileAtomically(
+          out / ("enface_" + std::to_string(i + 1) + ".svg"),
+          enfaceFigureSvg(*valve_case, s.closed_V, {title, s.metrics.orifice.tissue_radius_mm}));
+    }
     std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv"
-              << (sections.empty() ? "" : ", sections.svg") << "\n";
+              << (sections.empty() ? "" : ", sections.svg") << ", enface_1.svg";
+    if (sets.size() > 1) std::cout << " .. enface_" << sets.size() << ".svg";
+    std::cout << " (one per cord set, in the order given)\n";
   }
   return kExitOk;
 }
