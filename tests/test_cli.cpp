@@ -1,6 +1,7 @@
 // The chordfit program end to end: the foundation pipeline (make-valve -> validate ->
 // heuristic -> metrics), the documented example case, and usage errors.
 #include <cmath>
+#include <optional>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -8,6 +9,7 @@
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/curve_io.h"
+#include "core/metrics.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -91,6 +93,29 @@ TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: "), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "case" / "case.json"));
+}
+
+TEST(ChordfitCli, MakeValveTakesTheAnatomyAndNamesABadValue) {
+  TempDir dir;
+  auto r = runChordfit("make-valve --out " + quoted(dir / "tall") +
+                       " --edge 3 --posterior-height 17 --anterior-height 26");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runChordfit("make-valve --out " + quoted(dir / "normal") + " --edge 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  // Taller leaflets: more leaflet area on the same annulus.
+  const auto area = [&](const std::string& name) {
+    Diagnostics diagnostics;
+    const std::optional<ValveCase> c = loadCase(dir / name, diagnostics);
+    EXPECT_TRUE(c.has_value()) << name;
+    return c ? surfaceArea(c->mesh.V, c->mesh.F) : 0.0;
+  };
+  EXPECT_GT(area("tall"), 1.05 * area("normal"));
+  r = runChordfit("make-valve --out " + quoted(dir / "bad") + " --posterior-side-height -1");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: make-valve: --posterior-side-height: must be positive"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "bad" / "case.json"));
 }
 
 TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {

@@ -6,6 +6,8 @@
 
 #include <string>
 
+#include "core/parametric_valve.h"
+
 namespace chordfit::cli {
 
 constexpr int kExitOk = 0;
@@ -20,9 +22,10 @@ int runValidate(const ValidateOptions& options);
 
 struct MakeValveOptions {
   std::string out_dir;
-  double edge_mm = 1.5;
   std::string annulus_file;  // optional user annulus polyline
   std::string name = "parametric-mitral";
+  // Anatomy and mesh resolution (target_edge_mm, --edge); the defaults of ValveParameters.
+  ValveParameters parameters;
 };
 int runMakeValve(const MakeValveOptions& options);
 

@@ -20,11 +20,32 @@ void addMakeValve(CLI::App& app, MakeValveOptions& o) {
   CLI::App* cmd =
       app.add_subcommand("make-valve", "Write a parametric mitral valve case (open state)");
   cmd->add_option("--out", o.out_dir, "Output case directory")->required();
-  cmd->add_option("--edge", o.edge_mm, "Target edge length, mm")->capture_default_str();
+  chordfit::ValveParameters& p = o.parameters;
+  cmd->add_option("--edge", p.target_edge_mm, "Target edge length, mm")->capture_default_str();
   cmd->add_option("--annulus", o.annulus_file,
                   "Annulus polyline (plain JSON point list or Slicer .mrk.json) to use instead "
                   "of the parametric saddle; frame: anterior at +x, atrium at +z");
   cmd->add_option("--name", o.name, "Case name")->capture_default_str();
+  cmd->add_option("--ap", p.ap_diameter_mm, "Anteroposterior annulus diameter (open), mm")
+      ->capture_default_str();
+  cmd->add_option("--cc", p.cc_diameter_mm, "Commissural annulus diameter (open), mm")
+      ->capture_default_str();
+  cmd->add_option("--saddle", p.saddle_height_mm, "Annulus saddle height (open), mm")
+      ->capture_default_str();
+  cmd->add_option("--closed-saddle", p.closed_saddle_height_mm, "Saddle height (closed), mm")
+      ->capture_default_str();
+  cmd->add_option("--anterior-height", p.anterior_height_mm, "A2 height, annulus to free edge, mm")
+      ->capture_default_str();
+  cmd->add_option("--posterior-height", p.posterior_height_mm, "P2 height, mm")
+      ->capture_default_str();
+  cmd->add_option("--posterior-side-height", p.posterior_side_height_mm, "P1 and P3 heights, mm")
+      ->capture_default_str();
+  cmd->add_option("--commissural-height", p.commissural_height_mm,
+                  "Leaflet height at the commissures, mm")
+      ->capture_default_str();
+  cmd->add_option("--indentation", p.indentation_depth,
+                  "Depth of the P1/P2 and P2/P3 clefts, fraction of the scallop height")
+      ->capture_default_str();
 }
 
 void addHeuristic(CLI::App& app, HeuristicCommandOptions& o) {

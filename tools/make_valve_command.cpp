@@ -1,5 +1,7 @@
 #include <iostream>
 #include <stdexcept>
+#include <string>
+#include <utility>
 
 #include "core/case_io.h"
 #include "core/curve_io.h"
@@ -9,9 +11,33 @@
 
 namespace chordfit::cli {
 
+namespace {
+
+// "<field> must be ..." from makeParametricValve as "<option>: must be ..." when an option sets
+// the field; empty otherwise.
+std::string optionMessage(const std::string& message) {
+  static const std::pair<const char*, const char*> kOptions[] = {
+      {"target_edge_mm", "--edge"},
+      {"ap_diameter_mm", "--ap"},
+      {"cc_diameter_mm", "--cc"},
+      {"closed_saddle_height_mm", "--closed-saddle"},
+      {"saddle_height_mm", "--saddle"},
+      {"anterior_height_mm", "--anterior-height"},
+      {"posterior_side_height_mm", "--posterior-side-height"},
+      {"posterior_height_mm", "--posterior-height"},
+      {"commissural_height_mm", "--commissural-height"},
+      {"indentation_depth", "--indentation"}};
+  for (const auto& [field, option] : kOptions) {
+    const std::string prefix = std::string(field) + " ";
+    if (message.rfind(prefix, 0) == 0) return option + (": " + message.substr(prefix.size()));
+  }
+  return "";
+}
+
+}  // namespace
+
 int runMakeValve(const MakeValveOptions& options) {
-  ValveParameters parameters;
-  parameters.target_edge_mm = options.edge_mm;
+  ValveParameters parameters = options.parameters;
   if (!options.annulus_file.empty()) {
     Diagnostics diagnostics;
     Curve curve;
@@ -24,8 +50,13 @@ int runMakeValve(const MakeValveOptions& options) {
   try {
     valve = makeParametricValve(parameters);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << (options.annulus_file.empty() ? "make-valve" : options.annulus_file)
-              << ": parameters: " << e.what() << "\n";
+    const std::string by_option = optionMessage(e.what());
+    if (!by_option.empty()) {
+      std::cerr << "error: make-valve: " << by_option << "\n";
+    } else {
+      std::cerr << "error: " << (options.annulus_file.empty() ? "make-valve" : options.annulus_file)
+                << ": parameters: " << e.what() << "\n";
+    }
     return kExitBadInput;
   }
   valve.valve_case.name = options.name;
