@@ -14,7 +14,7 @@ namespace {
 
 constexpr double kMarginMm = 4.0;     // around the projected ring
 constexpr double kTitlePx = 28.0;     // title row
-constexpr double kLegendPx = 44.0;    // two legend rows
+constexpr double kLegendPx = 84.0;    // legend, height scale, note
 constexpr double kLightestMm = 4.0;   // heights mapped to the lightest shade and above
 constexpr double kDarkestMm = -12.0;  // ... to the darkest and below
 constexpr const char* kOpenColour = "#e0301e";
@@ -124,12 +124,27 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   swatch(10, y0, shade(0, 0.5), anterior + " leaflet");
   swatch(150, y0, shade(1, 0.5), posterior + " leaflet");
   swatch(290, y0, kOpenColour, "open orifice");
-  char note[200];
+  // Height scale: one swatch per 2 mm of both leaflet shades, labelled every 4 mm.
+  const double y1 = y0 + 22.0;
+  svg << "<text x=\"10\" y=\"" << y1 << "\" font-size=\"11\">height above the annulus plane, mm:"
+      << "</text>\n";
+  const int steps = static_cast<int>((kLightestMm - kDarkestMm) / 2.0);
+  for (int k = 0; k <= steps; ++k) {
+    const double x = 240.0 + 22.0 * k, t = static_cast<double>(k) / steps;
+    svg << "<rect x=\"" << x << "\" y=\"" << y1 - 10 << "\" width=\"20\" height=\"6\" fill=\""
+        << shade(0, t) << "\"/><rect x=\"" << x << "\" y=\"" << y1 - 4
+        << "\" width=\"20\" height=\"6\" fill=\"" << shade(1, t) << "\"/>\n";
+    if (k % 2 == 0) {
+      svg << "<text x=\"" << x + 10 << "\" y=\"" << y1 + 13
+          << "\" font-size=\"10\" text-anchor=\"middle\">" << kDarkestMm + 2.0 * k << "</text>\n";
+    }
+  }
+  char note[160];
   std::snprintf(note, sizeof note,
-                "atrial view, anterior up; lighter = higher (%.0f to %+.0f mm from the annulus "
-                "plane); leaflets drawn \xC2\xB1 %.2g mm (tissue)",
-                kDarkestMm, kLightestMm, options.tissue_radius_mm);
-  svg << "<text x=\"10\" y=\"" << y0 + 18 << "\" font-size=\"11\" fill=\"#444\">" << note
+                "atrial view, anterior up; leaflets drawn \xC2\xB1 %.2g mm (tissue), the highest "
+                "on top",
+                options.tissue_radius_mm);
+  svg << "<text x=\"10\" y=\"" << y1 + 30 << "\" font-size=\"11\" fill=\"#444\">" << note
       << "</text>\n</svg>\n";
   return svg.str();
 }
