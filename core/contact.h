@@ -85,7 +85,7 @@ class ContactDetector {
   std::vector<std::pair<int, int>> candidates_;
   std::vector<double> candidate_distance_;
   std::vector<double> x_built_, moved_;
-  std::vector<int> near_;  // one grid row's vertices inside the triangle's sphere, build scratch
+  std::vector<int> near_;  // one grid row's vertices in the triangle's sphere and not excluded
   std::vector<std::pair<int, double>> hits_;  // one triangle's (vertex, distance), build scratch
   int rebuilds_ = 0;
 };

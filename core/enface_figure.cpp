@@ -149,4 +149,14 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   return svg.str();
 }
 
+std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                            const std::string& subject, const OrificeCoverage& orifice) {
+  char coverage[120];
+  std::snprintf(coverage, sizeof coverage,
+                ": closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f mm\xC2\xB2 "
+                "open)",
+                100.0 * orifice.coverage(), orifice.open_area_mm2, orifice.orifice_area_mm2);
+  return enfaceFigureSvg(valve_case, closed_V, {subject + coverage, orifice.tissue_radius_mm});
+}
+
 }  // namespace chordfit

@@ -14,6 +14,7 @@
 #include <Eigen/Core>
 
 #include "core/case_data.h"
+#include "core/orifice_coverage.h"
 
 namespace chordfit {
 
@@ -26,5 +27,10 @@ struct EnfaceFigureOptions {
 // closed_V  #V by 3 closed positions of valve_case.mesh (its annulus ring included)
 std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                             const EnfaceFigureOptions& options);
+
+// The same, titled "<subject>: closed valve from the atrium, orifice N % covered (...)" and
+// drawn with the tissue radius of `orifice`, the closure's measured coverage.
+std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                            const std::string& subject, const OrificeCoverage& orifice);
 
 }  // namespace chordfit

@@ -391,15 +391,8 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   writeFileAtomically(truth / "metrics.json", metrics.dump(2) + "\n");
   writeFileAtomically(truth / "truth.json", syntheticTruthJson(s));
   writeFileAtomically(truth / "cross_sections.svg", s.cross_sections_svg);
-  char title[200];
-  std::snprintf(title, sizeof title,
-                "%s: true closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f "
-                "mm\xC2\xB2 open)",
-                s.truth_case.name.c_str(), 100.0 * s.truth_metrics.orifice.coverage(),
-                s.truth_metrics.orifice.open_area_mm2, s.truth_metrics.orifice.orifice_area_mm2);
-  writeFileAtomically(
-      truth / "enface.svg",
-      enfaceFigureSvg(s.truth_case, V, {title, s.truth_metrics.orifice.tissue_radius_mm}));
+  writeFileAtomically(truth / "enface.svg",
+                      enfaceFigureSvg(s.truth_case, V, s.truth_case.name, s.truth_metrics.orifice));
 
   writeCase(directory, s.valve_case);
 }

@@ -1,5 +1,6 @@
 #include "tools/command_support.h"
 
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -57,6 +58,19 @@ std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_ca
   }
   settings.phase = ClosurePhase::kClose;
   return settings;
+}
+
+bool optionsArePositive(const char* command,
+                        std::initializer_list<std::pair<const char*, double>> options,
+                        const char* what) {
+  for (const auto& [option, value] : options) {
+    if (!(value > 0.0) || !std::isfinite(value)) {
+      std::cerr << "error: " << command << ": " << option << ": must be " << what << ", got "
+                << value << "\n";
+      return false;
+    }
+  }
+  return true;
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {

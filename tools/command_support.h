@@ -1,8 +1,10 @@
 // Small pieces every command shares: loading a case with errors printed, summaries.
 #pragma once
 
+#include <initializer_list>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/case_data.h"
@@ -31,6 +33,12 @@ std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_ca
                                                        const std::string& case_dir);
 
 // "P2, A2" or "none".
+// Each (option, value) must be a finite number > 0; the first that is not gets
+// "error: <command>: <option>: must be <what>, got <value>" on stderr. Returns whether all are.
+bool optionsArePositive(const char* command,
+                        std::initializer_list<std::pair<const char*, double>> options,
+                        const char* what);
+
 std::string joinSegments(const std::vector<std::string>& segments);
 
 // The prolapse lines printed after a Table 1 row: what the tracings show, what the closed

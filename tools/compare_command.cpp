@@ -233,16 +233,10 @@ int runCompare(const CompareOptions& options) {
     if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
     // One atrial view per set, numbered in the order given (labels need not be file names).
     for (std::size_t i = 0; i < sets.size(); ++i) {
-      const ComparedSet& s = sets[i];
-      char title[240];
-      std::snprintf(title, sizeof title,
-                    "%s, %s: closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f "
-                    "mm\xC2\xB2 open)",
-                    valve_case->name.c_str(), s.label.c_str(), 100.0 * s.metrics.orifice.coverage(),
-                    s.metrics.orifice.open_area_mm2, s.metrics.orifice.orifice_area_mm2);
       writeFileAtomically(
           out / ("enface_" + std::to_string(i + 1) + ".svg"),
-          enfaceFigureSvg(*valve_case, s.closed_V, {title, s.metrics.orifice.tissue_radius_mm}));
+          enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
+                          sets[i].metrics.orifice));
     }
     std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv"
               << (sections.empty() ? "" : ", sections.svg") << ", enface_1.svg";

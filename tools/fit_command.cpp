@@ -7,7 +7,6 @@
 #include <cstdio>
 #include <iostream>
 #include <sstream>
-#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -65,16 +64,14 @@ int runFit(const FitCommandOptions& o) {
               << o.section_weight << "\n";
     return kExitBadInput;
   }
-  const std::pair<const char*, double> positive[] = {{"--max-sims", o.max_sims},
-                                                     {"--threads", o.threads},
-                                                     {"--tip-box", o.tip_box_mm},
-                                                     {"--fd-step", o.fd_scale_step},
-                                                     {"--fd-tip-step", o.fd_tip_step_mm}};
-  for (const auto& [option, value] : positive)
-    if (!(value > 0.0) || !std::isfinite(value)) {
-      std::cerr << "error: fit: " << option << ": must be a positive number, got " << value << "\n";
-      return kExitBadInput;
-    }
+  if (!optionsArePositive("fit",
+                          {{"--max-sims", o.max_sims},
+                           {"--threads", o.threads},
+                           {"--tip-box", o.tip_box_mm},
+                           {"--fd-step", o.fd_scale_step},
+                           {"--fd-tip-step", o.fd_tip_step_mm}},
+                          "a positive number"))
+    return kExitBadInput;
   const auto valve_case = loadCaseOrReport(o.case_dir);
   if (!valve_case) return kExitBadInput;
   if (valve_case->tracings.empty()) {

@@ -1,8 +1,6 @@
-#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <map>
-#include <utility>
 
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
@@ -39,16 +37,12 @@ void printCordSummary(const CordSet& set, const ValveMesh& mesh) {
 }  // namespace
 
 int runHeuristic(const HeuristicCommandOptions& options) {
-  const std::pair<const char*, double> positive[] = {
-      {"--primary-spacing", options.primary_spacing_mm},
-      {"--secondary-spacing", options.secondary_spacing_mm},
-      {"--secondary-depth", options.secondary_depth_mm}};
-  for (const auto& [option, value] : positive)
-    if (!(value > 0.0) || !std::isfinite(value)) {
-      std::cerr << "error: heuristic: " << option << ": must be a positive length in mm, got "
-                << value << "\n";
-      return kExitBadInput;
-    }
+  if (!optionsArePositive("heuristic",
+                          {{"--primary-spacing", options.primary_spacing_mm},
+                           {"--secondary-spacing", options.secondary_spacing_mm},
+                           {"--secondary-depth", options.secondary_depth_mm}},
+                          "a positive length in mm"))
+    return kExitBadInput;
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   HeuristicOptions heuristic;

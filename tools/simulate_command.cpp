@@ -142,16 +142,8 @@ int runSimulate(const SimulateOptions& options) {
         {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
   }
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
-  char enface_title[200];
-  std::snprintf(
-      enface_title, sizeof enface_title,
-      "%s: closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f mm\xC2\xB2 "
-      "open)",
-      valve_case->name.c_str(), 100.0 * metrics.orifice.coverage(), metrics.orifice.open_area_mm2,
-      metrics.orifice.orifice_area_mm2);
-  writeFileAtomically(
-      out / "enface.svg",
-      enfaceFigureSvg(*valve_case, closed.V, {enface_title, metrics.orifice.tissue_radius_mm}));
+  writeFileAtomically(out / "enface.svg",
+                      enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics.orifice));
 
   std::printf("closure: %s after %d steps, %.2f s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
