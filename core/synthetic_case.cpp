@@ -237,6 +237,34 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
   return s;
 }
 
+ValveCase truthCaseAtEdge(const SyntheticCase& s, double edge_mm) {
+  if (!(edge_mm > 0.0) || !std::isfinite(edge_mm)) {
+    throw std::invalid_argument("edge: must be positive and finite");
+  }
+  ValveParameters anatomy = s.anatomy;
+  anatomy.target_edge_mm = edge_mm;
+  const ParametricValve valve = makeParametricValve(anatomy);
+  CordSet skeleton;
+  if (s.options.attach_at_vertices) {
+    skeleton = attachmentCordSet(s.attachments, mapAttachments(valve, s.attachments));
+  } else {
+    skeleton = attachmentCordSet(s.attachments, pointAttachments(valve, s.attachments));
+  }
+  // Same physical cords: the truth's rest lengths, tips and provenance, moved to this mesh.
+  CordSet cords = *s.truth_case.cords;
+  for (std::size_t i = 0; i < cords.cords.size(); ++i) {
+    cords.cords[i].vertex = skeleton.cords.at(i).vertex;
+    cords.cords[i].point = skeleton.cords.at(i).point;
+  }
+  ValveCase out = valve.valve_case;
+  out.name = s.truth_case.name;
+  out.cords = cords;
+  out.tracings = s.truth_case.tracings;
+  out.tissue_stiffness = lesionTissueStiffness(s.preset, out.mesh);
+  out.simulation_json = s.truth_case.simulation_json;
+  return out;
+}
+
 namespace {
 json pointJson(const std::vector<CordPoint>& points, std::size_t i) {
   if (points.empty()) return nullptr;

@@ -101,6 +101,13 @@ SimulationResult closeTruthWithRetries(
 // (truth_result.converged).
 SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options);
 
+// The truth's valve on a mesh of another resolution (edge `edge_mm`), for mesh-convergence
+// studies: the same patient anatomy, the same cords (each at its anatomical point, or at the
+// nearest vertex when the case was made with attach_at_vertices; the truth's rest lengths and
+// PM tips, in mm, not re-derived from the heuristic on the new mesh) and the same lesion
+// tissue. Tracings are the truth's; the simulation block is the truth's settings.
+ValveCase truthCaseAtEdge(const SyntheticCase& synthetic, double edge_mm);
+
 // Writes the case to `directory` and the truth to `directory`/truth:
 //   case.json, open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
 //   tracings.json, cords.json                         (writeCase; case.json last)

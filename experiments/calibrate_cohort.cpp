@@ -14,10 +14,13 @@
 
 #include "core/cohort_presets.h"
 #include "core/synthetic_case.h"
+#include "experiments/tool_arguments.h"
 
 namespace {
 
 using namespace chordfit;
+using tool_arguments::parseNumber;
+using tool_arguments::parsePositiveInteger;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
@@ -45,22 +48,13 @@ KEY=VALUE changes the preset before the cases are made:
   anterior_height=MM, posterior_height=MM (P2), posterior_side_height=MM (P1, P3),
   commissural_height=MM, saddle=MM (open; the closed saddle keeps its ratio),
   indentation=F      anatomy
+  closed_contraction=F, closed_saddle=MM   the closed annulus (in-plane ratio to the open
+                     one, and the closed saddle height)
 )";
 
 int usageError(const std::string& message) {
   std::cerr << "calibrate_cohort: error: " << message << "\n(calibrate_cohort --help)\n";
   return kExitUsage;
-}
-
-bool parseNumber(const std::string& text, double& value) {
-  char* end = nullptr;
-  value = std::strtod(text.c_str(), &end);
-  return !text.empty() && *end == '\0';
-}
-
-// A whole number >= 1 (seeds, step caps): "1.5" or "0" is an error, not rounded.
-bool parsePositiveInteger(const std::string& text, double& value) {
-  return parseNumber(text, value) && value >= 1.0 && value == std::floor(value) && value < 1e9;
 }
 
 // Applies KEY=VALUE to the preset; an empty string when it worked, else the problem.
@@ -104,6 +98,10 @@ std::string applySetting(const std::string& setting, CohortPreset& preset) {
     a.saddle_height_mm = value;
   } else if (key == "indentation") {
     a.indentation_depth = value;
+  } else if (key == "closed_contraction") {
+    a.closed_contraction = value;
+  } else if (key == "closed_saddle") {
+    a.closed_saddle_height_mm = value;
   } else {
     return "unknown key \"" + key + "\"";
   }
@@ -137,13 +135,9 @@ int main(int argc, char** argv) {
     double value = 0.0;
     if (arg == "--seeds") {
       if (!has_value) return usageError("--seeds: expected a list");
-      seeds.clear();
-      std::istringstream in(argv[++i]);
-      for (std::string seed; std::getline(in, seed, ',');) {
-        if (!parsePositiveInteger(seed, value)) {
-          return usageError("--seeds: expected positive integers, got \"" + seed + "\"");
-        }
-        seeds.push_back(static_cast<std::uint64_t>(value));
+      std::string bad;
+      if (!tool_arguments::parseSeedList(argv[++i], seeds, bad)) {
+        return usageError("--seeds: expected positive integers, got \"" + bad + "\"");
       }
     } else if (arg == "--edge") {
       if (!has_value || !parseNumber(argv[++i], edge) || !(edge > 0.0)) {

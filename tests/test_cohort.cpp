@@ -457,6 +457,54 @@ TEST(LesionTissue, OnlyInTheListedSegments) {
   EXPECT_LT(softest_posterior, 1.5 * preset.lesion_stiffness);
 }
 
+// The truth's valve at another resolution (mesh-convergence studies): at the truth's own
+// edge it is the truth case; at the case edge it has the case mesh and the case's cord
+// points, but keeps the truth's rest lengths, tips and lesion tissue.
+TEST(TruthCaseAtEdge, IsTheSamePhysicalValveOnAnotherMesh) {
+  SyntheticCaseOptions options;
+  options.preset = "prolapse-A2";  // lesion tissue as well as cords
+  options.seed = 2;
+  options.edge_mm = 3.0;
+  options.tracing.planes = 2;
+  SimulationSettings settings = truthSimulationSettings();
+  settings.max_steps = 200;  // only the geometry and cords matter here
+  options.truth_settings = settings;
+  const SyntheticCase s = makeSyntheticCase(options);
+  const CordSet& truth_cords = *s.truth_case.cords;
+
+  const ValveCase same = truthCaseAtEdge(s, options.edge_mm * options.truth_edge_ratio);
+  EXPECT_EQ(same.mesh.V, s.truth_case.mesh.V);
+  EXPECT_EQ(same.tissue_stiffness, s.truth_case.tissue_stiffness);
+  EXPECT_EQ(same.tracings.size(), s.truth_case.tracings.size());
+  ASSERT_EQ(same.cords->cords.size(), truth_cords.cords.size());
+  for (std::size_t i = 0; i < truth_cords.cords.size(); ++i) {
+    EXPECT_EQ(same.cords->cords[i].vertex, truth_cords.cords[i].vertex) << "cord " << i;
+    ASSERT_EQ(same.cords->cords[i].point.has_value(), truth_cords.cords[i].point.has_value());
+    if (truth_cords.cords[i].point) {
+      EXPECT_EQ(same.cords->cords[i].point->weights, truth_cords.cords[i].point->weights);
+    }
+  }
+
+  const ValveCase coarse = truthCaseAtEdge(s, options.edge_mm);
+  EXPECT_EQ(coarse.mesh.V, s.valve_case.mesh.V) << "the case mesh";
+  ASSERT_EQ(coarse.cords->cords.size(), truth_cords.cords.size());
+  ASSERT_EQ(coarse.cords->tips.size(), truth_cords.tips.size());
+  for (std::size_t t = 0; t < truth_cords.tips.size(); ++t) {
+    EXPECT_EQ(coarse.cords->tips[t].position, truth_cords.tips[t].position) << "true tip";
+  }
+  for (std::size_t i = 0; i < truth_cords.cords.size(); ++i) {
+    const Cord& cord = coarse.cords->cords[i];
+    EXPECT_EQ(cord.rest_length, truth_cords.cords[i].rest_length) << "true length, cord " << i;
+    EXPECT_EQ(cord.vertex, s.case_vertices[i]) << "case attachment, cord " << i;
+    ASSERT_TRUE(cord.point.has_value());
+    EXPECT_EQ(cord.point->vertices, s.case_points[i].vertices);
+    EXPECT_EQ(cord.point->weights, s.case_points[i].weights);
+  }
+  ASSERT_EQ(coarse.tissue_stiffness.size(), coarse.mesh.V.rows());
+  EXPECT_LT(coarse.tissue_stiffness.minCoeff(), 0.5) << "the lesion is there";
+  EXPECT_THROW(truthCaseAtEdge(s, 0.0), std::invalid_argument);
+}
+
 // ---------------------------------------------------------------------------------------
 // Calibration: the truths prolapse exactly where the preset says.
 // ---------------------------------------------------------------------------------------
