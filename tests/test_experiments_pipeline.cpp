@@ -48,6 +48,15 @@ std::vector<std::string> cells(const std::string& line) {
   return result;
 }
 
+// The cells of a Markdown table row "| a | b |": "", " a ", " b " (leading empty cell kept,
+// so cell k is the k-th column).
+std::vector<std::string> markdownCells(const std::string& line) {
+  std::vector<std::string> result;
+  std::istringstream in(line);
+  for (std::string cell; std::getline(in, cell, '|');) result.push_back(cell);
+  return result;
+}
+
 class ExperimentsPipeline : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -336,6 +345,38 @@ TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
            {"normal-1 --edge 0", "--edge: expected a positive length"},
            {"normal-1 --seeds 1,1.5", "--seeds: expected positive integers, got \"1.5\""},
            {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"}}) {
+    r = testing::runProgram(tool, arguments);
+    EXPECT_EQ(r.exit_code, 2) << arguments;
+    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
+  }
+}
+
+// mesh_convergence (docs/performance.md "Mesh convergence of the closed valve"): the
+// reference lies on its own noise-free tracings, a coarser mesh of the same valve does not
+// quite; bad arguments exit 2 naming the problem.
+TEST(MeshConvergence, MeasuresACoarserMeshAgainstTheReferenceAndRejectsBadArguments) {
+  const fs::path tool = runnerPath().parent_path() / "mesh_convergence";
+  auto r = testing::runProgram(tool, "normal-1 --seeds 1 --reference 1.5 --edges 3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = lines(r.out);
+  ASSERT_EQ(rows.size(), 4u) << r.out;
+  EXPECT_EQ(rows[0].rfind("| Seed | Edge (mm) | Vertices |", 0), 0u) << rows[0];
+  const auto reference = markdownCells(rows[2]), coarse = markdownCells(rows[3]);
+  ASSERT_GE(reference.size(), 7u) << rows[2];
+  ASSERT_GE(coarse.size(), 7u) << rows[3];
+  EXPECT_DOUBLE_EQ(std::stod(reference[2]), 1.5);
+  EXPECT_LT(std::stod(reference[5]), 1e-3) << "the reference lies on its tracings";
+  EXPECT_DOUBLE_EQ(std::stod(coarse[2]), 3.0);
+  EXPECT_LT(std::stoi(coarse[3]), std::stoi(reference[3])) << "fewer vertices";
+  EXPECT_GT(std::stod(coarse[5]), 0.01) << "a coarser mesh closes a little differently";
+  EXPECT_LT(std::stod(coarse[5]), 1.0) << "but it is the same valve";
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"normal-3", "unknown preset \"normal-3\""},
+           {"normal-1 --edges 3,x", "--edges: expected positive lengths in mm, got \"x\""},
+           {"normal-1 --edges 0.5", "0.5 mm is not coarser than the reference (0.6 mm)"},
+           {"normal-1 --reference -1", "--reference: expected a positive length"},
+           {"normal-1 --seeds 0", "--seeds: expected positive integers, got \"0\""},
+           {"normal-1 --foo", "unknown argument \"--foo\""}}) {
     r = testing::runProgram(tool, arguments);
     EXPECT_EQ(r.exit_code, 2) << arguments;
     EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
