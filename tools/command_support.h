@@ -32,13 +32,13 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
 std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
                                                        const std::string& case_dir);
 
-// "P2, A2" or "none".
 // Each (option, value) must be a finite number > 0; the first that is not gets
 // "error: <command>: <option>: must be <what>, got <value>" on stderr. Returns whether all are.
 bool optionsArePositive(const char* command,
                         std::initializer_list<std::pair<const char*, double>> options,
                         const char* what);
 
+// "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 
 // The prolapse lines printed after a Table 1 row: what the tracings show, what the closed

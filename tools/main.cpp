@@ -145,6 +145,26 @@ void addCompare(CLI::App& app, CompareOptions& o) {
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
 
+void addEditCords(CLI::App& app, EditCordsOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "edit-cords",
+      "Scale and lock cords as the paper's editor does (rest = seed rest length x scale)");
+  cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
+  cmd->add_option("--cords", o.cords_file,
+                  "CordSet JSON to edit (default: the case's cords, else the heuristic)");
+  cmd->add_option("--out", o.out_file, "Output CordSet JSON")->required();
+  cmd->add_option("--all", o.all_scale, "Scale every cord: S");
+  cmd->add_option("--group", o.group_scales,
+                  "Scale a leaflet/tip group: NAME=S, e.g. posterior/posteromedial=0.9 "
+                  "(repeatable)");
+  cmd->add_option("--segment", o.segment_scales,
+                  "Scale the cords of a Carpentier segment: SEG=S, e.g. P2=1.2 (repeatable)");
+  cmd->add_option("--cord", o.cord_scales, "Scale cords by index: K=S or K,K=S (repeatable)");
+  cmd->add_option("--lock", o.lock,
+                  "Lock cords after the scaling: K,K,... | edited | all (fit keeps them)");
+  cmd->add_option("--unlock", o.unlock, "Unlock cords before the scaling: K,K,... | all");
+}
+
 void addFit(CLI::App& app, FitCommandOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "fit", "Fit cord rest lengths (and PM tips) to the tracings with Ceres or NLopt");
@@ -210,6 +230,8 @@ int main(int argc, char** argv) {
   addValidate(app, validate);
   addMakeValve(app, make_valve);
   addHeuristic(app, heuristic);
+  EditCordsOptions edit_cords;
+  addEditCords(app, edit_cords);
   addMetrics(app, metrics);
   addSimulate(app, simulate);
   SweepCordOptions sweep_cord;
@@ -235,6 +257,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("make-case")) return runMakeCase(make_case);
     if (app.got_subcommand("fit")) return runFit(fit);
     if (app.got_subcommand("compare")) return runCompare(compare);
+    if (app.got_subcommand("edit-cords")) return runEditCords(edit_cords);
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";
     return kExitFailure;

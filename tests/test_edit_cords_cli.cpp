@@ -1,0 +1,123 @@
+// chordfit edit-cords end to end: the paper's editor on the command line (a scale multiplies
+// the seed rest length; edited cords become manual; locked cords are left alone), and bad
+// input.
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "core/carpentier.h"
+#include "core/case_io.h"
+#include "core/cordset_io.h"
+#include "core/metrics.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+namespace fs = std::filesystem;
+using testing::quoted;
+using testing::runChordfit;
+using testing::TempDir;
+
+const fs::path kSmallCase = fs::path(CHORDFIT_CASES_DIR) / "small-normal";
+
+CordSet readCords(const fs::path& path) {
+  Diagnostics diagnostics;
+  CordSet set;
+  EXPECT_TRUE(readCordSet(path, path.filename().string(), set, diagnostics));
+  return set;
+}
+
+// The Carpentier segment of each cord, as the command localises it (open-state vertex).
+std::vector<std::string> cordSegments(const ValveCase& c, const CordSet& set) {
+  const Eigen::VectorXi segments = openStateSegments(c.mesh);
+  std::vector<std::string> names;
+  for (const Cord& cord : set.cords) {
+    names.push_back(segmentName(c.mesh.leaflet_names, segments(cord.vertex)));
+  }
+  return names;
+}
+
+TEST(EditCordsCli, ScalesTheSeedLengthMostSpecificLastMarksManualAndLocks) {
+  TempDir dir;
+  const auto out = dir / "manual.json";
+  const auto r =
+      runChordfit("edit-cords " + quoted(kSmallCase) +
+                  " --all 0.9 --segment P2=1.2 --cord 0=0.8 --lock edited --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Diagnostics diagnostics;
+  const auto c = loadCase(kSmallCase, diagnostics);
+  ASSERT_TRUE(c && c->cords);
+  const CordSet& seed = *c->cords;
+  const CordSet edited = readCords(out);
+  ASSERT_EQ(edited.cords.size(), seed.cords.size());
+  const std::vector<std::string> segment = cordSegments(*c, seed);
+  int p2 = 0;
+  for (std::size_t i = 0; i < seed.cords.size(); ++i) {
+    const double scale = i == 0 ? 0.8 : segment[i] == "P2" ? 1.2 : 0.9;
+    p2 += (i != 0 && segment[i] == "P2") ? 1 : 0;
+    const Cord& cord = edited.cords[i];
+    EXPECT_DOUBLE_EQ(cord.seed_rest_length, seed.cords[i].seed_rest_length) << "cord " << i;
+    EXPECT_DOUBLE_EQ(cord.rest_length, scale * seed.cords[i].seed_rest_length) << "cord " << i;
+    EXPECT_EQ(cord.provenance, Provenance::kManual) << "cord " << i;
+    EXPECT_TRUE(cord.locked) << "cord " << i;
+  }
+  EXPECT_GT(p2, 0) << "the small case has P2 cords";
+  EXPECT_NE(r.out.find("edited"), std::string::npos) << r.out;
+  for (const auto& entry : fs::directory_iterator(dir.path())) {
+    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left a temp file";
+  }
+}
+
+TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {
+  TempDir dir;
+  auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cord 1,2=0.85 --lock 1 --out " +
+                       quoted(dir / "a.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CordSet a = readCords(dir / "a.json");
+  ASSERT_GT(a.cords.size(), 3u);
+  EXPECT_TRUE(a.cords[1].locked);
+  EXPECT_FALSE(a.cords[2].locked);
+
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cords " + quoted(dir / "a.json") +
+                  " --all 1.1 --out " + quoted(dir / "b.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("1 locked left alone"), std::string::npos) << r.out;
+  const CordSet b = readCords(dir / "b.json");
+  EXPECT_EQ(b.cords[1].rest_length, a.cords[1].rest_length) << "locked: bit for bit";
+  EXPECT_TRUE(b.cords[1].locked);
+  EXPECT_DOUBLE_EQ(b.cords[2].rest_length, 1.1 * a.cords[2].seed_rest_length);
+
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cords " + quoted(dir / "b.json") +
+                  " --unlock all --cord 1=1.05 --out " + quoted(dir / "c.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CordSet c = readCords(dir / "c.json");
+  EXPECT_FALSE(c.cords[1].locked);
+  EXPECT_DOUBLE_EQ(c.cords[1].rest_length, 1.05 * a.cords[1].seed_rest_length);
+}
+
+TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
+  TempDir dir;
+  const auto out = dir / "out.json";
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"", "nothing to do"},
+           {"--segment P4=1.1", "--segment P4=1.1: no cord in segment \"P4\""},
+           {"--segment P2=0", "--segment P2=0: the scale must be a number in (0, 10]"},
+           {"--segment P2", "--segment P2: expected NAME=SCALE"},
+           {"--group anterior/nowhere=1", "no cord in group \"anterior/nowhere\""},
+           {"--cord 9999=1", "--cord 9999=1: \"9999\" is not a cord index"},
+           {"--all 1 --lock 1,z", "--lock 1,z: \"z\" is not a cord index"},
+           {"--all nan", "--all nan: the scale must be a number"},
+           {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
+           {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"}}) {
+    const auto r =
+        runChordfit("edit-cords " + quoted(kSmallCase) + " " + arguments + " --out " + quoted(out));
+    EXPECT_EQ(r.exit_code, 2) << arguments;
+    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
+    EXPECT_FALSE(fs::exists(out)) << arguments;
+  }
+}
+
+}  // namespace
+}  // namespace chordfit

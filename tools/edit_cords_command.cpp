@@ -1,0 +1,242 @@
+// edit-cords: scale and lock cords as the paper's editor does, so a manual cord set can be
+// made, fitted from (fit --seed-cords keeps locked cords and starts from the manual ones) and
+// compared (compare heuristic.json manual.json fit/cords.json).
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "core/carpentier.h"
+#include "core/cordset_io.h"
+#include "core/metrics.h"
+#include "tools/command_support.h"
+#include "tools/commands.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+// Largest scale accepted: the cohort's most elongated cords are 2.5 x the heuristic's bound.
+constexpr double kMaxScale = 10.0;
+// The fit's default scale bounds (inverse/fit_parameters.h): an unlocked cord outside them
+// starts the fit clamped.
+constexpr double kFitScaleLower = 0.7, kFitScaleUpper = 1.5;
+
+int usage(const std::string& message) {
+  std::cerr << "error: edit-cords: " << message << "\n";
+  return kExitBadInput;
+}
+
+bool parseScale(const std::string& text, double& scale) {
+  char* end = nullptr;
+  scale = std::strtod(text.c_str(), &end);
+  return !text.empty() && *end == '\0' && std::isfinite(scale) && scale > 0.0 && scale <= kMaxScale;
+}
+
+// "NAME=S" -> name, scale; false with `problem` set otherwise.
+bool splitAssignment(const std::string& option, const std::string& text, std::string& name,
+                     double& scale, std::string& problem) {
+  const std::size_t eq = text.rfind('=');
+  if (eq == std::string::npos || eq == 0) {
+    problem = option + " " + text + ": expected NAME=SCALE";
+    return false;
+  }
+  name = text.substr(0, eq);
+  if (!parseScale(text.substr(eq + 1), scale)) {
+    problem = option + " " + text + ": the scale must be a number in (0, " +
+              std::to_string(static_cast<int>(kMaxScale)) + "]";
+    return false;
+  }
+  return true;
+}
+
+// Cord indices "3,5,7" (0-based, < count), or every cord for "all", or `edited` for "edited"
+// when `allow_edited`. `option` names the argument in the problem ("--lock 1,z").
+bool parseCordList(const std::string& option, const std::string& text, int count,
+                   const std::set<int>& edited, bool allow_edited, std::set<int>& out,
+                   std::string& problem) {
+  out.clear();
+  if (text == "all") {
+    for (int i = 0; i < count; ++i) out.insert(i);
+    return true;
+  }
+  if (allow_edited && text == "edited") {
+    out = edited;
+    return true;
+  }
+  std::istringstream in(text);
+  for (std::string item; std::getline(in, item, ',');) {
+    char* end = nullptr;
+    const long index = std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || index < 0 || index >= count) {
+      problem = option + ": \"" + item + "\" is not a cord index 0.." + std::to_string(count - 1) +
+                (allow_edited ? ", \"edited\" or \"all\"" : " or \"all\"");
+      return false;
+    }
+    out.insert(static_cast<int>(index));
+  }
+  if (out.empty()) {
+    problem = option + ": expected cord indices";
+    return false;
+  }
+  return true;
+}
+
+std::string namesOf(const std::set<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
+  return text;
+}
+
+// One scaling request, resolved to cord indices.
+struct ScaleRequest {
+  std::string what;  // "--group anterior/anterolateral=0.9"
+  std::vector<int> cords;
+  double scale = 1.0;
+};
+
+}  // namespace
+
+int runEditCords(const EditCordsOptions& options) {
+  if (options.all_scale.empty() && options.group_scales.empty() && options.segment_scales.empty() &&
+      options.cord_scales.empty() && options.lock.empty() && options.unlock.empty()) {
+    return usage("nothing to do: give --all, --group, --segment, --cord, --lock or --unlock");
+  }
+  const auto valve_case = loadCaseOrReport(options.case_dir);
+  if (!valve_case) return kExitBadInput;
+  auto cords = resolveCords(*valve_case, options.cords_file);
+  if (!cords) return kExitBadInput;
+  CordSet set = *cords;
+  const CordSet before = set;
+  const ValveMesh& mesh = valve_case->mesh;
+  const int count = static_cast<int>(set.cords.size());
+  if (count == 0) return usage("the cord set has no cords");
+
+  // Each cord's group (leaflet/tip) and Carpentier segment (open-state position of its vertex).
+  const Eigen::VectorXi vertex_segments = openStateSegments(mesh);
+  std::vector<std::string> group(count), segment(count);
+  std::set<std::string> groups, segments;
+  for (int i = 0; i < count; ++i) {
+    const Cord& cord = set.cords[i];
+    group[i] = groupName(cord, mesh.leaflet, mesh.leaflet_names, set.tips);
+    const int id = vertex_segments(cord.vertex);
+    segment[i] = id >= 0 ? segmentName(mesh.leaflet_names, id) : "?";
+    groups.insert(group[i]);
+    segments.insert(segment[i]);
+  }
+
+  // Parse and resolve everything before changing anything.
+  std::vector<ScaleRequest> requests;
+  std::string problem;
+  if (!options.all_scale.empty()) {
+    ScaleRequest r{"--all " + options.all_scale, {}, 1.0};
+    if (!parseScale(options.all_scale, r.scale)) {
+      return usage("--all " + options.all_scale + ": the scale must be a number in (0, " +
+                   std::to_string(static_cast<int>(kMaxScale)) + "]");
+    }
+    for (int i = 0; i < count; ++i) r.cords.push_back(i);
+    requests.push_back(r);
+  }
+  const auto byName = [&](const std::string& option, const std::vector<std::string>& items,
+                          const std::vector<std::string>& names_of_cords,
+                          const std::set<std::string>& names, const char* kind) {
+    for (const std::string& item : items) {
+      ScaleRequest r{option + " " + item, {}, 1.0};
+      std::string name;
+      if (!splitAssignment(option, item, name, r.scale, problem)) return false;
+      if (!names.count(name)) {
+        problem = option + " " + item + ": no cord in " + kind + " \"" + name + "\" (the cords' " +
+                  kind + "s: " + namesOf(names) + ")";
+        return false;
+      }
+      for (int i = 0; i < count; ++i)
+        if (names_of_cords[i] == name) r.cords.push_back(i);
+      requests.push_back(r);
+    }
+    return true;
+  };
+  if (!byName("--group", options.group_scales, group, groups, "group") ||
+      !byName("--segment", options.segment_scales, segment, segments, "segment")) {
+    return usage(problem);
+  }
+  for (const std::string& item : options.cord_scales) {
+    ScaleRequest r{"--cord " + item, {}, 1.0};
+    std::string name;
+    std::set<int> index;
+    if (!splitAssignment("--cord", item, name, r.scale, problem) ||
+        !parseCordList("--cord " + item, name, count, {}, false, index, problem)) {
+      return usage(problem);
+    }
+    r.cords.assign(index.begin(), index.end());
+    requests.push_back(r);
+  }
+  std::set<int> unlock;
+  if (!options.unlock.empty() && !parseCordList("--unlock " + options.unlock, options.unlock, count,
+                                                {}, false, unlock, problem)) {
+    return usage(problem);
+  }
+  std::set<int> lock;  // checked now, resolved after the scaling ("edited")
+  if (!options.lock.empty() &&
+      !parseCordList("--lock " + options.lock, options.lock, count, {}, true, lock, problem)) {
+    return usage(problem);
+  }
+
+  // Apply: unlock, scale (in the order given), lock.
+  for (const int i : unlock) set.cords[i].locked = false;
+  std::set<int> edited;
+  int left_locked = 0;
+  for (const ScaleRequest& r : requests) {
+    int changed = 0;
+    for (const int i : r.cords) {
+      if (scaleCord(set, i, r.scale) == 1) {
+        ++changed;
+        edited.insert(i);
+      }
+    }
+    const int locked = static_cast<int>(r.cords.size()) - changed;
+    left_locked += locked;
+    std::printf("  %-40s %3d cords scaled", r.what.c_str(), changed);
+    if (locked > 0) std::printf(", %d locked left alone", locked);
+    std::printf("\n");
+  }
+  if (!options.lock.empty()) {
+    parseCordList("--lock " + options.lock, options.lock, count, edited, true, lock, problem);
+    for (const int i : lock) set.cords[i].locked = true;
+  }
+
+  writeCordSet(options.out_file, set, &mesh);
+
+  std::printf("edit-cords: %d cords, %zu edited, %zu locked now, %zu unlocked -> %s\n", count,
+              edited.size(), lock.size(), unlock.size(), options.out_file.c_str());
+  std::printf("  %5s  %-30s %-4s %-9s %9s %18s %7s  %-9s %s\n", "cord", "group (leaflet/tip)",
+              "seg", "kind", "seed (mm)", "rest (mm) before>after", "scale", "provenance",
+              "locked");
+  int outside_bounds = 0;
+  for (int i = 0; i < count; ++i) {
+    const Cord& a = before.cords[i];
+    const Cord& b = set.cords[i];
+    if (!b.locked && (b.scale() < kFitScaleLower || b.scale() > kFitScaleUpper)) ++outside_bounds;
+    if (a.rest_length == b.rest_length && a.locked == b.locked) continue;
+    std::printf("  %5d  %-30s %-4s %-9s %9.2f %8.2f > %8.2f %7.3f  %-9s %s\n", i, group[i].c_str(),
+                segment[i].c_str(), toString(b.kind), b.seed_rest_length, a.rest_length,
+                b.rest_length, b.scale(), toString(b.provenance), b.locked ? "yes" : "no");
+  }
+  if (left_locked > 0) {
+    std::printf("  (%d scalings skipped locked cords; --unlock them first to change them)\n",
+                left_locked);
+  }
+  if (outside_bounds > 0) {
+    std::printf(
+        "note: %d unlocked cords have a scale outside the fit's default bounds [%.1f, %.1f]; "
+        "`chordfit fit --seed-cords` starts them clamped (lock them to keep them, or widen "
+        "--scale-bounds)\n",
+        outside_bounds, kFitScaleLower, kFitScaleUpper);
+  }
+  return kExitOk;
+}
+
+}  // namespace chordfit::cli
