@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/curve_csv.h"
 #include "core/json_fields.h"
 
 namespace chordfit {
@@ -156,6 +157,7 @@ bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
 bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& diagnostics,
                const std::string& display_name, int markup_index) {
   const std::string file = display_name.empty() ? path.string() : display_name;
+  if (isDelimitedCurveFile(path)) return readDelimitedCurve(path, file, curve, diagnostics);
   try {
     const auto document = loadJsonFile(path, file, diagnostics);
     if (!document) return false;

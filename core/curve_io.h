@@ -1,7 +1,8 @@
 // Curve readers: 3D Slicer markups JSON (*.mrk.json: Curve / ClosedCurve / Fiducial lists,
 // coordinateSystem LPS or RAS) and plain JSON point lists ({"points": [[x,y,z], ...]} or a
-// bare [[x,y,z], ...] array). All points are returned in the case coordinate system, LPS
-// (3D Slicer's file convention): RAS input is converted by negating x and y.
+// bare [[x,y,z], ...] array), and by extension delimited text (*.fcsv, *.csv, *.txt;
+// curve_csv.h). All points are returned in the case coordinate system, LPS (3D Slicer's file
+// convention): RAS input is converted by negating x and y.
 #pragma once
 
 #include <filesystem>

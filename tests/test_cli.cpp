@@ -73,6 +73,46 @@ TEST(ChordfitCli, MetricsOfTheExampleCaseMatchItsTracings) {
   EXPECT_NE(r.out.find("| Yes |"), std::string::npos) << r.out;
 }
 
+// A tracing drawn in another tool: the example case's commissural tracing as a Slicer legacy
+// .fcsv in RAS and as a plain CSV gives the same metrics as the markups JSON.
+TEST(ChordfitCli, TracingFilesInFcsvOrCsvGiveTheSameMetrics) {
+  TempDir dir;
+  const std::filesystem::path example =
+      std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case";
+  Diagnostics diagnostics;
+  Curve curve;
+  ASSERT_TRUE(readCurve(example / "tracing_commissural.mrk.json", curve, diagnostics));
+  std::string fcsv =
+      "# Markups fiducial file version = 4.13\n# CoordinateSystem = RAS\n"
+      "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,associatedNodeID\n";
+  std::string csv = "label,x,y,z\n";
+  for (Eigen::Index i = 0; i < curve.points.rows(); ++i) {
+    const Eigen::Vector3d p = curve.points.row(i);
+    fcsv += std::to_string(i) + "," + std::to_string(-p.x()) + "," + std::to_string(-p.y()) + "," +
+            std::to_string(p.z()) + ",0,0,0,1,1,1,0,T-" + std::to_string(i) + ",,\n";
+    csv += "T-" + std::to_string(i) + "," + std::to_string(p.x()) + "," + std::to_string(p.y()) +
+           "," + std::to_string(p.z()) + "\n";
+  }
+  const auto reference =
+      runChordfit("metrics " + quoted(example) + " --mesh " + quoted(example / "open.obj"));
+  ASSERT_EQ(reference.exit_code, 0) << reference.err;
+  for (const auto& [name, text] : std::vector<std::pair<std::string, std::string>>{
+           {"tracing_commissural.fcsv", fcsv}, {"tracing_commissural.csv", csv}}) {
+    const auto case_dir = dir / name.substr(name.rfind('.') + 1);
+    std::filesystem::copy(example, case_dir);
+    testing::writeText(case_dir / name, text);
+    std::string tracings = testing::readText(case_dir / "tracings.json");
+    const std::string json_name = "tracing_commissural.mrk.json";
+    tracings.replace(tracings.find(json_name), json_name.size(), name);
+    testing::writeText(case_dir / "tracings.json", tracings);
+    std::filesystem::remove(case_dir / json_name);
+    const auto r =
+        runChordfit("metrics " + quoted(case_dir) + " --mesh " + quoted(case_dir / "open.obj"));
+    ASSERT_EQ(r.exit_code, 0) << name << ": " << r.err;
+    EXPECT_EQ(r.out, reference.out) << name;
+  }
+}
+
 TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
   TempDir dir;
   Eigen::MatrixXd ring(48, 3);

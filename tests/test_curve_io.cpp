@@ -1,4 +1,4 @@
-// Curve readers: 3D Slicer markups JSON and plain point lists.
+// Curve readers: 3D Slicer markups JSON, plain point lists and delimited text.
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -189,6 +189,81 @@ TEST_F(CurveIoTest, MalformedJsonIsReportedWithLineAndColumn) {
 TEST_F(CurveIoTest, MissingFileIsReportedAsNotFound) {
   const Problem p = readFails(dir_ / "absent.json", "annulus.mrk.json");
   EXPECT_EQ(p.what, "file not found");
+}
+
+// ---------------------------------------------------------------------------------------
+// Delimited text (core/curve_csv.h): Slicer's legacy .fcsv and plain CSV / text lists.
+// ---------------------------------------------------------------------------------------
+
+TEST_F(CurveIoTest, SlicerFcsvInLpsIsReadFromItsNamedColumns) {
+  const Curve c = readOk(write("tracing.fcsv",
+                               "# Markups fiducial file version = 4.13\n"
+                               "# CoordinateSystem = LPS\n"
+                               "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel,lock,label,desc,"
+                               "associatedNodeID\n"
+                               "0,1.5,-2,3.25,0,0,0,1,1,1,0,F-1,,\n"
+                               "1,-4,5,6,0,0,0,1,1,1,0,F-2,,,2,0\n"
+                               "2,7,8,-9.5,0,0,0,1,1,1,0,F-3,\"a, b\",\n"));
+  EXPECT_EQ(c.points, threePointsLps());
+  EXPECT_FALSE(c.closed);
+}
+
+TEST_F(CurveIoTest, SlicerFcsvInRasOrWithTheOldNumericCodeOrWithoutTheLineIsConverted) {
+  for (const std::string system : {"# CoordinateSystem = RAS\n", "# CoordinateSystem = 0\n", ""}) {
+    const Curve c = readOk(write("ras.fcsv", "# Markups fiducial file version = 4.6\n" + system +
+                                                 "# columns = id,x,y,z,ow,ox,oy,oz,vis,sel\n"
+                                                 "a,-1.5,2,3.25,0,0,0,1,1,1\n"
+                                                 "b,4,-5,6,0,0,0,1,1,1\n"
+                                                 "c,-7,-8,-9.5,0,0,0,1,1,1\n"));
+    EXPECT_EQ(c.points, threePointsLps()) << system;
+  }
+  const Curve lps = readOk(write("code1.fcsv", "# CoordinateSystem = 1\n0,1.5,-2,3.25\n"));
+  EXPECT_EQ(lps.points.row(0), threePointsLps().row(0));
+}
+
+TEST_F(CurveIoTest, PlainCsvWithOrWithoutAHeaderAndAnySeparator) {
+  EXPECT_EQ(readOk(write("plain.csv", "1.5,-2,3.25\n-4,5,6\n\n# a comment\n7,8,-9.5\n")).points,
+            threePointsLps());
+  EXPECT_EQ(readOk(write("spaces.txt", "1.5 -2 3.25\n-4\t5  6\n7 8 -9.5\n")).points,
+            threePointsLps());
+  EXPECT_EQ(readOk(write("semi.csv", "1.5;-2;3.25\n-4;5;6\n7;8;-9.5\n")).points, threePointsLps());
+  // Header: the columns by name, anywhere in the row; x,y,z and l,p,s are LPS, r,a,s RAS.
+  EXPECT_EQ(readOk(write("xyz.csv", "label,Z,x,y\nA,3.25,1.5,-2\nB,6,-4,5\nC,-9.5,7,8\n")).points,
+            threePointsLps());
+  EXPECT_EQ(readOk(write("lps.csv", "l,p,s\n1.5,-2,3.25\n-4,5,6\n7,8,-9.5\n")).points,
+            threePointsLps());
+  EXPECT_EQ(readOk(write("ras.csv",
+                         "label,r,a,s,defined\nA,-1.5,2,3.25,1\nB,4,-5,6,1\n"
+                         "C,-7,-8,-9.5,1\n"))
+                .points,
+            threePointsLps());
+}
+
+TEST_F(CurveIoTest, DelimitedTextProblemsNameTheFileAndLine) {
+  Problem p = readFails(write("bad.csv", "1,2,3\n4,five,6\n"), "tracing.csv");
+  EXPECT_EQ(p.where, "line 2");
+  EXPECT_EQ(p.what, "y is not a finite number: \"five\"");
+  p = readFails(write("short.csv", "1,2,3\n4,5\n"), "tracing.csv");
+  EXPECT_EQ(p.where, "line 2");
+  EXPECT_EQ(p.what, "expected at least 3 fields, got 2");
+  p = readFails(write("nan.txt", "1 2 nan\n"), "tracing.txt");
+  EXPECT_EQ(p.what, "z is not a finite number: \"nan\"");
+  p = readFails(write("header.csv", "u,v,w\n1,2,3\n"), "tracing.csv");
+  EXPECT_EQ(p.where, "line 1");
+  EXPECT_NE(p.what.find("expected x,y,z, l,p,s or r,a,s"), std::string::npos) << p.what;
+  p = readFails(write("system.fcsv", "# CoordinateSystem = IJK\n0,1,2,3\n"), "t.fcsv");
+  EXPECT_NE(p.what.find("expected LPS, RAS, 0 or 1, got \"IJK\""), std::string::npos) << p.what;
+  p = readFails(write("empty.csv", "# nothing\n\n"), "tracing.csv");
+  EXPECT_EQ(p.what, "no points");
+  p = readFails(dir_ / "absent.fcsv", "tracing.fcsv");
+  EXPECT_EQ(p.what, "file not found");
+  // Many bad lines: a few are reported, then the file is given up.
+  std::string many;
+  for (int i = 0; i < 50; ++i) many += "a,b,c\n";
+  Diagnostics diagnostics;
+  Curve curve;
+  EXPECT_FALSE(readCurve(write("many.txt", "1,2,3\n" + many), curve, diagnostics, "many.txt"));
+  EXPECT_LE(diagnostics.problems().size(), 5u);
 }
 
 }  // namespace
