@@ -167,3 +167,18 @@ struct EditCordsOptions {
 int runEditCords(const EditCordsOptions& options);
 
 }  // namespace chordfit::cli
+
+namespace chordfit::cli {
+
+// import-mesh: a case from a segmented open-state valve mesh and three landmarks
+// (core/case_import.h); the annulus ring, leaflet labels and closed annulus are derived.
+struct ImportMeshOptions {
+  std::string mesh_file;
+  std::string landmarks_file;       // curve file: AL commissure, PM commissure, anterior point
+  std::string closed_annulus_file;  // optional curve file: the closed-state annulus
+  std::string name;                 // default: the output directory's name
+  std::string out_dir;
+};
+int runImportMesh(const ImportMeshOptions& options);
+
+}  // namespace chordfit::cli

@@ -145,6 +145,22 @@ void addCompare(CLI::App& app, CompareOptions& o) {
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
 
+void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
+  CLI::App* cmd = app.add_subcommand(
+      "import-mesh",
+      "Make a case from a segmented open valve mesh and 3 landmarks (ring, leaflets derived)");
+  cmd->add_option("MESH", o.mesh_file, "Open-state valve mesh (.ply .obj .stl .off .vtk)")
+      ->required();
+  cmd->add_option("--landmarks", o.landmarks_file,
+                  "Curve file with 3 points: anterolateral commissure, posteromedial "
+                  "commissure, a point of the anterior annulus")
+      ->required();
+  cmd->add_option("--closed-annulus", o.closed_annulus_file,
+                  "Curve file: the closed-state (systolic) annulus as a loop (default: static)");
+  cmd->add_option("--name", o.name, "Case name (default: the output directory's name)");
+  cmd->add_option("--out", o.out_dir, "New case directory")->required();
+}
+
 void addEditCords(CLI::App& app, EditCordsOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "edit-cords",
@@ -223,12 +239,14 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", "chordfit 0.1.0");
   ValidateOptions validate;
   MakeValveOptions make_valve;
+  ImportMeshOptions import_mesh;
   HeuristicCommandOptions heuristic;
   MetricsOptions metrics;
   SimulateOptions simulate;
   MakeCaseOptions make_case;
   addValidate(app, validate);
   addMakeValve(app, make_valve);
+  addImportMesh(app, import_mesh);
   addHeuristic(app, heuristic);
   EditCordsOptions edit_cords;
   addEditCords(app, edit_cords);
@@ -250,6 +268,7 @@ int main(int argc, char** argv) {
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);
     if (app.got_subcommand("make-valve")) return runMakeValve(make_valve);
+    if (app.got_subcommand("import-mesh")) return runImportMesh(import_mesh);
     if (app.got_subcommand("heuristic")) return runHeuristic(heuristic);
     if (app.got_subcommand("metrics")) return runMetrics(metrics);
     if (app.got_subcommand("simulate")) return runSimulate(simulate);

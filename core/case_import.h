@@ -1,0 +1,48 @@
+// A case from a bare open-state mitral valve mesh (segmented elsewhere, e.g. 3D Slicer or
+// SlicerHeart) and three landmarks, so a user does not have to write the annulus ring and the
+// per-vertex leaflet labels by hand:
+//   1. annulus ring: the mesh boundary loop nearest to the two commissure landmarks (each
+//      within kMaxLandmarkDistanceMm of it), in the loop's own order;
+//   2. commissures: the ring vertices nearest to the landmarks; they split the ring into two
+//      arcs, and the arc holding the ring vertex nearest to the anterior landmark is the
+//      anterior leaflet's (commissure vertices go with it);
+//   3. leaflet labels: each vertex takes the leaflet whose annulus arc is nearer along the mesh
+//      edges (graph_distance.h);
+//   4. closed annulus: a closed-state annulus curve, if given, resampled onto the ring with both
+//      commissures anchored (each at the curve point nearest to its open position) and each arc
+//      mapped by arc length, in the direction that keeps the ring nearer to its open position;
+//      without one the annulus stays at its open position (static).
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/case_data.h"
+
+namespace chordfit {
+
+constexpr double kMaxLandmarkDistanceMm = 5.0;
+
+struct ImportLandmarks {
+  Eigen::Vector3d anterolateral;  // anterolateral commissure, on the annulus
+  Eigen::Vector3d posteromedial;  // posteromedial commissure, on the annulus
+  Eigen::Vector3d anterior;       // a point of the anterior annulus, e.g. its midpoint
+};
+
+struct ImportedCase {
+  ValveCase valve_case;  // name, mesh (V, F, leaflet labels, annulus), annulus_closed
+  std::string error;     // non-empty: what is wrong with the input, in words
+  double commissure_distance_mm[2] = {0.0, 0.0};  // landmark to its ring vertex (AL, PM)
+  double anterior_fraction = 0.0;                 // anterior arc / ring perimeter (open state)
+  double closed_shift_mm = 0.0;                   // mean ring displacement open -> closed
+  bool ok() const { return error.empty(); }
+};
+
+// V #V by 3 open-state positions (mm, LPS), F #F by 3 triangles; `closed_curve` #P by 3 points
+// of the closed-state annulus as a closed loop (empty: static annulus).
+ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                             const ImportLandmarks& landmarks, const Eigen::MatrixXd& closed_curve,
+                             const std::string& name);
+
+}  // namespace chordfit
