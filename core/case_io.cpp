@@ -209,6 +209,21 @@ bool readTracings(const SideFile& file, const fs::path& dir, ValveCase& c,
   });
 }
 
+}  // namespace
+
+bool readTracingsFile(const fs::path& path, const std::vector<std::string>& leaflet_names,
+                      std::vector<Tracing>& tracings, Diagnostics& diagnostics) {
+  ValveCase c;
+  c.mesh.leaflet_names = leaflet_names;
+  if (!readTracings(SideFile{path, path.string()}, path.parent_path(), c, diagnostics)) {
+    return false;
+  }
+  tracings = std::move(c.tracings);
+  return true;
+}
+
+namespace {
+
 bool readTipsFile(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) {
   return readSideArray(file, "tips", diagnostics, [&](const json& list, JsonFields& fields) {
     std::vector<PmTip> tips;

@@ -16,6 +16,14 @@ constexpr int kCaseFormatVersion = 1;
 // short tracings, dangling cord references) and returns nullopt if there was any.
 std::optional<ValveCase> loadCase(const std::filesystem::path& directory, Diagnostics& diagnostics);
 
+// Reads a tracings file on its own (the format of case.json's "tracings", docs/case-format.md),
+// e.g. to add tracings to a case being built: curve files it names are relative to its own
+// directory, leaflet names resolve against `leaflet_names`. Returns false with the problems in
+// `diagnostics`.
+bool readTracingsFile(const std::filesystem::path& path,
+                      const std::vector<std::string>& leaflet_names, std::vector<Tracing>& tracings,
+                      Diagnostics& diagnostics);
+
 // Writes a case directory: open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
 // and tracings.json / pm_tips.json / cords.json when present, then case.json last (so an
 // interrupted write leaves no loadable half-case). Each file is written atomically.

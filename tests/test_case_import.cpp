@@ -133,10 +133,23 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   writePointList(dir / "landmarks.json", points);
   writePointList(dir / "closed.json", truth.annulus_closed, true);
 
+  // Tracings in their own folder, one of them in a curve file beside them.
+  fs::create_directories(dir / "echo");
+  testing::writeText(dir / "echo" / "p.csv", "x,y,z\n-10,0,-4\n-8,0,-6\n");
+  testing::writeText(dir / "echo" / "tracings.json",
+                     R"({"tracings": [
+      {"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]}, "leaflet": "anterior",
+       "points": [[10, 0, -4], [8, 0, -6], [6, 0, -7]]},
+      {"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]}, "leaflet": "posterior",
+       "file": "p.csv"}]})");
+  writePointList(dir / "tips.json", Eigen::MatrixXd{{2, 12, -18}, {2, -12, -18}});
+
   const auto case_dir = dir / "case";
   auto r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
                        quoted(dir / "landmarks.json") + " --closed-annulus " +
-                       quoted(dir / "closed.json") + " --out " + quoted(case_dir));
+                       quoted(dir / "closed.json") + " --tracings " +
+                       quoted(dir / "echo" / "tracings.json") + " --pm-tips " +
+                       quoted(dir / "tips.json") + " --out " + quoted(case_dir));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("anterior arc: 3"), std::string::npos) << r.out;
   Diagnostics diagnostics;
@@ -144,6 +157,13 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   ASSERT_TRUE(loaded);
   EXPECT_EQ(loaded->name, "case");
   EXPECT_GE(labelAgreement(loaded->mesh.leaflet, truth.mesh.leaflet), kMinLabelAgreement);
+  ASSERT_EQ(loaded->tracings.size(), 2u);
+  EXPECT_EQ(loaded->tracings[1].leaflet, 1);
+  EXPECT_EQ(loaded->tracings[1].points.rows(), 2);
+  ASSERT_TRUE(loaded->tips);
+  ASSERT_EQ(loaded->tips->size(), 2u);
+  EXPECT_EQ((*loaded->tips)[0].name, "anterolateral");
+  EXPECT_EQ((*loaded->tips)[1].position, Eigen::Vector3d(2, -12, -18));
   EXPECT_EQ(runChordfit("validate " + quoted(case_dir)).exit_code, 0);
 
   r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +

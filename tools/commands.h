@@ -176,6 +176,8 @@ struct ImportMeshOptions {
   std::string mesh_file;
   std::string landmarks_file;       // curve file: AL commissure, PM commissure, anterior point
   std::string closed_annulus_file;  // optional curve file: the closed-state annulus
+  std::string tracings_file;        // optional tracings file (docs/case-format.md)
+  std::string pm_tips_file;         // optional curve file: PM tips, anterolateral first
   std::string name;                 // default: the output directory's name
   std::string out_dir;
 };

@@ -39,11 +39,18 @@ int runImportMesh(const ImportMeshOptions& options) {
   Diagnostics diagnostics;
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
-  Curve landmarks, closed;
+  Curve landmarks, closed, tips;
   readMesh(options.mesh_file, V, F, diagnostics, options.mesh_file);
   readCurve(options.landmarks_file, landmarks, diagnostics, options.landmarks_file);
   if (!options.closed_annulus_file.empty()) {
     readCurve(options.closed_annulus_file, closed, diagnostics, options.closed_annulus_file);
+  }
+  if (!options.pm_tips_file.empty()) {
+    readCurve(options.pm_tips_file, tips, diagnostics, options.pm_tips_file);
+  }
+  std::vector<Tracing> tracings;
+  if (!options.tracings_file.empty()) {
+    readTracingsFile(options.tracings_file, ValveMesh{}.leaflet_names, tracings, diagnostics);
   }
   if (!diagnostics.ok()) return reportProblems(diagnostics);
   if (landmarks.points.rows() != 3) {
@@ -57,8 +64,20 @@ int runImportMesh(const ImportMeshOptions& options) {
   l.posteromedial = landmarks.points.row(1).transpose();
   l.anterior = landmarks.points.row(2).transpose();
   const std::string name = options.name.empty() ? out.filename().string() : options.name;
-  const ImportedCase imported = importValveCase(V, F, l, closed.points, name);
+  ImportedCase imported = importValveCase(V, F, l, closed.points, name);
   if (!imported.ok()) return fail(options.mesh_file, imported.error);
+  imported.valve_case.tracings = tracings;
+  if (tips.points.rows() > 0) {
+    std::vector<PmTip> pm_tips;
+    for (Eigen::Index t = 0; t < tips.points.rows(); ++t) {
+      PmTip tip;
+      tip.name = tips.points.rows() == 2 ? (t == 0 ? "anterolateral" : "posteromedial")
+                                         : "tip-" + std::to_string(t + 1);
+      tip.position = tips.points.row(t).transpose();
+      pm_tips.push_back(tip);
+    }
+    imported.valve_case.tips = pm_tips;
+  }
 
   // Write beside the target, load it back (every check of `validate`), then move it in place.
   const fs::path staging = out.parent_path() / (out.filename().string() + ".import-tmp");
@@ -102,10 +121,16 @@ int runImportMesh(const ImportMeshOptions& options) {
         options.closed_annulus_file.c_str(), imported.closed_shift_mm);
   }
   std::cout << caseSummary(*loaded);
-  std::printf(
-      "next: add the tracings of the closed valve (docs/case-format.md, \"tracings\") to "
-      "fit; `chordfit simulate %s --out DIR` closes it with the heuristic cords\n",
-      options.out_dir.c_str());
+  if (tracings.empty()) {
+    std::printf(
+        "next: add the tracings of the closed valve (--tracings, or docs/case-format.md "
+        "\"tracings\") to fit; `chordfit simulate %s --out DIR` closes it with the "
+        "heuristic cords\n",
+        options.out_dir.c_str());
+  } else {
+    std::printf("next: `chordfit fit %s --out DIR` fits the cords to the tracings\n",
+                options.out_dir.c_str());
+  }
   return kExitOk;
 }
 

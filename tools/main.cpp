@@ -157,6 +157,11 @@ void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
       ->required();
   cmd->add_option("--closed-annulus", o.closed_annulus_file,
                   "Curve file: the closed-state (systolic) annulus as a loop (default: static)");
+  cmd->add_option("--tracings", o.tracings_file,
+                  "Tracings of the closed valve (tracings.json format; copied into the case)");
+  cmd->add_option("--pm-tips", o.pm_tips_file,
+                  "Curve file with the papillary-muscle tips, anterolateral first (default: "
+                  "the heuristic places them)");
   cmd->add_option("--name", o.name, "Case name (default: the output directory's name)");
   cmd->add_option("--out", o.out_dir, "New case directory")->required();
 }
