@@ -97,6 +97,31 @@ TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {
   EXPECT_DOUBLE_EQ(c.cords[1].rest_length, 1.05 * a.cords[1].seed_rest_length);
 }
 
+TEST(EditCordsCli, MoveTipShiftsTheTipAndKeepsTheRestLengths) {
+  TempDir dir;
+  const auto r = runChordfit("edit-cords " + quoted(kSmallCase) +
+                             " --move-tip posteromedial=1,-2,0.5 --out " + quoted(dir / "t.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Diagnostics diagnostics;
+  const auto c = loadCase(kSmallCase, diagnostics);
+  ASSERT_TRUE(c && c->cords);
+  const CordSet moved = readCords(dir / "t.json");
+  ASSERT_EQ(moved.tips.size(), c->cords->tips.size());
+  for (std::size_t t = 0; t < moved.tips.size(); ++t) {
+    const PmTip& before = c->cords->tips[t];
+    const Eigen::Vector3d offset =
+        before.name == "posteromedial" ? Eigen::Vector3d(1, -2, 0.5) : Eigen::Vector3d::Zero();
+    EXPECT_TRUE(moved.tips[t].position.isApprox(before.position + offset, 1e-12)) << before.name;
+    ASSERT_EQ(moved.tips[t].closed_position.has_value(), before.closed_position.has_value());
+    if (before.closed_position) {
+      EXPECT_TRUE(moved.tips[t].closed_position->isApprox(*before.closed_position + offset, 1e-12));
+    }
+  }
+  for (std::size_t i = 0; i < moved.cords.size(); ++i) {
+    EXPECT_EQ(moved.cords[i].rest_length, c->cords->cords[i].rest_length) << "cord " << i;
+  }
+}
+
 TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
   TempDir dir;
   const auto out = dir / "out.json";
@@ -109,6 +134,8 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--cord 9999=1", "--cord 9999=1: \"9999\" is not a cord index"},
            {"--all 1 --lock 1,z", "--lock 1,z: \"z\" is not a cord index"},
            {"--all nan", "--all nan: the scale must be a number"},
+           {"--move-tip elsewhere=1,2,3", "--move-tip elsewhere=1,2,3: expected NAME=DX,DY,DZ"},
+           {"--move-tip anterolateral=1,2", "the offset must be three finite numbers"},
            {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
            {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"}}) {
     const auto r =

@@ -152,7 +152,9 @@ namespace chordfit::cli {
 // edit-cords: the paper's cord editor on the command line. A scale multiplies a cord's seed
 // rest length (rest = seed_rest_length * scale, the paper's "scale cord lengths"); edited
 // cords become provenance manual; locked cords are left alone. Applied in this order, so the
-// more specific wins: --unlock, --all, --group, --segment, --cord, --lock.
+// more specific wins: --unlock, --all, --group, --segment, --cord, --lock. --move-tip moves a
+// PM tip (its open and, when present, closed position, as the fit's tip offsets do); rest
+// lengths stay.
 struct EditCordsOptions {
   std::string case_dir;
   std::string cords_file;  // optional; else the case's cords, else the heuristic
@@ -161,6 +163,7 @@ struct EditCordsOptions {
   std::vector<std::string> group_scales;    // "anterior/anterolateral=S" (leaflet/tip)
   std::vector<std::string> segment_scales;  // "P2=S" (Carpentier segment of the cord's vertex)
   std::vector<std::string> cord_scales;     // "K=S" (cord index, 0-based)
+  std::vector<std::string> tip_moves;       // "NAME=DX,DY,DZ" (mm): a PM tip moved
   std::string lock;                         // "K,K,..." | "edited" | "all" (empty: none)
   std::string unlock;                       // "K,K,..." | "all" (empty: none)
 };

@@ -103,8 +103,10 @@ struct ScaleRequest {
 
 int runEditCords(const EditCordsOptions& options) {
   if (options.all_scale.empty() && options.group_scales.empty() && options.segment_scales.empty() &&
-      options.cord_scales.empty() && options.lock.empty() && options.unlock.empty()) {
-    return usage("nothing to do: give --all, --group, --segment, --cord, --lock or --unlock");
+      options.cord_scales.empty() && options.tip_moves.empty() && options.lock.empty() &&
+      options.unlock.empty()) {
+    return usage(
+        "nothing to do: give --all, --group, --segment, --cord, --move-tip, --lock or --unlock");
   }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
@@ -174,6 +176,37 @@ int runEditCords(const EditCordsOptions& options) {
     r.cords.assign(index.begin(), index.end());
     requests.push_back(r);
   }
+  std::vector<std::pair<int, Eigen::Vector3d>> moves;  // tip index, offset
+  for (const std::string& item : options.tip_moves) {
+    const std::size_t eq = item.rfind('=');
+    std::set<std::string> tip_names;
+    for (const PmTip& tip : set.tips) tip_names.insert(tip.name);
+    int tip = -1;
+    for (std::size_t t = 0; eq != std::string::npos && t < set.tips.size(); ++t) {
+      if (set.tips[t].name == item.substr(0, eq)) tip = static_cast<int>(t);
+    }
+    if (tip < 0) {
+      return usage("--move-tip " + item + ": expected NAME=DX,DY,DZ with NAME one of the tips (" +
+                   namesOf(tip_names) + ")");
+    }
+    Eigen::Vector3d offset;
+    std::istringstream in(item.substr(eq + 1));
+    int k = 0;
+    for (std::string field; std::getline(in, field, ',') && k < 4; ++k) {
+      char* end = nullptr;
+      const double value = std::strtod(field.c_str(), &end);
+      if (field.empty() || *end != '\0' || !std::isfinite(value) || k == 3) {
+        k = 4;
+        break;
+      }
+      offset(k) = value;
+    }
+    if (k != 3) {
+      return usage("--move-tip " + item +
+                   ": the offset must be three finite numbers DX,DY,DZ (mm)");
+    }
+    moves.emplace_back(tip, offset);
+  }
   std::set<int> unlock;
   if (!options.unlock.empty() && !parseCordList("--unlock " + options.unlock, options.unlock, count,
                                                 {}, false, unlock, problem)) {
@@ -203,6 +236,13 @@ int runEditCords(const EditCordsOptions& options) {
     if (locked > 0) std::printf(", %d locked left alone", locked);
     std::printf("\n");
   }
+  for (const auto& [tip, offset] : moves) {
+    set.tips[tip].position += offset;
+    if (set.tips[tip].closed_position) *set.tips[tip].closed_position += offset;
+    std::printf("  --move-tip %-29s moved by (%.2f, %.2f, %.2f) mm to (%.2f, %.2f, %.2f)\n",
+                set.tips[tip].name.c_str(), offset.x(), offset.y(), offset.z(),
+                set.tips[tip].position.x(), set.tips[tip].position.y(), set.tips[tip].position.z());
+  }
   if (!options.lock.empty()) {
     parseCordList("--lock " + options.lock, options.lock, count, edited, true, lock, problem);
     for (const int i : lock) set.cords[i].locked = true;
@@ -212,9 +252,16 @@ int runEditCords(const EditCordsOptions& options) {
 
   std::printf("edit-cords: %d cords, %zu edited, %zu locked now, %zu unlocked -> %s\n", count,
               edited.size(), lock.size(), unlock.size(), options.out_file.c_str());
-  std::printf("  %5s  %-30s %-4s %-9s %9s %18s %7s  %-9s %s\n", "cord", "group (leaflet/tip)",
-              "seg", "kind", "seed (mm)", "rest (mm) before>after", "scale", "provenance",
-              "locked");
+  bool any_changed = false;
+  for (int i = 0; i < count; ++i) {
+    any_changed |= before.cords[i].rest_length != set.cords[i].rest_length ||
+                   before.cords[i].locked != set.cords[i].locked;
+  }
+  if (any_changed) {
+    std::printf("  %5s  %-30s %-4s %-9s %9s %18s %7s  %-9s %s\n", "cord", "group (leaflet/tip)",
+                "seg", "kind", "seed (mm)", "rest (mm) before>after", "scale", "provenance",
+                "locked");
+  }
   int outside_bounds = 0;
   for (int i = 0; i < count; ++i) {
     const Cord& a = before.cords[i];
