@@ -1,6 +1,7 @@
 // Importing a bare valve mesh (core/case_import.h, chordfit import-mesh): on the parametric
 // valve, whose ring, labels and closed annulus are known, the derived ones must match; bad
 // landmarks and meshes are reported in words; the command writes a loadable case or nothing.
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -76,6 +77,24 @@ TEST(CaseImport, RecoversTheRingLabelsAndClosedAnnulusOfTheParametricValve) {
               kClosedRingToleranceMm)
         << "ring vertex " << mesh.annulus(k);
   }
+}
+
+// A segmented surface is never as regular as the parametric one: jitter every vertex by up to
+// 0.3 mm (a fifth of an edge); the labels must not care.
+TEST(CaseImport, LabelsSurviveAnIrregularSurface) {
+  const ValveCase& truth = valve().valve_case;
+  Eigen::MatrixXd V = truth.mesh.V;
+  std::uint64_t state = 12345;
+  for (Eigen::Index i = 0; i < V.size(); ++i) {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;  // LCG (Knuth MMIX)
+    V(i) += 0.3 * (2.0 * static_cast<double>(state >> 11) / 9007199254740992.0 - 1.0);
+  }
+  const ImportedCase imported =
+      importValveCase(V, truth.mesh.F, landmarksOf(truth.mesh), Eigen::MatrixXd(), "jittered");
+  ASSERT_TRUE(imported.ok()) << imported.error;
+  EXPECT_GE(labelAgreement(imported.valve_case.mesh.leaflet, truth.mesh.leaflet),
+            kMinLabelAgreement);
+  EXPECT_LT(imported.commissure_distance_mm[0], 0.6);
 }
 
 TEST(CaseImport, CommissureOrderDoesNotMatterAndNoCurveMeansAStaticAnnulus) {
