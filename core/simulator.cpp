@@ -262,8 +262,60 @@ class Stepper {
               ? settings.contact_exclusion_mm
               : std::max(2.5 * thickness,
                          options.thickness_mm + options.margin_mm + options.skin_mm);
-      detector_ = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
+      if (settings.edge_contact) {
+        // Contact points: the vertices, then the edge midpoints (index n_ + e).
+        contact_edges_ = uniqueEdges(model.F);
+        Eigen::MatrixXd points(n_ + contact_edges_.rows(), 3);
+        points.topRows(n_) = model.V_rest;
+        for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
+          points.row(n_ + e) = 0.5 * (model.V_rest.row(contact_edges_(e, 0)) +
+                                      model.V_rest.row(contact_edges_(e, 1)));
+        }
+        detector_ = std::make_unique<ContactDetector>(points, model.F, options);
+      } else {
+        detector_ = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
+      }
     }
+  }
+
+  // With edge contact: x and w extended by the edge midpoints (generalised inverse mass
+  // (w_i + w_j) / 4), for the detector.
+  void extendByMidpoints(const std::vector<double>& x, std::vector<double>& out) const {
+    out.resize(3 * static_cast<size_t>(n_ + contact_edges_.rows()));
+    std::copy(x.begin(), x.end(), out.begin());
+    for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
+      const int i = contact_edges_(e, 0), j = contact_edges_(e, 1);
+      for (int d = 0; d < 3; ++d) out[3 * (n_ + e) + d] = 0.5 * (x[3 * i + d] + x[3 * j + d]);
+    }
+  }
+
+  void detectContacts() {
+    if (contact_edges_.rows() == 0) {
+      detector_->detect(x_prev_.data(), x_.data(), sys_.w.data(), contacts_);
+      return;
+    }
+    extendByMidpoints(x_prev_, points_prev_);
+    extendByMidpoints(x_, points_);
+    points_w_.assign(sys_.w.begin(), sys_.w.end());
+    points_w_.resize(n_ + contact_edges_.rows());
+    for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
+      points_w_[n_ + e] = 0.25 * (sys_.w[contact_edges_(e, 0)] + sys_.w[contact_edges_(e, 1)]);
+    }
+    detector_->detect(points_prev_.data(), points_.data(), points_w_.data(), contacts_);
+    // Midpoints back to their edges; a triangle with an end of the edge is the edge's own sheet
+    // (the rest-state exclusion covers it only for edges shorter than twice its radius).
+    std::size_t kept = 0;
+    for (ContactConstraint k : contacts_) {
+      if (k.p >= n_) {
+        const Eigen::Index e = k.p - n_;
+        k.p = contact_edges_(e, 0);
+        k.p2 = contact_edges_(e, 1);
+        const auto touches = [&k](int v) { return v == k.a || v == k.b || v == k.c; };
+        if (touches(k.p) || touches(k.p2)) continue;
+      }
+      contacts_[kept++] = k;
+    }
+    contacts_.resize(kept);
   }
 
   // Dirichlet boundary at ramp fraction s: annulus ring and PM tips, start -> end.
@@ -302,7 +354,7 @@ class Stepper {
   // constraint impulses for the next prediction. Contacts are detected anew each step and
   // start from lambda = 0 (see simulator.h).
   void solve() {
-    if (detector_) detector_->detect(x_prev_.data(), x_.data(), sys_.w.data(), contacts_);
+    if (detector_) detectContacts();
     lambda_contacts_.assign(contacts_.size(), 0.0);
     std::fill(lambda_floors_.begin(), lambda_floors_.end(), 0.0);
     if (!warm_) {
@@ -416,6 +468,10 @@ class Stepper {
   std::vector<double> lambda_floors_;  // area floors: from 0 every step, like the contacts
   std::vector<ContactConstraint> contacts_;
   std::unique_ptr<ContactDetector> detector_;
+  // Edge contact only: the mesh edges whose midpoints are contact points, and the detector's
+  // extended positions and inverse masses (vertices, then midpoints).
+  Eigen::MatrixXi contact_edges_;
+  std::vector<double> points_prev_, points_, points_w_;
   long long projections_ = 0;
 };
 
@@ -773,11 +829,13 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
         int out;
         if (fields.integer(value, where, out)) *ik.target = out;
       }
-    if (key == "contact" || key == "warm_start_lambda" || key == "kinetic_damping") {
+    if (key == "contact" || key == "edge_contact" || key == "warm_start_lambda" ||
+        key == "kinetic_damping") {
       known = true;
       bool out;
       if (fields.boolean(value, where, out))
         (key == "contact"           ? s.contact
+         : key == "edge_contact"    ? s.edge_contact
          : key == "kinetic_damping" ? s.kinetic_damping
                                     : s.warm_start_lambda) = out;
     } else if (key == "phase") {

@@ -306,11 +306,13 @@ void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, c
   }
 }
 
-// Contact distance C and its unit direction u (see ContactConstraint).
-inline bool contactState(const ContactConstraint& k, const double* x, double& C, Vec3& u,
-                         double bary[3]) {
-  const CMap3 xp(x + 3 * static_cast<long>(k.p)), xa(x + 3 * static_cast<long>(k.a)),
-      xb(x + 3 * static_cast<long>(k.b)), xc(x + 3 * static_cast<long>(k.c));
+// Contact distance C of the point xp from k's triangle and its unit direction u (see
+// ContactConstraint).
+template <class P>
+inline bool contactStateAt(const P& xp, const ContactConstraint& k, const double* x, double& C,
+                           Vec3& u, double bary[3]) {
+  const CMap3 xa(x + 3 * static_cast<long>(k.a)), xb(x + 3 * static_cast<long>(k.b)),
+      xc(x + 3 * static_cast<long>(k.c));
   const int region = closestPointOnTriangle(xp, xa, xb, xc, bary[0], bary[1], bary[2]);
   const Vec3 d = xp - (bary[0] * xa + bary[1] * xb + bary[2] * xc);
   if (region == 0) {
@@ -328,12 +330,52 @@ inline bool contactState(const ContactConstraint& k, const double* x, double& C,
   return true;
 }
 
+inline bool contactState(const ContactConstraint& k, const double* x, double& C, Vec3& u,
+                         double bary[3]) {
+  return contactStateAt(CMap3(x + 3 * static_cast<long>(k.p)), k, x, C, u, bary);
+}
+
+// Contact of the midpoint m = (x_p + x_p2) / 2 of an edge with a triangle: C and its direction
+// as for a vertex, grad_p C = grad_p2 C = u / 2, so the generalised inverse mass of the point
+// is (w_p + w_p2) / 4 (the cords' points between vertices do the same).
+template <bool kAcc>
+void edgeContact(const ContactConstraint& k, double* x, const double* w, double& lambda,
+                 double* acc) {
+  const Vec3 mid = 0.5 * (at(x, k.p) + at(x, k.p2));
+  double C, b[3];
+  Vec3 u;
+  if (!contactStateAt(mid, k, x, C, u, b)) return;
+  if (C > 0.0 && lambda == 0.0) return;
+  const double denom = 0.25 * (w[k.p] + w[k.p2]) + w[k.a] * b[0] * b[0] + w[k.b] * b[1] * b[1] +
+                       w[k.c] * b[2] * b[2];
+  if (denom == 0.0) return;
+  const double total = std::max(lambda - C / denom, 0.0);
+  const double dl = total - lambda;
+  lambda = total;
+  at(x, k.p) += (0.5 * w[k.p] * dl) * u;
+  at(x, k.p2) += (0.5 * w[k.p2] * dl) * u;
+  at(x, k.a) -= (w[k.a] * b[0] * dl) * u;
+  at(x, k.b) -= (w[k.b] * b[1] * dl) * u;
+  at(x, k.c) -= (w[k.c] * b[2] * dl) * u;
+  if (kAcc) {
+    accumulate(acc, k.p, 0.5 * u, total);
+    accumulate(acc, k.p2, 0.5 * u, total);
+    accumulate(acc, k.a, -b[0] * u, total);
+    accumulate(acc, k.b, -b[1] * u, total);
+    accumulate(acc, k.c, -b[2] * u, total);
+  }
+}
+
 template <bool kAcc>
 void contactSweep(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
                   double* lambda, double* acc) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const ContactConstraint& k = constraints[c];
+    if (k.p2 >= 0) {
+      edgeContact<kAcc>(k, x, w, lambda[c], acc);
+      continue;
+    }
     double C, b[3];
     Vec3 u;
     if (!contactState(k, x, C, u, b)) continue;

@@ -92,6 +92,9 @@ struct CordConstraint {
 // Hard (compliance 0), pushes only.
 struct ContactConstraint {
   int p = 0, a = 0, b = 0, c = 0;
+  // >= 0: the contact point is the midpoint of the edge (p, p2) instead of vertex p (edge
+  // contact, SimulationSettings::edge_contact); its correction is shared by the two ends.
+  int p2 = -1;
   double side = 1.0;  // +1: x_p stays on the side the winding normal points to; -1: other
   double thickness = 0.0;
 };

@@ -58,6 +58,19 @@ TEST(SimulatorSettingsRanges, AreaFloorIsReadFromJsonAndZeroDisablesIt) {
   EXPECT_EQ(SimulationSettings{}.area_floor_fraction, 0.5);
 }
 
+TEST(SimulatorSettingsRanges, EdgeContactIsOptInAndReadFromJson) {
+  EXPECT_FALSE(SimulationSettings{}.edge_contact);
+  Diagnostics diagnostics;
+  const SimulationSettings s =
+      settingsFromJson(R"({"edge_contact": true})", diagnostics, {}, "case.json");
+  EXPECT_TRUE(diagnostics.problems().empty());
+  EXPECT_TRUE(s.edge_contact);
+  Diagnostics bad;
+  settingsFromJson(R"({"edge_contact": "yes"})", bad, {}, "case.json");
+  ASSERT_EQ(bad.problems().size(), 1u);
+  EXPECT_EQ(bad.problems()[0].where, "simulation.edge_contact");
+}
+
 TEST(SimulatorSettingsRanges, JsonOutOfRangeValuesAreDiagnosedWithFileKeyAndProblem) {
   Diagnostics diagnostics;
   settingsFromJson(R"({"pressure_mmhg": 1e300, "ramp_ms": 2.0})", diagnostics, {},

@@ -18,6 +18,7 @@
 #include "core/annulus_plane.h"
 #include "core/cgal_backend.h"
 #include "core/cohort_presets.h"
+#include "core/cord_attachments.h"
 #include "core/heuristic.h"
 #include "core/metrics.h"
 #include "core/parametric_valve.h"
@@ -274,6 +275,39 @@ TEST(CohortValveClosure, ElongatedP2CordsProlapseP2AndNothingElse) {
   EXPECT_EQ(prolapse.segments, std::vector<std::string>{"P2"})
       << "max height " << prolapse.max_height_mm << " mm";
   EXPECT_GT(prolapse.max_height_mm, 3.0);
+}
+
+// Vertex-triangle contact alone lets coarse sheets cross edge through edge: on the normal
+// anatomy with the cohort's anatomical cords and the P2 cords x 1.3, the flap at edge 2.5 mm
+// ends with intersecting triangle pairs. With the edge midpoints as contact points as well
+// (SimulationSettings::edge_contact) it ends with none, and in the same shape.
+TEST(CohortValveClosure, EdgeContactKeepsACoarseFlapFromPassingThroughTheOtherSheet) {
+  ValveParameters p;
+  p.target_edge_mm = kCohortEdgeMm;
+  const ParametricValve valve = makeParametricValve(p);
+  const std::vector<AnatomicalAttachment> attachments = layoutAttachments(valve);
+  ValveCase c = valve.valve_case;
+  c.cords = attachmentCordSet(attachments, pointAttachments(valve, attachments));
+  CordSet cords = heuristicCordSet(c);
+  for (std::size_t i = 0; i < cords.cords.size(); ++i) {
+    const double p2 = attachments[i].segment() == kP2 ? 1.3 : 1.0;
+    scaleCord(cords, static_cast<int>(i), normalCordScale(cords.cords[i].kind) * p2);
+  }
+  const SimulationResult vertex_only = simulateClosure(c, cords, SimulationSettings{});
+  SimulationSettings settings;
+  settings.edge_contact = true;
+  const SimulationResult with_edges = simulateClosure(c, cords, settings);
+  ASSERT_TRUE(vertex_only.ok() && with_edges.ok()) << vertex_only.error << with_edges.error;
+  const int crossings = countSelfIntersections(vertex_only.V, c.mesh.F);
+  std::printf(
+      "[ cohort   ] P2 x 1.3 flap, edge %.1f mm: %d intersecting pairs with vertex "
+      "contact, %d with edge contact\n",
+      kCohortEdgeMm, crossings, countSelfIntersections(with_edges.V, c.mesh.F));
+  EXPECT_GT(crossings, 0) << "the scenario no longer shows the crossing; pick another";
+  EXPECT_EQ(countSelfIntersections(with_edges.V, c.mesh.F), 0);
+  EXPECT_TRUE(with_edges.converged);
+  const ProlapseResult a = prolapseOfMesh(c, vertex_only.V), b = prolapseOfMesh(c, with_edges.V);
+  EXPECT_NEAR(b.segment_max_height_mm.at("P2"), a.segment_max_height_mm.at("P2"), 0.5);
 }
 
 TEST(CohortValveClosure, ReversedFieldsReturnTowardTheOpenState) {
