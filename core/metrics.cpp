@@ -297,6 +297,7 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
       0.5 * contactThicknessMm(settingsFromJson(valve_case.simulation_json, ignored));
   m.orifice =
       orificeCoverage(ring, closed_V, valve_case.mesh.F, annulus.frame, 0.25, half_thickness);
+  m.self_intersections = countSelfIntersections(closed_V, valve_case.mesh.F);
   if (m.has_tracings) {
     m.tracing_prolapse = prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2});
     m.section_prolapse = prolapseOfSections(valve_case, annulus, closed_V);

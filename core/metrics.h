@@ -130,6 +130,9 @@ struct ValveMetrics {
   // Is the valve closed: the leaflets' projection onto the closed annulus plane against the
   // orifice the closed annulus vertices of the mesh enclose (orifice_coverage.h).
   OrificeCoverage orifice;
+  // Pairs of non-adjacent triangles that intersect (CGAL, cgal_backend.h): the leaflets passing
+  // through each other or themselves, which contact should prevent (0 expected).
+  int self_intersections = 0;
   Eigen::VectorXd tracing_distances;  // per stacked tracing point
 };
 

@@ -25,6 +25,7 @@ nlohmann::json metricsJson(const ValveMetrics& m) {
   j["open_orifice_area_mm2"] = m.orifice.open_area_mm2;
   j["orifice_area_mm2"] = m.orifice.orifice_area_mm2;
   j["orifice_tissue_radius_mm"] = m.orifice.tissue_radius_mm;
+  j["self_intersections"] = m.self_intersections;
   if (m.has_tracings) {
     j["tracing_prolapse_segments"] = m.tracing_prolapse.segments;
     j["section_prolapse_segments"] = m.section_prolapse.segments;

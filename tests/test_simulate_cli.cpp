@@ -38,6 +38,8 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_GT(metrics["steps"].get<int>(), 0);
+  EXPECT_EQ(metrics["self_intersections"].get<int>(), 0) << "the leaflets do not cross";
+  EXPECT_NE(r.out.find("leaflets passing through:        none"), std::string::npos) << r.out;
   const std::string vtk = testing::readText(dir_ / "sim" / "closed.vtk");
   EXPECT_NE(vtk.find("SCALARS height_above_annulus_plane_mm"), std::string::npos);
   EXPECT_NE(vtk.find("SCALARS distance_to_tracing_mm"), std::string::npos);

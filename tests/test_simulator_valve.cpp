@@ -304,6 +304,7 @@ TEST(CohortValveClosure, EdgeContactKeepsACoarseFlapFromPassingThroughTheOtherSh
       "contact, %d with edge contact\n",
       kCohortEdgeMm, crossings, countSelfIntersections(with_edges.V, c.mesh.F));
   EXPECT_GT(crossings, 0) << "the scenario no longer shows the crossing; pick another";
+  EXPECT_EQ(computeMetrics(c, vertex_only.V).self_intersections, crossings) << "reported";
   EXPECT_EQ(countSelfIntersections(with_edges.V, c.mesh.F), 0);
   EXPECT_TRUE(with_edges.converged);
   const ProlapseResult a = prolapseOfMesh(c, vertex_only.V), b = prolapseOfMesh(c, with_edges.V);

@@ -100,6 +100,14 @@ std::string closedValveSummary(const ValveMetrics& m, const std::string& indent)
         m.orifice.tissue_radius_mm);
     text += indent + line;
   }
+  text += indent + "leaflets passing through:        " +
+          (m.self_intersections == 0
+               ? std::string("none")
+               : std::to_string(m.self_intersections) +
+                     (m.self_intersections == 1 ? " intersecting triangle pair"
+                                                : " intersecting triangle pairs") +
+                     " (simulation.edge_contact may help)") +
+          "\n";
   return text;
 }
 
