@@ -126,9 +126,10 @@ struct SimulationSettings {
   // Also the midpoint of every mesh edge as a contact point against the triangles (opt-in).
   // Vertex-triangle contact alone lets two coarse sheets cross edge through edge while every
   // vertex stays outside the other's thickness (docs/performance.md, "Self-intersections of
-  // coarse closures"); the midpoints removed them on 18 of the 19 benchmark closures that had
-  // them. Off by default: 3 of those 19 no longer settle, and the default 620-vertex valve
-  // takes 1,734 steps instead of 516 (measured 2026-11-25).
+  // coarse closures"); the midpoints, held at 0.8 of the thickness as a backstop, removed them
+  // on all 19 benchmark closures that had them. Off by default: the 2,092-vertex valve takes
+  // 3.6 s instead of 1.6 (4x the contact points) and the fitted flaps move (measured
+  // 2026-11-25).
   bool edge_contact = false;
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
   double contact_margin_mm = 0.0;     // <= 0: 0.25 * contact thickness
