@@ -14,13 +14,13 @@
 
 #include "core/cohort_presets.h"
 #include "core/synthetic_case.h"
-#include "experiments/tool_arguments.h"
+#include "experiments/tool_support.h"
 
 namespace {
 
 using namespace chordfit;
-using tool_arguments::parseNumber;
-using tool_arguments::parsePositiveInteger;
+using tool_support::parseNumber;
+using tool_support::parsePositiveInteger;
 
 constexpr int kExitOk = 0;
 constexpr int kExitFailed = 1;
@@ -108,12 +108,6 @@ std::string applySetting(const std::string& setting, CohortPreset& preset) {
   return "";
 }
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string text;
-  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
-  return text.empty() ? "–" : text;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -136,7 +130,7 @@ int main(int argc, char** argv) {
     if (arg == "--seeds") {
       if (!has_value) return usageError("--seeds: expected a list");
       std::string bad;
-      if (!tool_arguments::parseSeedList(argv[++i], seeds, bad)) {
+      if (!tool_support::parseSeedList(argv[++i], seeds, bad)) {
         return usageError("--seeds: expected positive integers, got \"" + bad + "\"");
       }
     } else if (arg == "--edge") {
@@ -167,8 +161,8 @@ int main(int argc, char** argv) {
       const SyntheticCase s = makeSyntheticCase(options);
       const ProlapseResult& mesh = s.truth_metrics.mesh_prolapse;
       std::printf("| %llu | %s | %s |", static_cast<unsigned long long>(seed),
-                  joined(mesh.segments).c_str(),
-                  joined(s.truth_metrics.tracing_prolapse.segments).c_str());
+                  tool_support::joinedNames(mesh.segments).c_str(),
+                  tool_support::joinedNames(s.truth_metrics.tracing_prolapse.segments).c_str());
       for (const char* name : {"A1", "A2", "A3", "P1", "P2", "P3"}) {
         const auto it = mesh.segment_max_height_mm.find(name);
         if (it == mesh.segment_max_height_mm.end()) {

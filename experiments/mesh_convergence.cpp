@@ -16,7 +16,7 @@
 #include "core/metrics.h"
 #include "core/simulator.h"
 #include "core/synthetic_case.h"
-#include "experiments/tool_arguments.h"
+#include "experiments/tool_support.h"
 
 namespace {
 
@@ -46,12 +46,6 @@ int usageError(const std::string& message) {
   return kExitUsage;
 }
 
-std::string joined(const std::vector<std::string>& names) {
-  std::string text;
-  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
-  return text.empty() ? "–" : text;
-}
-
 void printRow(std::uint64_t seed, double edge, const ValveCase& valve_case,
               const SimulationResult& result, double seconds) {
   const ValveMetrics m = computeMetrics(valve_case, result.V);
@@ -59,8 +53,8 @@ void printRow(std::uint64_t seed, double edge, const ValveCase& valve_case,
               static_cast<unsigned long long>(seed), edge,
               static_cast<long>(valve_case.mesh.V.rows()), result.converged ? "yes" : "no",
               result.steps, m.deviation.mean, m.deviation.max,
-              joined(m.mesh_prolapse.segments).c_str(), m.mesh_prolapse.max_height_mm,
-              100.0 * m.orifice.coverage(), seconds);
+              tool_support::joinedNames(m.mesh_prolapse.segments).c_str(),
+              m.mesh_prolapse.max_height_mm, 100.0 * m.orifice.coverage(), seconds);
   std::fflush(stdout);
 }
 
@@ -85,15 +79,15 @@ int main(int argc, char** argv) {
     const bool has_value = i + 1 < argc;
     std::string bad;
     if (arg == "--seeds") {
-      if (!has_value || !tool_arguments::parseSeedList(argv[++i], seeds, bad)) {
+      if (!has_value || !tool_support::parseSeedList(argv[++i], seeds, bad)) {
         return usageError("--seeds: expected positive integers, got \"" + bad + "\"");
       }
     } else if (arg == "--edges") {
-      if (!has_value || !tool_arguments::parseLengthList(argv[++i], edges, bad)) {
+      if (!has_value || !tool_support::parseLengthList(argv[++i], edges, bad)) {
         return usageError("--edges: expected positive lengths in mm, got \"" + bad + "\"");
       }
     } else if (arg == "--reference") {
-      if (!has_value || !tool_arguments::parseNumber(argv[++i], reference_edge) ||
+      if (!has_value || !tool_support::parseNumber(argv[++i], reference_edge) ||
           !(reference_edge > 0.0)) {
         return usageError("--reference: expected a positive length in mm");
       }

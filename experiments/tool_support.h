@@ -1,5 +1,5 @@
-// Argument parsing shared by the small experiment tools (calibrate_cohort, mesh_convergence),
-// which parse by hand: CLI11 is confined to tools/main.cpp for build time.
+// Pieces shared by the small experiment tools (calibrate_cohort, mesh_convergence): argument
+// parsing by hand (CLI11 is confined to tools/main.cpp for build time) and table cells.
 #pragma once
 
 #include <cmath>
@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-namespace chordfit::tool_arguments {
+namespace chordfit::tool_support {
 
 // The whole of `text` as a number (strtod syntax); false for "", "1x" or "x".
 inline bool parseNumber(const std::string& text, double& value) {
@@ -57,4 +57,11 @@ inline bool parseLengthList(const std::string& text, std::vector<double>& length
   return !lengths.empty();
 }
 
-}  // namespace chordfit::tool_arguments
+// "A2 P2", or "–" for none: a list of segment names as one table cell.
+inline std::string joinedNames(const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& n : names) text += (text.empty() ? "" : " ") + n;
+  return text.empty() ? "–" : text;
+}
+
+}  // namespace chordfit::tool_support
