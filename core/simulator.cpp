@@ -272,6 +272,12 @@ class Stepper {
                                       model.V_rest.row(contact_edges_(e, 1)));
         }
         detector_ = std::make_unique<ContactDetector>(points, model.F, options);
+        // Inverse masses are fixed for the run: the midpoints' once, (w_i + w_j) / 4.
+        points_w_.assign(sys_.w.begin(), sys_.w.end());
+        points_w_.resize(n_ + contact_edges_.rows());
+        for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
+          points_w_[n_ + e] = 0.25 * (sys_.w[contact_edges_(e, 0)] + sys_.w[contact_edges_(e, 1)]);
+        }
       } else {
         detector_ = std::make_unique<ContactDetector>(model.V_rest, model.F, options);
       }
@@ -286,8 +292,7 @@ class Stepper {
   // "Self-intersections of coarse closures").
   static constexpr double kEdgeContactThicknessFraction = 0.8;
 
-  // With edge contact: x and w extended by the edge midpoints (generalised inverse mass
-  // (w_i + w_j) / 4), for the detector.
+  // With edge contact: positions extended by the edge midpoints, for the detector.
   void extendByMidpoints(const std::vector<double>& x, std::vector<double>& out) const {
     out.resize(3 * static_cast<size_t>(n_ + contact_edges_.rows()));
     std::copy(x.begin(), x.end(), out.begin());
@@ -304,11 +309,6 @@ class Stepper {
     }
     extendByMidpoints(x_prev_, points_prev_);
     extendByMidpoints(x_, points_);
-    points_w_.assign(sys_.w.begin(), sys_.w.end());
-    points_w_.resize(n_ + contact_edges_.rows());
-    for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
-      points_w_[n_ + e] = 0.25 * (sys_.w[contact_edges_(e, 0)] + sys_.w[contact_edges_(e, 1)]);
-    }
     detector_->detect(points_prev_.data(), points_.data(), points_w_.data(), contacts_);
     // Midpoints back to their edges; a triangle with an end of the edge is the edge's own sheet
     // (the rest-state exclusion covers it only for edges shorter than twice its radius).

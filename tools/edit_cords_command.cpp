@@ -86,6 +86,20 @@ bool parseCordList(const std::string& option, const std::string& text, int count
   return true;
 }
 
+// "DX,DY,DZ": exactly three finite numbers.
+bool parseOffset(const std::string& text, Eigen::Vector3d& offset) {
+  std::vector<std::string> fields;
+  std::istringstream in(text);
+  for (std::string field; std::getline(in, field, ',');) fields.push_back(field);
+  if (fields.size() != 3) return false;
+  for (int k = 0; k < 3; ++k) {
+    char* end = nullptr;
+    offset(k) = std::strtod(fields[k].c_str(), &end);
+    if (fields[k].empty() || *end != '\0' || !std::isfinite(offset(k))) return false;
+  }
+  return true;
+}
+
 std::string namesOf(const std::set<std::string>& names) {
   std::string text;
   for (const std::string& n : names) text += (text.empty() ? "" : ", ") + n;
@@ -177,10 +191,10 @@ int runEditCords(const EditCordsOptions& options) {
     requests.push_back(r);
   }
   std::vector<std::pair<int, Eigen::Vector3d>> moves;  // tip index, offset
+  std::set<std::string> tip_names;
+  for (const PmTip& tip : set.tips) tip_names.insert(tip.name);
   for (const std::string& item : options.tip_moves) {
     const std::size_t eq = item.rfind('=');
-    std::set<std::string> tip_names;
-    for (const PmTip& tip : set.tips) tip_names.insert(tip.name);
     int tip = -1;
     for (std::size_t t = 0; eq != std::string::npos && t < set.tips.size(); ++t) {
       if (set.tips[t].name == item.substr(0, eq)) tip = static_cast<int>(t);
@@ -190,18 +204,7 @@ int runEditCords(const EditCordsOptions& options) {
                    namesOf(tip_names) + ")");
     }
     Eigen::Vector3d offset;
-    std::istringstream in(item.substr(eq + 1));
-    int k = 0;
-    for (std::string field; std::getline(in, field, ',') && k < 4; ++k) {
-      char* end = nullptr;
-      const double value = std::strtod(field.c_str(), &end);
-      if (field.empty() || *end != '\0' || !std::isfinite(value) || k == 3) {
-        k = 4;
-        break;
-      }
-      offset(k) = value;
-    }
-    if (k != 3) {
+    if (!parseOffset(item.substr(eq + 1), offset)) {
       return usage("--move-tip " + item +
                    ": the offset must be three finite numbers DX,DY,DZ (mm)");
     }
