@@ -47,9 +47,9 @@ constexpr double kLesionStiffnessP3 = 0.1;
 // as well made the fine truth of seed 3 at the default edge diverge (step 3,828 of its flap;
 // experiments/README.md "Calibration").
 constexpr double kLesionStiffnessBarlow = 0.05;
-// Degenerative (myxomatous) anatomy: deep indentations between the posterior scallops
-// (fraction of the scallop height, normal 0.5) and an enlarged prolapsing scallop.
-constexpr double kMyxomatousIndentation = 0.8;
+// Enlarged prolapsing scallop of the degenerative (myxomatous) anatomy. (Its deep clefts,
+// 0.8 of the scallop height against the normal 0.5, became the normal anatomy's on
+// 2026-11-25: ValveParameters::indentation_depth.)
 constexpr double kEnlargedScallop = 1.2;  // x the normal scallop height
 
 std::uint64_t splitmix64(std::uint64_t z) {
@@ -83,13 +83,12 @@ ValveParameters normal2Anatomy() {
   return p;
 }
 
-// The normal anatomy with the degenerative changes of an isolated scallop lesion: deep clefts
-// and, for P2, a taller scallop (14 -> 17 mm; P2 heights above 15 mm are typical of
-// fibroelastic deficiency with redundant P2, Carpentier's "Reconstructive valve surgery" 2010).
-ValveParameters myxomatousAnatomy(bool enlarged_p2) {
+// The normal anatomy with the degenerative change of an isolated P2 lesion: a taller P2 scallop
+// (14 -> 17 mm; P2 heights above 15 mm are typical of fibroelastic deficiency with redundant P2,
+// Carpentier's "Reconstructive valve surgery" 2010).
+ValveParameters enlargedP2Anatomy() {
   ValveParameters p = normalAnatomy();
-  p.indentation_depth = kMyxomatousIndentation;
-  if (enlarged_p2) p.posterior_height_mm *= kEnlargedScallop;
+  p.posterior_height_mm *= kEnlargedScallop;
   return p;
 }
 
@@ -103,7 +102,6 @@ ValveParameters barlowAnatomy() {
   p.posterior_height_mm = 19.0;
   p.posterior_side_height_mm = 15.0;
   p.commissural_height_mm = 10.0;
-  p.indentation_depth = kMyxomatousIndentation;
   return p;
 }
 
@@ -128,8 +126,8 @@ std::vector<CohortPreset> buildPresets() {
   {
     CohortPreset p;
     p.name = "prolapse-P2";
-    p.summary = "isolated P2 prolapse: elongated P2 cords, enlarged P2 (17 mm), deep clefts";
-    p.anatomy = myxomatousAnatomy(true);
+    p.summary = "isolated P2 prolapse: elongated P2 cords, enlarged P2 (17 mm)";
+    p.anatomy = enlargedP2Anatomy();
     p.segment_scale = {0, 0, 0, 0, kElongatedP2, 0};
     p.intended_prolapse = {"P2"};
     presets.push_back(p);
@@ -150,8 +148,8 @@ std::vector<CohortPreset> buildPresets() {
     p.name = "prolapse-P3";
     p.summary =
         "commissural prolapse: elongated P3 cords (posteromedial side), soft (myxomatous) P3 "
-        "tissue, deep clefts";
-    p.anatomy = myxomatousAnatomy(false);
+        "tissue";
+    p.anatomy = normalAnatomy();
     p.segment_scale = {0, 0, 0, 0, 0, kElongatedP3};
     p.lesion_stiffness = kLesionStiffnessP3;
     p.intended_prolapse = {"P3"};
@@ -176,7 +174,7 @@ std::vector<CohortPreset> buildPresets() {
     p.name = "flail-P2";
     p.summary =
         "flail P2: one or two ruptured primary cords in the middle of an elongated, enlarged P2";
-    p.anatomy = myxomatousAnatomy(true);
+    p.anatomy = enlargedP2Anatomy();
     p.segment_scale = {0, 0, 0, 0, kElongatedFlail, 0};
     p.ruptured_segment = "P2";
     p.min_ruptured = 1;

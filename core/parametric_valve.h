@@ -27,8 +27,14 @@ struct ValveParameters {
   double posterior_height_mm = 14.0;       // P2 height
   double posterior_side_height_mm = 11.0;  // P1 / P3 heights
   double commissural_height_mm = 8.0;      // leaflet height at the commissures
-  double indentation_depth = 0.5;          // fraction of height lost at the P1/P2, P2/P3 clefts
-  double target_edge_mm = 1.5;             // mesh resolution
+  // Fraction of the scallop height lost at the P1/P2 and P2/P3 clefts (the indentations that
+  // let the posterior leaflet unfold; Carpentier). 0.8 rather than 0.5: with the shallower
+  // clefts the scallops are tied together so tightly that elongated P2 cords (x 1.3) lift P1
+  // and P3 over the prolapse criterion as well, where isolated P2 prolapse is the commonest
+  // degenerative lesion; at 0.8 P2 prolapses alone at edges 1.5-3 mm and the normal cords
+  // prolapse nowhere (docs/performance.md, "Clefts of the normal anatomy").
+  double indentation_depth = 0.8;
+  double target_edge_mm = 1.5;  // mesh resolution
   // Optional user annulus (#P by 3, ordered, closed loop implied) replacing the parametric
   // ellipse/saddle for the open state. The closed annulus is derived from it by contraction
   // about its centroid and saddle deepening.

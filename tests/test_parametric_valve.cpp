@@ -34,7 +34,9 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kOnSaddleTolerance = 1e-9;      // mm, analytic annulus positions
 constexpr double kBelowAnnulusTolerance = 1e-9;  // mm
 constexpr double kMinEdgeRatio = 0.3;            // edge length / target_edge_mm
-constexpr double kMaxEdgeRatio = 2.0;
+// The longest edges run along the free edge on the flanks of the clefts, where the leaflet
+// height drops ~2 mm per mm of arc (2.1-2.2 x the target with the default 0.8-deep clefts).
+constexpr double kMaxEdgeRatio = 2.3;
 constexpr double kMinAreaRatio = 1e-3;               // triangle area / target_edge_mm^2
 constexpr double kAnteriorFractionTolerance = 0.03;  // share of annulus vertices
 constexpr double kScalingTolerance = 0.25;           // relative, vertex count ratio
@@ -307,8 +309,8 @@ TEST(ParametricValve, CommissuresAndCleftsAreLowerThanTheLeafletPeaks) {
     if (mesh.leaflet(mesh.annulus(k)) == mesh.leaflet(mesh.annulus((k + 1) % count))) continue;
     EXPECT_NEAR(columnLength(valve, k), p.commissural_height_mm, 1.0) << "column " << k;
   }
-  // Posterior height profile has two interior minima (the clefts), each well above 0 and
-  // below the neighbouring scallop peaks.
+  // Posterior height profile has two interior minima (the clefts) at the height the
+  // parametrisation gives them, above 0 and below the neighbouring scallop peaks.
   std::vector<double> posterior;
   for (int k = 0; k < count; ++k) {
     if (mesh.leaflet(mesh.annulus(k)) == 1) posterior.push_back(columnLength(valve, k));
@@ -317,7 +319,10 @@ TEST(ParametricValve, CommissuresAndCleftsAreLowerThanTheLeafletPeaks) {
   for (size_t i = 1; i + 1 < posterior.size(); ++i) {
     if (posterior[i] < posterior[i - 1] && posterior[i] <= posterior[i + 1]) {
       ++minima;
-      EXPECT_GT(posterior[i], 0.3 * p.posterior_side_height_mm);
+      const double cleft =
+          (1.0 - p.indentation_depth) * 0.5 * (p.posterior_side_height_mm + p.posterior_height_mm);
+      EXPECT_NEAR(posterior[i], cleft, 1.0);
+      EXPECT_GT(posterior[i], 0.0);
       EXPECT_LT(posterior[i], p.posterior_side_height_mm);
     }
   }
@@ -444,12 +449,12 @@ TEST(ParametricValve, BenchmarkResolutionsGiveTheirVertexCounts) {
     int vertices;
   };
   constexpr double kCountTolerance = 0.05;  // relative
-  for (const Size& size : {Size{1.7, 500}, Size{0.82, 2000}, Size{0.4, 8000}}) {
+  for (const Size& size : {Size{1.65, 500}, Size{0.8, 2000}, Size{0.39, 8000}}) {
     const auto count = makeParametricValve(withEdge(size.edge)).valve_case.mesh.V.rows();
     EXPECT_NEAR(static_cast<double>(count), size.vertices, kCountTolerance * size.vertices)
         << "edge " << size.edge;
   }
-  for (double edge : {0.4, 0.5, 0.82, 1.0, 1.5, 1.7, 2.0, 3.0}) {
+  for (double edge : {0.39, 0.5, 0.8, 1.0, 1.5, 1.65, 2.0, 3.0}) {
     const ValveMesh& mesh = makeParametricValve(withEdge(edge)).valve_case.mesh;
     std::printf("[ info ] target_edge_mm %.2f: %ld vertices, %ld faces, %ld annulus columns\n",
                 edge, static_cast<long>(mesh.V.rows()), static_cast<long>(mesh.F.rows()),
@@ -601,7 +606,8 @@ TEST(ParametricValve, TiltedSaddlePolylineKeepsTheFrameConvention) {
   const Eigen::Vector3d centre = shift.transpose();
   for (int k = 0; k < mesh.annulus.size(); ++k) {
     const double annulus_height = n.dot(vertex(mesh, mesh.annulus(k)) - centre);
-    EXPECT_LT(n.dot(vertex(mesh, valve.free_edge(k)) - centre), annulus_height - 5.0);
+    // 1 mm: the clefts leave 2.5 mm of leaflet, hanging at an angle.
+    EXPECT_LT(n.dot(vertex(mesh, valve.free_edge(k)) - centre), annulus_height - 1.0);
   }
   EXPECT_GT(valve.segment.minCoeff(), -1);
   // Deeper closed saddle: out-of-plane spread grows by the closed/open ratio (7/5).
