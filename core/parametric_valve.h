@@ -32,7 +32,8 @@ struct ValveParameters {
   // clefts the scallops are tied together so tightly that elongated P2 cords (x 1.3) lift P1
   // and P3 over the prolapse criterion as well, where isolated P2 prolapse is the commonest
   // degenerative lesion; at 0.8 P2 prolapses alone at edges 1.5-3 mm and the normal cords
-  // prolapse nowhere (docs/performance.md, "Clefts of the normal anatomy").
+  // prolapse nowhere (experiments/README.md "Calibration"; docs/performance.md, "Clefts of the
+  // normal anatomy").
   double indentation_depth = 0.8;
   double target_edge_mm = 1.5;  // mesh resolution
   // Optional user annulus (#P by 3, ordered, closed loop implied) replacing the parametric
