@@ -339,6 +339,8 @@ class Stepper {
         tips_[3 * k + d] = (1.0 - s) * model_.tip_start(k, d) + s * model_.tip_end(k, d);
   }
 
+  void setDragTime(double drag_time_ms) { drag_decay_ = std::exp(-dt_ / drag_time_ms); }
+
   // v += dt w f (pressure); drag toward the flow velocity u; x~ = x + dt v + w impulse (the
   // last step's constraint impulses: warm start); displacement clamped to max_step.
   void predict(double pressure, const Vec3& u) {
@@ -468,7 +470,8 @@ class Stepper {
   const SimulationSettings& settings_;
   const System sys_;
   const int n_;
-  const double dt_, inv_dt2_, max_step_, drag_decay_;
+  const double dt_, inv_dt2_, max_step_;
+  double drag_decay_;
   const bool warm_;
   std::vector<double> x_, x_prev_, v_, force_;
   std::vector<double> impulse_;  // sum_j grad C_j lambda_j per vertex (warm start)
@@ -548,10 +551,16 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
   // Steps max_steps - average_unsettled_steps + 1 .. max_steps (those after the ramp) are
   // summed; used only if the closure does not settle.
   const int first_averaged = max_steps - settings.average_unsettled_steps + 1;
+  const int late_drag_step =
+      warm_closure ? settings.late_drag_after_warm_steps : settings.late_drag_after_steps;
   std::vector<double> position_sum;
   int averaged = 0;
   for (int step = 1; step <= max_steps; ++step) {
     const double t = step * dt;
+    if (step == late_drag_step) {
+      stepper.setDragTime(settings.late_drag_time_ms);
+      result.late_drag = true;
+    }
     const double s = ramp(t, ramp_ms);
     stepper.setBoundary(s);
     stepper.predict(pressure * s, t < ramp_ms ? flow : Vec3::Zero());
@@ -742,6 +751,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"flow_speed_mm_per_ms", s.flow_speed_mm_per_ms, 0.0, false, 100.0},
       {"drag_time_ms", s.drag_time_ms, 0.0, true, 1e4},
       {"ramp_ms", s.ramp_ms, 0.0, false, 1e4},
+      {"late_drag_time_ms", s.late_drag_time_ms, 0.0, true, 1e4},
       {"dt_ms", s.dt_ms, 0.0, false, 10.0},  // 0 = automatic
       {"stiffness_ratio", s.stiffness_ratio, 0.0, true, 1000.0},
       {"max_stiffness_ratio", s.max_stiffness_ratio, -1e300, false, 1e4},  // <= 0: off
@@ -756,6 +766,9 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"max_steps", static_cast<double>(s.max_steps), 1.0, false, 1e8},
       {"max_warm_steps", static_cast<double>(s.max_warm_steps), 1.0, false, 1e8},
       {"average_unsettled_steps", static_cast<double>(s.average_unsettled_steps), 0.0, false, 1e8},
+      {"late_drag_after_steps", static_cast<double>(s.late_drag_after_steps), 0.0, false, 1e8},
+      {"late_drag_after_warm_steps", static_cast<double>(s.late_drag_after_warm_steps), 0.0, false,
+       1e8},
   };
   std::vector<SettingsProblem> problems;
   for (const Range& r : ranges) {
@@ -804,6 +817,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"flow_speed_mm_per_ms", &s.flow_speed_mm_per_ms},
       {"drag_time_ms", &s.drag_time_ms},
       {"ramp_ms", &s.ramp_ms},
+      {"late_drag_time_ms", &s.late_drag_time_ms},
       {"dt_ms", &s.dt_ms},
       {"stiffness_ratio", &s.stiffness_ratio},
       {"max_stiffness_ratio", &s.max_stiffness_ratio},
@@ -822,7 +836,9 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
                              {"window", &s.window},
                              {"max_steps", &s.max_steps},
                              {"max_warm_steps", &s.max_warm_steps},
-                             {"average_unsettled_steps", &s.average_unsettled_steps}};
+                             {"average_unsettled_steps", &s.average_unsettled_steps},
+                             {"late_drag_after_steps", &s.late_drag_after_steps},
+                             {"late_drag_after_warm_steps", &s.late_drag_after_warm_steps}};
   for (const auto& [key, value] : parsed->items()) {
     const std::string where = "simulation." + key;
     bool known = false;

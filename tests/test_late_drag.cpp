@@ -1,0 +1,71 @@
+// The late drag (SimulationSettings::late_drag_*): a closure still moving after its step
+// threshold gets a stronger drag. It must settle a flap that swings without end under the
+// default drag, and leave a closure that settles earlier bit-identical.
+#include <gtest/gtest.h>
+
+#include "core/heuristic.h"
+#include "core/simulator.h"
+#include "tests/test_support.h"
+
+namespace chordfit {
+namespace {
+
+SimulationSettings withoutLateDrag(SimulationSettings settings) {
+  settings.late_drag_after_steps = 0;
+  settings.late_drag_after_warm_steps = 0;
+  return settings;
+}
+
+// The quick-start case with the paper's heuristic cords (too long everywhere): its P2 flap
+// swings until the 5,000-step cap under the default drag (measured 2026-11-25).
+TEST(LateDrag, SettlesAFlapThatSwingsWithoutIt) {
+  const testing::BundledCase bundled = testing::bundledCase("prolapse-P2");
+  const CordSet cords = heuristicCordSet(bundled.valve_case);
+  const SimulationResult swinging =
+      simulateClosure(bundled.valve_case, cords, withoutLateDrag(bundled.settings));
+  ASSERT_TRUE(swinging.ok()) << swinging.error;
+  EXPECT_FALSE(swinging.converged) << "the flap settles without the late drag now; pick another";
+  EXPECT_FALSE(swinging.late_drag);
+
+  const SimulationResult damped = simulateClosure(bundled.valve_case, cords, bundled.settings);
+  ASSERT_TRUE(damped.ok()) << damped.error;
+  EXPECT_TRUE(damped.late_drag);
+  EXPECT_TRUE(damped.converged);
+  EXPECT_LT(damped.steps, bundled.settings.late_drag_after_steps + 1000);
+  // The same equilibrium: the settled state lies within the swinging one's excursion.
+  EXPECT_LT((damped.V - swinging.V).rowwise().norm().mean(), 0.1);
+}
+
+TEST(LateDrag, LeavesAClosureThatSettlesEarlierBitIdentical) {
+  const testing::BundledCase bundled = testing::bundledCase("small-normal");
+  const CordSet& cords = *bundled.valve_case.cords;
+  const SimulationResult with = simulateClosure(bundled.valve_case, cords, bundled.settings);
+  const SimulationResult without =
+      simulateClosure(bundled.valve_case, cords, withoutLateDrag(bundled.settings));
+  ASSERT_TRUE(with.ok() && without.ok()) << with.error << without.error;
+  ASSERT_TRUE(with.converged);
+  ASSERT_LT(with.steps, bundled.settings.late_drag_after_steps);
+  EXPECT_FALSE(with.late_drag);
+  EXPECT_EQ(with.steps, without.steps);
+  EXPECT_TRUE(with.V == without.V);
+}
+
+TEST(LateDrag, SettingsAreReadAndChecked) {
+  Diagnostics diagnostics;
+  const SimulationSettings s = settingsFromJson(
+      R"({"late_drag_after_steps": 300, "late_drag_after_warm_steps": 0,
+          "late_drag_time_ms": 0.25})",
+      diagnostics);
+  EXPECT_TRUE(diagnostics.ok());
+  EXPECT_EQ(s.late_drag_after_steps, 300);
+  EXPECT_EQ(s.late_drag_after_warm_steps, 0);
+  EXPECT_DOUBLE_EQ(s.late_drag_time_ms, 0.25);
+  SimulationSettings bad;
+  bad.late_drag_time_ms = 0.0;
+  const std::vector<SettingsProblem> problems = settingsProblems(bad);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].key, "late_drag_time_ms");
+}
+
+}  // namespace
+}  // namespace chordfit
