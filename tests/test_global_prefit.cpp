@@ -72,7 +72,7 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   EXPECT_GT(result.secondary_factor, result.primary_factor);
   EXPECT_LT(std::abs(result.primary_factor - kPrimaryScale), 0.05);
   // The secondaries are the weakly determined kind here: the stage's grid points 0.92 and 0.97
-  // cost 31.9 and 31.8 (against 251 for the best common factor), and which one wins turns on
+  // cost 31.9 and 31.8 (against 251 for the best common factor), and which one wins depends
   // on the late drag (simulator.h): 0.97 with it, 0.92 without.
   EXPECT_LT(std::abs(result.secondary_factor - kSecondaryScale), 0.075);
   EXPECT_LT(result.best.cost, 0.5 * best_common) << "better than any common factor";
