@@ -251,10 +251,10 @@ TEST(CohortValveClosure, NormalValveClosesWithoutSelfIntersectionOrProlapse) {
 
 // DISABLED: fails (coverage 0.968 at edge 2.5 mm with the leaflets counted as 1 mm thick
 // tissue; 0.932 with the clefts of 0.5 and the heuristic's cord placement before 2026-11-25):
-// the P1 and P3 scallops hang almost vertically from
-// the annulus in the closed state instead of swinging in to meet the anterior leaflet, leaving
-// paracommissural gaps (experiments/README.md "Calibration", docs/performance.md "Does the
-// valve close?"). Run with --gtest_also_run_disabled_tests.
+// the P1 and P3 scallops hang almost vertically from the annulus in the closed state instead
+// of swinging in to meet the anterior leaflet, leaving paracommissural gaps
+// (experiments/README.md "Calibration", docs/performance.md "Does the valve close?"). Run
+// with --gtest_also_run_disabled_tests.
 TEST(CohortValveClosure, DISABLED_NormalValveCoversTheOrifice) {
   const CohortClosure& c = normalCohortClosure();
   ASSERT_TRUE(c.result.ok()) << c.result.error;
