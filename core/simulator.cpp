@@ -240,6 +240,7 @@ class Stepper {
         v_(3 * n_, 0.0),
         force_(3 * n_),
         impulse_(warm_ ? 3 * n_ : 0, 0.0),
+        contact_impulse_(warm_ ? 3 * n_ : 0, 0.0),
         tips_(3 * model.tip_start.rows()),
         lambda_edges_(sys_.edges.size()),
         lambda_areas_(sys_.areas.size()),
@@ -341,8 +342,9 @@ class Stepper {
 
   void setDragTime(double drag_time_ms) { drag_decay_ = std::exp(-dt_ / drag_time_ms); }
 
-  // v += dt w f (pressure); drag toward the flow velocity u; x~ = x + dt v + w impulse (the
-  // last step's constraint impulses: warm start); displacement clamped to max_step.
+  // v += dt w f (pressure); drag toward the flow velocity u; x~ = x + dt v + w (impulse +
+  // carry contact_impulse) (the last step's constraint impulses: warm start, the contacts'
+  // in part, see SimulationSettings::contact_impulse_carry); displacement clamped to max_step.
   void predict(double pressure, const Vec3& u) {
     pressureForces(model_.F, x_.data(), pressure, force_.data(), n_);
     x_prev_ = x_;
@@ -352,7 +354,10 @@ class Stepper {
       vi += (dt_ * sys_.w[i]) * CMap3(&force_[3 * i]);
       vi = u + drag_decay_ * (vi - u);
       Vec3 disp = dt_ * vi;
-      if (warm_) disp += sys_.w[i] * CMap3(&impulse_[3 * i]);
+      if (warm_) {
+        disp += sys_.w[i] * (CMap3(&impulse_[3 * i]) +
+                             settings_.contact_impulse_carry * CMap3(&contact_impulse_[3 * i]));
+      }
       const double len = disp.norm();
       if (len > max_step_) disp *= max_step_ / len;
       Map3(&x_[3 * i]) += disp;
@@ -376,15 +381,18 @@ class Stepper {
     const double* w = sys_.w.data();
     for (int it = 0; it < settings_.iterations; ++it) {
       double* acc = nullptr;
+      double* contact_acc = nullptr;
       if (warm_ && it == settings_.iterations - 1) {
         std::fill(impulse_.begin(), impulse_.end(), 0.0);
+        std::fill(contact_impulse_.begin(), contact_impulse_.end(), 0.0);
         acc = impulse_.data();
+        contact_acc = contact_impulse_.data();
       }
       projectDistances(sys_.edges, inv_dt2_, x, w, lambda_edges_.data(), acc);
       projectAreas(sys_.areas, inv_dt2_, x, w, lambda_areas_.data(), acc);
       projectBending(sys_.bends, inv_dt2_, x, w, lambda_bends_.data(), acc);
       projectAreaFloors(sys_.area_floors, x, w, lambda_floors_.data(), acc);
-      projectContacts(contacts_, x, w, lambda_contacts_.data(), acc);
+      projectContacts(contacts_, x, w, lambda_contacts_.data(), contact_acc);
       projectCords(sys_.cords, inv_dt2_, tips_.data(), x, w, lambda_cords_.data(), acc);
     }
     // Area floors are checked every sweep but not counted: ns per projection stays comparable
@@ -474,8 +482,9 @@ class Stepper {
   double drag_decay_;
   const bool warm_;
   std::vector<double> x_, x_prev_, v_, force_;
-  std::vector<double> impulse_;  // sum_j grad C_j lambda_j per vertex (warm start)
-  std::vector<double> tips_;     // 3 #tips
+  std::vector<double> impulse_;          // sum_j grad C_j lambda_j per vertex (warm start)
+  std::vector<double> contact_impulse_;  // the same sum over the contacts alone
+  std::vector<double> tips_;             // 3 #tips
   std::vector<double> lambda_edges_, lambda_areas_, lambda_bends_, lambda_cords_, lambda_contacts_;
   std::vector<double> lambda_floors_;  // area floors: from 0 every step, like the contacts
   std::vector<ContactConstraint> contacts_;
@@ -752,6 +761,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"drag_time_ms", s.drag_time_ms, 0.0, true, 1e4},
       {"ramp_ms", s.ramp_ms, 0.0, false, 1e4},
       {"late_drag_time_ms", s.late_drag_time_ms, 0.0, true, 1e4},
+      {"contact_impulse_carry", s.contact_impulse_carry, 0.0, false, 1.0},
       {"dt_ms", s.dt_ms, 0.0, false, 10.0},  // 0 = automatic
       {"stiffness_ratio", s.stiffness_ratio, 0.0, true, 1000.0},
       {"max_stiffness_ratio", s.max_stiffness_ratio, -1e300, false, 1e4},  // <= 0: off
@@ -818,6 +828,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"drag_time_ms", &s.drag_time_ms},
       {"ramp_ms", &s.ramp_ms},
       {"late_drag_time_ms", &s.late_drag_time_ms},
+      {"contact_impulse_carry", &s.contact_impulse_carry},
       {"dt_ms", &s.dt_ms},
       {"stiffness_ratio", &s.stiffness_ratio},
       {"max_stiffness_ratio", &s.max_stiffness_ratio},

@@ -111,6 +111,14 @@ struct SimulationSettings {
   // prediction (xpbd_constraints.h): the equilibrium is then the elastic one for any number
   // of iterations. false = textbook XPBD (lambda reset every step).
   bool warm_start_lambda = true;
+  // Fraction of the contacts' impulses carried into the next prediction with the warm start
+  // (the other constraints' impulses are carried whole). Carried whole, a contact's push moves
+  // its vertex out of reach, the pair is not detected in the next step, the vertex falls back
+  // and the pair forms again: a period-2 toggle that never settles (normal-1 fits, the
+  // benchmark valve at some edges). Carried not at all, the warm-started closures lose their
+  // consistency with the cold ones. 0.5 settles every toggling closure tried
+  // (docs/performance.md, "Contact impulses").
+  double contact_impulse_carry = 0.5;
   // Largest allowed vertex displacement per step before the constraints (velocity clamp);
   // keeps contact detection from missing a crossing. <= 0: 0.25 * contact thickness.
   double max_step_mm = 0.0;
@@ -163,7 +171,8 @@ struct SimulationSettings {
 //   pressure_mmhg, youngs_modulus_mpa, thickness_mm, poisson_ratio, density_g_per_cm3,
 //   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, late_drag_time_ms,
 //   dt_ms,
-//   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, max_step_mm, tolerance_mm,
+//   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, contact_impulse_carry,
+//   max_step_mm, tolerance_mm,
 //   window, max_steps, max_warm_steps, late_drag_after_steps, late_drag_after_warm_steps,
 //   average_unsettled_steps, contact, edge_contact,
 //   contact_thickness_mm,
