@@ -116,8 +116,9 @@ struct SimulationSettings {
   // its vertex out of reach, the pair is not detected in the next step, the vertex falls back
   // and the pair forms again: a period-2 toggle that never settles (normal-1 fits, the
   // benchmark valve at some edges). Carried not at all, the warm-started closures lose their
-  // consistency with the cold ones. 0.5 settles every toggling closure tried
-  // (docs/performance.md, "Contact impulses").
+  // consistency with the cold ones. 0.5 settles every toggling closure tried; on the
+  // benchmark the fits' unsettled closures fell from 5.6 to 1.0 % (docs/performance.md,
+  // "Contact impulses carried in part").
   double contact_impulse_carry = 0.5;
   // Largest allowed vertex displacement per step before the constraints (velocity clamp);
   // keeps contact detection from missing a crossing. <= 0: 0.25 * contact thickness.
@@ -126,9 +127,9 @@ struct SimulationSettings {
   int window = 10;
   // Step cap. Closures that settle take 300-1,700 steps up to ~2,000 vertices (measured on
   // the cohort and bench-sim valves); those that do not settle (a cycle at a cord pulled
-  // into a tent, or a contact pair toggling; the largest step stays at 0.003-0.1 mm,
-  // docs/performance.md) change by less than their own oscillation after a few thousand
-  // steps, and a fit runs hundreds of closures, so the cap is 5,000 (it was 20,000: a
+  // into a tent, a contact pair toggling before contact_impulse_carry; the largest step stays
+  // at 0.003-0.1 mm, docs/performance.md) change by less than their own oscillation after a few
+  // thousand steps, and a fit runs hundreds of closures, so the cap is 5,000 (it was 20,000: a
   // non-settling closure then cost 5 s instead of 1.2 s).
   int max_steps = 5000;
   // Step cap of a warm-started closure (phase close with a start state, as for the fit's finite

@@ -249,7 +249,7 @@ TEST(CohortValveClosure, NormalValveClosesWithoutSelfIntersectionOrProlapse) {
   EXPECT_LT(prolapse.max_height_mm, 2.0);
 }
 
-// DISABLED: fails (coverage 0.968 at edge 2.5 mm with the leaflets counted as 1 mm thick
+// DISABLED: fails (coverage 0.966 at edge 2.5 mm with the leaflets counted as 1 mm thick
 // tissue; 0.932 with the clefts of 0.5 and the heuristic's cord placement before 2026-11-25):
 // the P1 and P3 scallops hang almost vertically from the annulus in the closed state instead
 // of swinging in to meet the anterior leaflet, leaving paracommissural gaps
