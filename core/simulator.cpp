@@ -263,7 +263,7 @@ class Stepper {
               ? settings.contact_exclusion_mm
               : std::max(2.5 * thickness,
                          options.thickness_mm + options.margin_mm + options.skin_mm);
-      if (settings.edge_contact) {
+      if (usesEdgeContact(settings, model.V_rest, model.F, thickness)) {
         // Contact points: the vertices, then the edge midpoints (index n_ + e).
         contact_edges_ = uniqueEdges(model.F);
         Eigen::MatrixXd points(n_ + contact_edges_.rows(), 3);
@@ -455,6 +455,7 @@ class Stepper {
     result.projections = projections_;
     if (detector_) {
       result.contact_rebuilds = detector_->rebuilds();
+      result.edge_contact = contact_edges_.rows() > 0;
       result.contact_candidates = detector_->candidates();
     }
     result.V.resize(n_, 3);
@@ -761,6 +762,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"drag_time_ms", s.drag_time_ms, 0.0, true, 1e4},
       {"ramp_ms", s.ramp_ms, 0.0, false, 1e4},
       {"late_drag_time_ms", s.late_drag_time_ms, 0.0, true, 1e4},
+      {"edge_contact_edge_ratio", s.edge_contact_edge_ratio, 0.0, false, 1e3},
       {"contact_impulse_carry", s.contact_impulse_carry, 0.0, false, 1.0},
       {"dt_ms", s.dt_ms, 0.0, false, 10.0},  // 0 = automatic
       {"stiffness_ratio", s.stiffness_ratio, 0.0, true, 1000.0},
@@ -798,6 +800,19 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
   return problems;
 }
 
+bool usesEdgeContact(const SimulationSettings& settings, const Eigen::MatrixXd& V_rest,
+                     const Eigen::MatrixXi& F, double contact_thickness_mm) {
+  if (settings.edge_contact) return true;
+  if (!(settings.edge_contact_edge_ratio > 0.0) || F.rows() == 0) return false;
+  const Eigen::MatrixXi edges = uniqueEdges(F);
+  std::vector<double> lengths(static_cast<size_t>(edges.rows()));
+  for (Eigen::Index e = 0; e < edges.rows(); ++e)
+    lengths[static_cast<size_t>(e)] = (V_rest.row(edges(e, 0)) - V_rest.row(edges(e, 1))).norm();
+  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  return *middle >= settings.edge_contact_edge_ratio * contact_thickness_mm;
+}
+
 double contactThicknessMm(const SimulationSettings& settings) {
   return settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
                                              : settings.material.thickness_mm;
@@ -829,6 +844,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"ramp_ms", &s.ramp_ms},
       {"late_drag_time_ms", &s.late_drag_time_ms},
       {"contact_impulse_carry", &s.contact_impulse_carry},
+      {"edge_contact_edge_ratio", &s.edge_contact_edge_ratio},
       {"dt_ms", &s.dt_ms},
       {"stiffness_ratio", &s.stiffness_ratio},
       {"max_stiffness_ratio", &s.max_stiffness_ratio},

@@ -144,14 +144,18 @@ struct SimulationSettings {
   // the oscillation (docs/performance.md, "Closures that do not settle").
   int average_unsettled_steps = 1000;
   bool contact = true;
-  // Also the midpoint of every mesh edge as a contact point against the triangles (opt-in).
+  // Also the midpoint of every mesh edge as a contact point against the triangles.
   // Vertex-triangle contact alone lets two coarse sheets cross edge through edge while every
   // vertex stays outside the other's thickness (docs/performance.md, "Self-intersections of
   // coarse closures"); the midpoints, held at 0.8 of the thickness as a backstop, removed them
-  // on all 19 benchmark closures that had them. Off by default: the 2,092-vertex valve takes
-  // 3.6 s instead of 1.6 (4x the contact points) and the fitted flaps move (measured
-  // 2026-11-25).
+  // on every benchmark closure that had them. true: always. false: only on a coarse mesh,
+  // whose median rest edge is at least `edge_contact_edge_ratio` times the contact thickness
+  // (crossings were seen at edges of 2-3 mm and never at 1.5 mm or finer with the 1 mm
+  // default thickness). On the fine meshes the midpoints would cost 2.3x the time (the
+  // 2,092-vertex valve 3.6 s instead of 1.6) for nothing; on the 2.5 mm case meshes they cost
+  // 1.5x (measured 2026-11-25). edge_contact_edge_ratio 0: never automatically.
   bool edge_contact = false;
+  double edge_contact_edge_ratio = 1.75;
   double contact_thickness_mm = 0.0;  // <= 0: material thickness
   double contact_margin_mm = 0.0;     // <= 0: 0.25 * contact thickness
   double contact_exclusion_mm = 0.0;  // <= 0: 2.5 * contact thickness (the list radius)
@@ -175,7 +179,7 @@ struct SimulationSettings {
 //   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, contact_impulse_carry,
 //   max_step_mm, tolerance_mm,
 //   window, max_steps, max_warm_steps, late_drag_after_steps, late_drag_after_warm_steps,
-//   average_unsettled_steps, contact, edge_contact,
+//   average_unsettled_steps, contact, edge_contact, edge_contact_edge_ratio,
 //   contact_thickness_mm,
 //   contact_margin_mm, contact_exclusion_mm, area_floor_fraction, kinetic_damping, phase
 //   ("close" | "open").
@@ -201,6 +205,11 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& settings
 // The separation contact keeps between a vertex and a triangle of the mid-surface:
 // contact_thickness_mm, or the material thickness when that is <= 0.
 double contactThicknessMm(const SimulationSettings& settings);
+
+// Whether a closure of the mesh (V_rest, F) uses edge contact: settings.edge_contact, or the
+// median rest edge length >= settings.edge_contact_edge_ratio * contact thickness (> 0).
+bool usesEdgeContact(const SimulationSettings& settings, const Eigen::MatrixXd& V_rest,
+                     const Eigen::MatrixXi& F, double contact_thickness_mm);
 
 // A simulation problem in plain arrays. simulateClosure builds one from a case; tests and
 // benchmarks may build their own (e.g. a clamped disc).
@@ -246,6 +255,7 @@ struct SimulationResult {
   long long projections = 0;         // constraint projections performed (for ns/projection)
   int kinetic_stops = 0;             // velocity resets by kinetic damping
   bool late_drag = false;            // the late drag (SimulationSettings) was switched on
+  bool edge_contact = false;         // edge midpoints were contact points (set or coarse mesh)
   int averaged_steps = 0;            // > 0: not settled, V is the mean over this many final steps
   std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
   bool diverged = false;             // the error is a divergence (not invalid input)

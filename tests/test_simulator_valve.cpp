@@ -284,7 +284,8 @@ TEST(CohortValveClosure, ElongatedP2CordsProlapseP2AndNothingElse) {
 // anatomy with shallow clefts (0.5 of the scallop height, the default before 2026-11-25), the
 // cohort's anatomical cords and the P2 cords x 1.3, the flap at edge 2.5 mm ends with
 // intersecting triangle pairs. With the edge midpoints as contact points as well
-// (SimulationSettings::edge_contact) it ends with none, and in the same shape.
+// (SimulationSettings::edge_contact, on by itself for a mesh this coarse) it ends with none,
+// and in the same shape.
 TEST(CohortValveClosure, EdgeContactKeepsACoarseFlapFromPassingThroughTheOtherSheet) {
   ValveParameters p;
   p.target_edge_mm = kCohortEdgeMm;
@@ -292,11 +293,13 @@ TEST(CohortValveClosure, EdgeContactKeepsACoarseFlapFromPassingThroughTheOtherSh
   ParametricValve valve = makeParametricValve(p);
   const CordSet cords = cohortCords(valve, 1.3);
   const ValveCase& c = valve.valve_case;
-  const SimulationResult vertex_only = simulateClosure(c, cords, SimulationSettings{});
-  SimulationSettings settings;
-  settings.edge_contact = true;
-  const SimulationResult with_edges = simulateClosure(c, cords, settings);
+  SimulationSettings vertex_settings;
+  vertex_settings.edge_contact_edge_ratio = 0.0;
+  const SimulationResult vertex_only = simulateClosure(c, cords, vertex_settings);
+  const SimulationResult with_edges = simulateClosure(c, cords, SimulationSettings{});
   ASSERT_TRUE(vertex_only.ok() && with_edges.ok()) << vertex_only.error << with_edges.error;
+  EXPECT_FALSE(vertex_only.edge_contact);
+  EXPECT_TRUE(with_edges.edge_contact) << "a 2.5 mm mesh is coarse: edge contact by default";
   const int crossings = countSelfIntersections(vertex_only.V, c.mesh.F);
   std::printf(
       "[ cohort   ] P2 x 1.3 flap, edge %.1f mm: %d intersecting pairs with vertex "
@@ -308,6 +311,41 @@ TEST(CohortValveClosure, EdgeContactKeepsACoarseFlapFromPassingThroughTheOtherSh
   EXPECT_TRUE(with_edges.converged);
   const ProlapseResult a = prolapseOfMesh(c, vertex_only.V), b = prolapseOfMesh(c, with_edges.V);
   EXPECT_NEAR(b.segment_max_height_mm.at("P2"), a.segment_max_height_mm.at("P2"), 0.5);
+}
+
+// Crossings were seen at edges of 2-3 mm, never at 1.5 mm or finer (1 mm thickness): the
+// midpoints are added by themselves only where they are needed, and a user can force or
+// forbid them.
+TEST(CohortValveClosure, EdgeContactIsAutomaticOnlyOnCoarseMeshes) {
+  const auto mesh = [](double edge_mm) {
+    ValveParameters p;
+    p.target_edge_mm = edge_mm;
+    return makeParametricValve(p).valve_case.mesh;
+  };
+  const ValveMesh fine = mesh(1.5), coarse = mesh(2.5);
+  const SimulationSettings defaults;
+  const double thickness = contactThicknessMm(defaults);
+  EXPECT_FALSE(usesEdgeContact(defaults, fine.V, fine.F, thickness));
+  EXPECT_TRUE(usesEdgeContact(defaults, coarse.V, coarse.F, thickness));
+  SimulationSettings forced;
+  forced.edge_contact = true;
+  EXPECT_TRUE(usesEdgeContact(forced, fine.V, fine.F, thickness));
+  SimulationSettings never;
+  never.edge_contact_edge_ratio = 0.0;
+  EXPECT_FALSE(usesEdgeContact(never, coarse.V, coarse.F, thickness));
+  // A thicker leaflet makes the same mesh fine relative to its thickness.
+  EXPECT_FALSE(usesEdgeContact(defaults, coarse.V, coarse.F, 2.0));
+
+  Diagnostics diagnostics;
+  const SimulationSettings parsed =
+      settingsFromJson(R"({"edge_contact_edge_ratio": 3})", diagnostics);
+  EXPECT_TRUE(diagnostics.ok());
+  EXPECT_DOUBLE_EQ(parsed.edge_contact_edge_ratio, 3.0);
+  SimulationSettings bad;
+  bad.edge_contact_edge_ratio = -1.0;
+  const std::vector<SettingsProblem> problems = settingsProblems(bad);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].key, "edge_contact_edge_ratio");
 }
 
 TEST(CohortValveClosure, ReversedFieldsReturnTowardTheOpenState) {

@@ -122,6 +122,7 @@ int runSimulate(const SimulateOptions& options) {
   j["converged"] = closed.converged;
   j["steps"] = closed.steps;
   j["averaged_steps"] = closed.averaged_steps;
+  j["edge_contact"] = closed.edge_contact;
   j["sim_seconds"] = closed.seconds;
   j["cords"] = cords->cords.size();
   if (options.phase == "open") {
