@@ -38,6 +38,9 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_GT(metrics["steps"].get<int>(), 0);
+  // A 3 mm mesh is coarse against the 1 mm thickness: edge midpoints join the contact points.
+  EXPECT_TRUE(metrics["edge_contact"].get<bool>());
+  EXPECT_NE(r.out.find("(edge midpoints as contact points too)"), std::string::npos) << r.out;
   EXPECT_EQ(metrics["self_intersections"].get<int>(), 0) << "the leaflets do not cross";
   EXPECT_NE(r.out.find("leaflets passing through:        none"), std::string::npos) << r.out;
   const std::string vtk = testing::readText(dir_ / "sim" / "closed.vtk");

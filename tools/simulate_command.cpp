@@ -146,9 +146,9 @@ int runSimulate(const SimulateOptions& options) {
   writeFileAtomically(out / "enface.svg",
                       enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics.orifice));
 
-  std::printf("closure: %s after %d steps, %.2f s%s\n",
+  std::printf("closure: %s after %d steps, %.2f s%s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
-              closed.seconds,
+              closed.seconds, closed.edge_contact ? " (edge midpoints as contact points too)" : "",
               closed.averaged_steps > 0 ? (": result = mean of the last " +
                                            std::to_string(closed.averaged_steps) + " steps")
                                               .c_str()
