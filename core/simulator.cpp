@@ -233,7 +233,7 @@ class Stepper {
         dt_(dt),
         inv_dt2_(1.0 / (dt * dt)),
         max_step_(max_step),
-        drag_decay_(std::exp(-dt / settings.drag_time_ms)),
+        drag_decay_(dragDecay(dt, settings.drag_time_ms)),
         warm_(settings.warm_start_lambda),
         x_(3 * n_),
         x_prev_(3 * n_),
@@ -340,7 +340,9 @@ class Stepper {
         tips_[3 * k + d] = (1.0 - s) * model_.tip_start(k, d) + s * model_.tip_end(k, d);
   }
 
-  void setDragTime(double drag_time_ms) { drag_decay_ = std::exp(-dt_ / drag_time_ms); }
+  // Velocity decay toward the flow field per step of a drag with time constant drag_time_ms.
+  static double dragDecay(double dt, double drag_time_ms) { return std::exp(-dt / drag_time_ms); }
+  void setDragTime(double drag_time_ms) { drag_decay_ = dragDecay(dt_, drag_time_ms); }
 
   // v += dt w f (pressure); drag toward the flow velocity u; x~ = x + dt v + w (impulse +
   // carry contact_impulse) (the last step's constraint impulses: warm start, the contacts'
