@@ -75,7 +75,10 @@ std::string caseName(const SyntheticCaseOptions& o) {
 }
 
 json settingsJson(const SimulationSettings& s) {
-  return {{"tolerance_mm", s.tolerance_mm}, {"window", s.window}, {"max_steps", s.max_steps}};
+  return {{"tolerance_mm", s.tolerance_mm},
+          {"window", s.window},
+          {"max_steps", s.max_steps},
+          {"ramp_ms", s.ramp_ms}};
 }
 
 // ---------------------------------------------------------------------------------------

@@ -457,6 +457,27 @@ TEST(LesionTissue, OnlyInTheListedSegments) {
   EXPECT_LT(softest_posterior, 1.5 * preset.lesion_stiffness);
 }
 
+// truth/case must redo the truth: its simulation settings are the truth's solver settings,
+// the 6 ms pressure ramp the cohort was calibrated with included (the default is 10 ms).
+TEST(TruthCase, CarriesTheTruthSolverSettings) {
+  SyntheticCaseOptions options;
+  options.preset = "normal-1";
+  options.edge_mm = 3.0;
+  options.tracing.planes = 2;
+  SimulationSettings settings = truthSimulationSettings();
+  settings.max_steps = 200;  // only the settings matter here
+  options.truth_settings = settings;
+  const SyntheticCase s = makeSyntheticCase(options);
+  Diagnostics diagnostics;
+  const SimulationSettings parsed = settingsFromJson(s.truth_case.simulation_json, diagnostics);
+  EXPECT_TRUE(diagnostics.ok());
+  EXPECT_EQ(parsed.ramp_ms, 6.0);
+  EXPECT_NE(parsed.ramp_ms, SimulationSettings{}.ramp_ms);
+  EXPECT_EQ(parsed.tolerance_mm, settings.tolerance_mm);
+  EXPECT_EQ(parsed.window, settings.window);
+  EXPECT_EQ(parsed.max_steps, settings.max_steps);
+}
+
 // The truth's valve at another resolution (mesh-convergence studies): at the truth's own
 // edge it is the truth case; at the case edge it has the case mesh and the case's cord
 // points, but keeps the truth's rest lengths, tips and lesion tissue.

@@ -72,12 +72,12 @@ TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   EXPECT_GT(result.secondary_factor, result.primary_factor);
   EXPECT_LT(std::abs(result.primary_factor - kPrimaryScale), 0.05);
   // The secondaries are the weakly determined kind here: which grid point wins depends on
-  // solver details (0.97 with the late drag, 0.92 without it; with the 12 ms pressure ramp the
+  // solver details (0.97 with the late drag, 0.92 without it; with the 10 ms pressure ramp the
   // common factor 0.867 itself, the primaries moving to 0.817).
   EXPECT_LT(std::abs(result.secondary_factor - kSecondaryScale), 0.075);
-  // Measured: 31.8 against 251 with the 6 ms ramp, 51.9 against 91.2 with the 12 ms ramp (the
-  // best common factor's closure fits much better with it).
-  EXPECT_LT(result.best.cost, 0.65 * best_common) << "better than any common factor";
+  // Measured: 31.8 against 251 with the 6 ms ramp, 51.9 against 166 with the 10 ms ramp (51.9
+  // against 91.2 with 12 ms).
+  EXPECT_LT(result.best.cost, 0.5 * best_common) << "better than any common factor";
   EXPECT_EQ(result.forward_sims, static_cast<int>(result.costs.size()) + 2 * options.kind_points);
   // The start is the seed with the two factors on its free cords.
   for (std::size_t c = 0; c < p.seed.cords.size(); ++c) {
