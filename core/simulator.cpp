@@ -220,6 +220,19 @@ void pressureForces(const Eigen::MatrixXi& F, const double* x, double p, double*
   }
 }
 
+// usesEdgeContact on the mesh's unique edges (uniqueEdges(F)), which the Stepper needs anyway.
+bool usesEdgeContactOnEdges(const SimulationSettings& settings, const Eigen::MatrixXd& V_rest,
+                            const Eigen::MatrixXi& edges, double contact_thickness_mm) {
+  if (settings.edge_contact) return true;
+  if (!(settings.edge_contact_edge_ratio > 0.0) || edges.rows() == 0) return false;
+  std::vector<double> lengths(static_cast<size_t>(edges.rows()));
+  for (Eigen::Index e = 0; e < edges.rows(); ++e)
+    lengths[static_cast<size_t>(e)] = (V_rest.row(edges(e, 0)) - V_rest.row(edges(e, 1))).norm();
+  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
+  std::nth_element(lengths.begin(), middle, lengths.end());
+  return *middle >= settings.edge_contact_edge_ratio * contact_thickness_mm;
+}
+
 // The state of one run and the three phases of a time step (Ten Minute Physics style: the
 // loop in simulate() reads as predict / solve / update). Flat arrays x, x_prev, v: 3 #V.
 class Stepper {
@@ -263,9 +276,10 @@ class Stepper {
               ? settings.contact_exclusion_mm
               : std::max(2.5 * thickness,
                          options.thickness_mm + options.margin_mm + options.skin_mm);
-      if (usesEdgeContact(settings, model.V_rest, model.F, thickness)) {
+      Eigen::MatrixXi edges = uniqueEdges(model.F);
+      if (usesEdgeContactOnEdges(settings, model.V_rest, edges, thickness)) {
         // Contact points: the vertices, then the edge midpoints (index n_ + e).
-        contact_edges_ = uniqueEdges(model.F);
+        contact_edges_ = std::move(edges);
         Eigen::MatrixXd points(n_ + contact_edges_.rows(), 3);
         points.topRows(n_) = model.V_rest;
         for (Eigen::Index e = 0; e < contact_edges_.rows(); ++e) {
@@ -804,15 +818,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
 
 bool usesEdgeContact(const SimulationSettings& settings, const Eigen::MatrixXd& V_rest,
                      const Eigen::MatrixXi& F, double contact_thickness_mm) {
-  if (settings.edge_contact) return true;
-  if (!(settings.edge_contact_edge_ratio > 0.0) || F.rows() == 0) return false;
-  const Eigen::MatrixXi edges = uniqueEdges(F);
-  std::vector<double> lengths(static_cast<size_t>(edges.rows()));
-  for (Eigen::Index e = 0; e < edges.rows(); ++e)
-    lengths[static_cast<size_t>(e)] = (V_rest.row(edges(e, 0)) - V_rest.row(edges(e, 1))).norm();
-  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-  std::nth_element(lengths.begin(), middle, lengths.end());
-  return *middle >= settings.edge_contact_edge_ratio * contact_thickness_mm;
+  return usesEdgeContactOnEdges(settings, V_rest, uniqueEdges(F), contact_thickness_mm);
 }
 
 double contactThicknessMm(const SimulationSettings& settings) {
