@@ -274,6 +274,18 @@ ValveCase truthCaseAtEdge(const SyntheticCase& s, double edge_mm) {
   return out;
 }
 
+CordSet trueCordsOnCaseMesh(const CordSet& case_cords, const CordSet& truth_cords) {
+  if (case_cords.cords.size() != truth_cords.cords.size() ||
+      case_cords.tips.size() != truth_cords.tips.size()) {
+    throw std::invalid_argument("the case's and the truth's cord sets differ in size");
+  }
+  CordSet cords = case_cords;
+  cords.tips = truth_cords.tips;
+  for (std::size_t i = 0; i < cords.cords.size(); ++i)
+    cords.cords[i].rest_length = truth_cords.cords[i].rest_length;
+  return cords;
+}
+
 namespace {
 json pointJson(const std::vector<CordPoint>& points, std::size_t i) {
   if (points.empty()) return nullptr;

@@ -108,6 +108,13 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options);
 // tissue. Tracings are the truth's; the simulation block is the truth's settings.
 ValveCase truthCaseAtEdge(const SyntheticCase& synthetic, double edge_mm);
 
+// The true cords on the case mesh: `case_cords` (the case's cords.json: the same anatomical
+// cords as the truth's, in the same order, attached on the case mesh) with the rest lengths
+// and PM tips of `truth_cords` (truth/cords.json). Closed on the case mesh they are the best
+// the case mesh and the per-cord parameterisation can do (experiments/, "true cords on the
+// case mesh"). Throws std::invalid_argument when the cord or tip counts differ.
+CordSet trueCordsOnCaseMesh(const CordSet& case_cords, const CordSet& truth_cords);
+
 // Writes the case to `directory` and the truth to `directory`/truth:
 //   case.json, open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
 //   tracings.json, cords.json                         (writeCase; case.json last)

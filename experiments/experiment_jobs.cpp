@@ -20,6 +20,7 @@
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/mesh_io.h"
+#include "core/synthetic_case.h"
 
 extern char** environ;
 
@@ -136,28 +137,23 @@ json tableMetrics(const json& m, const fs::path& file) {
   return t;
 }
 
-// The true cord set on the CASE mesh: the case's cords (same order and vertices as the
-// truth's, synthetic_case.h) with the true rest lengths, and the true PM tips.
-CordSet trueCordsOnCaseMesh(const fs::path& case_dir, const json& truth) {
+// The true cord set on the CASE mesh (core/synthetic_case.h, trueCordsOnCaseMesh) from the
+// case's cords.json and truth/cords.json.
+CordSet trueCordsOnCaseMesh(const fs::path& case_dir) {
   Diagnostics diagnostics;
-  CordSet seed, true_set;
-  if (!readCordSet(case_dir / "cords.json", "cords.json", seed, diagnostics) ||
-      !readCordSet(case_dir / "truth" / "cords.json", "truth/cords.json", true_set, diagnostics)) {
+  CordSet case_cords, truth_cords;
+  if (!readCordSet(case_dir / "cords.json", "cords.json", case_cords, diagnostics) ||
+      !readCordSet(case_dir / "truth" / "cords.json", "truth/cords.json", truth_cords,
+                   diagnostics)) {
     std::ostringstream out;
     diagnostics.print(out);
     throw std::runtime_error(case_dir.string() + ": " + out.str());
   }
-  const json& cords = truth.at("cords");
-  if (cords.size() != seed.cords.size() || true_set.tips.size() != seed.tips.size()) {
-    throw std::runtime_error(case_dir.string() + ": truth.json and cords.json disagree in size");
+  try {
+    return chordfit::trueCordsOnCaseMesh(case_cords, truth_cords);
+  } catch (const std::invalid_argument& e) {
+    throw std::runtime_error(case_dir.string() + ": cords.json, truth/cords.json: " + e.what());
   }
-  CordSet result = seed;
-  result.tips = true_set.tips;
-  for (std::size_t i = 0; i < cords.size(); ++i) {
-    // true_rest_length_mm = true_scale_of_case_seed * case seed rest length (truth.json).
-    result.cords[i].rest_length = cords[i].at("true_rest_length_mm").get<double>();
-  }
-  return result;
 }
 
 // Distance (mm) of each cord's attachment, in the TRUE closed state, from the nearest
@@ -392,9 +388,8 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
     } else {
       cords_file = case_dir / "cords.json";
       if (job.method == Method::kTruth) {
-        const json truth = readJsonFile(case_dir / "truth" / "truth.json");
         cords_file = run_dir / "true_cords_on_case_mesh.json";
-        writeCordSet(cords_file, trueCordsOnCaseMesh(case_dir, truth));
+        writeCordSet(cords_file, trueCordsOnCaseMesh(case_dir));
         const fs::path floor_file = case_dir / "truth" / "metrics.json";
         result["noise_floor"] = tableMetrics(readJsonFile(floor_file), floor_file);
       }

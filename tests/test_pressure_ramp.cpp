@@ -7,13 +7,11 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
-#include <fstream>
-
-#include <nlohmann/json.hpp>
 
 #include "core/cordset_io.h"
 #include "core/metrics.h"
 #include "core/simulator.h"
+#include "core/synthetic_case.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -21,28 +19,13 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The case's cords (the truth's attachment points on the case mesh) with the true rest lengths
-// (truth.json) and the true PM tips (truth/cords.json), as experiments/ closes them.
-CordSet trueCordsOnCaseMesh(const ValveCase& valve_case, const fs::path& case_dir) {
-  std::ifstream in(case_dir / "truth" / "truth.json");
-  const nlohmann::json truth = nlohmann::json::parse(in);
-  Diagnostics diagnostics;
-  CordSet true_set;
-  if (!readCordSet(case_dir / "truth" / "cords.json", "truth/cords.json", true_set, diagnostics))
-    throw std::runtime_error("truth/cords.json unreadable");
-  CordSet cords = *valve_case.cords;
-  cords.tips = true_set.tips;
-  const nlohmann::json& true_cords = truth.at("cords");
-  if (true_cords.size() != cords.cords.size()) throw std::runtime_error("cord count differs");
-  for (std::size_t i = 0; i < cords.cords.size(); ++i)
-    cords.cords[i].rest_length = true_cords[i].at("true_rest_length_mm").get<double>();
-  return cords;
-}
-
 TEST(PressureRamp, SlowRampLetsTheTrueCordsMakeTheFlapOnTheCaseMesh) {
   const testing::BundledCase bundled = testing::bundledCase("prolapse-P2");
-  const CordSet truth_cords =
-      trueCordsOnCaseMesh(bundled.valve_case, fs::path(CHORDFIT_CASES_DIR) / "prolapse-P2");
+  Diagnostics diagnostics;
+  CordSet true_set;
+  ASSERT_TRUE(readCordSet(fs::path(CHORDFIT_CASES_DIR) / "prolapse-P2" / "truth" / "cords.json",
+                          "truth/cords.json", true_set, diagnostics));
+  const CordSet truth_cords = trueCordsOnCaseMesh(*bundled.valve_case.cords, true_set);
   ASSERT_EQ(bundled.settings.ramp_ms, SimulationSettings{}.ramp_ms) << "the case sets no ramp";
 
   SimulationSettings fast = bundled.settings;
