@@ -37,6 +37,7 @@ options:
   --seeds LIST       patient seeds, comma-separated (default 1,2,3)
   --edge MM          case mesh edge; the truth mesh is half of it (default 3)
   --max-steps N      truth step cap (default that of make-case, 6000)
+  --ramp MS          truth pressure ramp (default that of make-case, 6 ms)
 
 KEY=VALUE changes the preset before the cases are made:
   normal=S           normal cord scale (kNormalCordScale)
@@ -142,6 +143,11 @@ int main(int argc, char** argv) {
         return usageError("--max-steps: expected a positive integer");
       }
       settings.max_steps = static_cast<int>(value);
+    } else if (arg == "--ramp") {
+      if (!has_value || !parseNumber(argv[++i], value) || !(value > 0.0)) {
+        return usageError("--ramp: expected a positive duration in ms");
+      }
+      settings.ramp_ms = value;
     } else if (const std::string problem = applySetting(arg, preset); !problem.empty()) {
       return usageError(problem);
     }

@@ -331,7 +331,8 @@ TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
 // with a changed preset value; bad keys, presets and values exit 2 naming the problem.
 TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
   const fs::path tool = runnerPath().parent_path() / "calibrate_cohort";
-  auto r = testing::runProgram(tool, "normal-1 --seeds 1 --edge 3 --max-steps 1500 normal=0.8");
+  auto r =
+      testing::runProgram(tool, "normal-1 --seeds 1 --edge 3 --max-steps 1500 --ramp 8 normal=0.8");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = lines(r.out);
   ASSERT_EQ(rows.size(), 3u) << r.out;
@@ -344,7 +345,9 @@ TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
            {"normal-3", "unknown preset \"normal-3\""},
            {"normal-1 --edge 0", "--edge: expected a positive length"},
            {"normal-1 --seeds 1,1.5", "--seeds: expected positive integers, got \"1.5\""},
-           {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"}}) {
+           {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"},
+           {"normal-1 --ramp -1", "--ramp: expected a positive duration"},
+           {"normal-1 --ramp", "--ramp: expected a positive duration"}}) {
     r = testing::runProgram(tool, arguments);
     EXPECT_EQ(r.exit_code, 2) << arguments;
     EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
