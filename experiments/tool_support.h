@@ -1,4 +1,5 @@
-// Pieces shared by the small experiment tools (calibrate_cohort, mesh_convergence): argument
+// Pieces shared by the small experiment tools (calibrate_cohort, mesh_convergence,
+// coarse_start): argument
 // parsing by hand (CLI11 is confined to tools/main.cpp for build time) and table cells.
 #pragma once
 

@@ -386,5 +386,36 @@ TEST(MeshConvergence, MeasuresACoarserMeshAgainstTheReferenceAndRejectsBadArgume
   }
 }
 
+// coarse_start (docs/performance.md, "Coarse-to-fine start"): the same valve closed cold and
+// warm-started from a coarser mesh's closure; on normal-1 seed 2 at edge 1.5 mm both land on
+// the same closed state. Bad arguments exit 2 naming the problem.
+TEST(CoarseStart, ClosesTheValveBothWaysAndRejectsBadArguments) {
+  const fs::path tool = runnerPath().parent_path() / "coarse_start";
+  auto r = testing::runProgram(tool, "normal-1 --seeds 2 --edge 1.5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = lines(r.out);
+  ASSERT_EQ(rows.size(), 3u) << r.out;
+  EXPECT_EQ(rows[0].rfind("| Seed | Vertices fine / coarse |", 0), 0u) << rows[0];
+  const auto cells = markdownCells(rows[2]);
+  ASSERT_GE(cells.size(), 11u) << rows[2];
+  const int fine = std::stoi(cells[2]);
+  const int coarse = std::stoi(cells[2].substr(cells[2].find('/') + 1));
+  EXPECT_LT(coarse, fine / 2) << "the coarse mesh has about a quarter of the vertices";
+  for (int column : {3, 4, 6})
+    EXPECT_EQ(cells[column].find("cap"), std::string::npos) << "every closure settles: " << rows[2];
+  const double apart_max = std::stod(cells[8].substr(cells[8].find('/') + 1));
+  EXPECT_LT(apart_max, 0.05) << "both starts reach the same closed state here: " << rows[2];
+  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
+           {"normal-3", "unknown preset \"normal-3\""},
+           {"normal-1 --ratio 1", "--ratio: expected a number in (1, 4]"},
+           {"normal-1 --edge 0.1", "--edge: expected a length in [0.3, 5] mm"},
+           {"normal-1 --seeds x", "--seeds: expected positive integers"},
+           {"normal-1 --foo", "unknown argument \"--foo\""}}) {
+    r = testing::runProgram(tool, arguments);
+    EXPECT_EQ(r.exit_code, 2) << arguments;
+    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace chordfit
