@@ -1,6 +1,6 @@
 // Pieces shared by the small experiment tools (calibrate_cohort, mesh_convergence,
-// coarse_start): argument
-// parsing by hand (CLI11 is confined to tools/main.cpp for build time) and table cells.
+// coarse_start): argument parsing by hand (CLI11 is confined to tools/main.cpp for build time)
+// and table cells.
 #pragma once
 
 #include <cmath>
