@@ -94,6 +94,11 @@ ValveParameters enlargedP2Anatomy() {
   return p;
 }
 
+// Commissures 11 mm (10 until 2026-11-25, ninth session): with 10, seed 2 (AP 34.9 mm, A2
+// 29.2 mm) lifted A1 to 2.35 mm beside its A2 at edge 2.5 mm; with 11 the three seeds prolapse
+// in A2 and P2 alone at edges 3 and 2.5 mm (A1 1.0 mm on seed 2), also with the 10 ms ramp.
+// Tried alongside: closed contraction 0.85/0.95, P1/P3 14/16 mm, clefts 0.6, closed saddle
+// 4/5 mm, commissures 9, 10.5, 11.5 (experiments/README.md, "Calibration").
 ValveParameters barlowAnatomy() {
   ValveParameters p;
   p.ap_diameter_mm = 34.0;
@@ -103,7 +108,7 @@ ValveParameters barlowAnatomy() {
   p.anterior_height_mm = 28.0;
   p.posterior_height_mm = 19.0;
   p.posterior_side_height_mm = 15.0;
-  p.commissural_height_mm = 10.0;
+  p.commissural_height_mm = 11.0;
   return p;
 }
 

@@ -3,6 +3,7 @@
 // default drag, and leave a closure that settles earlier bit-identical.
 #include <gtest/gtest.h>
 
+#include "core/cohort_presets.h"
 #include "core/simulator.h"
 #include "core/synthetic_case.h"
 #include "tests/test_support.h"
@@ -16,14 +17,19 @@ SimulationSettings withoutLateDrag(SimulationSettings settings) {
   return settings;
 }
 
-// The bileaflet truth of seed 1 at case edge 3 mm (truth mesh 1.5 mm, tight truth settings):
-// its P2 flap swings until the 6,000-step cap under the default drag, and settles at 2,958
-// steps with the late drag (measured 2026-11-25). The bundled quick-start case with the
-// heuristic cords swung too until the contacts' impulses were carried only in part
+// The bileaflet truth of seed 1 at case edge 3 mm (truth mesh 1.5 mm, tight truth settings),
+// with the preset's commissures as they were until 2026-11-25 (10 mm; 11 since): its P2 flap
+// swings until the 6,000-step cap under the default drag, and settles at 2,958 steps with the
+// late drag (measured 2026-11-25). With the 11 mm commissures it settles at 1,036 steps,
+// before the late drag starts. The bundled quick-start case with the heuristic cords swung
+// too until the contacts' impulses were carried only in part
 // (SimulationSettings::contact_impulse_carry); it now settles in ~300 steps either way.
 TEST(LateDrag, SettlesAFlapThatSwingsWithoutIt) {
   SyntheticCaseOptions options;
   options.preset = "bileaflet";
+  CohortPreset swinging_preset = *findCohortPreset("bileaflet");
+  swinging_preset.anatomy.commissural_height_mm = 10.0;
+  options.custom_preset = swinging_preset;
   options.seed = 1;
   options.edge_mm = 3.0;
   const SyntheticCase bileaflet = makeSyntheticCase(options);
