@@ -581,6 +581,21 @@ TEST(CohortCalibration, P3TruthProlapsesInP3Only) {
   EXPECT_GT(s.truth_metrics.mesh_prolapse.max_height_mm, 3.0) << describe(s);
 }
 
+// bileaflet seed 2 at the benchmark's edge 2.5 mm: with the preset's commissures at 10 mm its
+// A1 rose to 2.35 mm beside A2 (a larger, taller valve than seeds 1 and 3); with 11 mm it stays
+// at ~1 mm (experiments/README.md, "Calibration").
+TEST(CohortCalibration, BileafletSeed2ProlapsesInA2AndP2AloneAtTheBenchmarkEdge) {
+  SyntheticCaseOptions options;
+  options.preset = "bileaflet";
+  options.seed = 2;
+  options.edge_mm = 2.5;
+  options.tracing.planes = 1;
+  const SyntheticCase s = makeSyntheticCase(options);
+  EXPECT_EQ(s.truth_metrics.mesh_prolapse.segments, (std::vector<std::string>{"A2", "P2"}))
+      << describe(s);
+  EXPECT_LT(s.truth_metrics.mesh_prolapse.segment_max_height_mm.at("A1"), 1.5) << describe(s);
+}
+
 // Every preset, seeds 1-3 (~10-20 s): the calibration of experiments/README.md holds. Guards it
 // against simulator and generator changes. The one known miss, prolapse-P3 seed 1, lifts A3
 // as well as P3; for it the intended segment must still be among the prolapsing ones.
