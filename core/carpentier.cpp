@@ -22,6 +22,25 @@ double lateralCoordinate(const AnnulusFrame& frame, const Eigen::Vector3d& p) {
   return frame.l.dot(p - frame.plane.centre);
 }
 
+// In-plane coordinates (a, l) of p about the annulus centre.
+Eigen::Vector2d inPlane(const AnnulusFrame& frame, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - frame.plane.centre;
+  return {frame.a.dot(d), frame.l.dot(d)};
+}
+
+// The point of the polyline `run` where the angle swept from its start (`swept`, one value per
+// point) first reaches `target`, linear between points; the last point if it never does.
+Eigen::Vector3d ringPointAtSweep(const std::vector<Eigen::Vector3d>& run,
+                                 const std::vector<double>& swept, double target) {
+  for (std::size_t k = 1; k < run.size(); ++k) {
+    const double lo = std::min(swept[k - 1], swept[k]), hi = std::max(swept[k - 1], swept[k]);
+    if (target < lo || target > hi) continue;
+    const double t = hi > lo ? (target - swept[k - 1]) / (swept[k] - swept[k - 1]) : 0.0;
+    return (1.0 - t) * run[k - 1] + t * run[k];
+  }
+  return run.back();
+}
+
 // Position of p along an arc as a fraction of its sweep (0 at theta_start, 1 at the far end);
 // outside the arc the fraction is < 0 or > 1, measured toward the nearer end.
 double arcFraction(const LeafletArc& arc, double theta) {
@@ -73,17 +92,30 @@ SegmentMap buildSegmentMap(const Eigen::MatrixXd& ring_positions, const ValveMes
     int j = i;
     while (j + 1 < first + n && label(j + 1) == run_label) ++j;
     // Commissures: midpoints of the ring edges where the label changes.
-    const Eigen::Vector3d start = 0.5 * (point(i - 1) + point(i));
-    const Eigen::Vector3d end = 0.5 * (point(j) + point(j + 1));
-    double sweep = wrapPi(annulusAngle(frame, point(i)) - annulusAngle(frame, start));
-    for (int k = i; k < j; ++k) {
-      sweep += wrapPi(annulusAngle(frame, point(k + 1)) - annulusAngle(frame, point(k)));
+    // The run from commissure to commissure and the angle swept up to each of its points.
+    std::vector<Eigen::Vector3d> run{0.5 * (point(i - 1) + point(i))};
+    for (int k = i; k <= j; ++k) run.push_back(point(k));
+    run.push_back(0.5 * (point(j) + point(j + 1)));
+    std::vector<double> swept{0.0};
+    for (std::size_t k = 1; k < run.size(); ++k) {
+      swept.push_back(swept.back() +
+                      wrapPi(annulusAngle(frame, run[k]) - annulusAngle(frame, run[k - 1])));
     }
-    sweep += wrapPi(annulusAngle(frame, end) - annulusAngle(frame, point(j)));
+    const Eigen::Vector3d& start = run.front();
+    const Eigen::Vector3d& end = run.back();
+    const double sweep = swept.back();
     LeafletArc arc{run_label, annulusAngle(frame, start), sweep};
+    arc.commissure_start = inPlane(frame, start);
+    arc.commissure_end = inPlane(frame, end);
+    for (int third = 0; third < 2; ++third) {
+      arc.ring_third[third] =
+          inPlane(frame, ringPointAtSweep(run, swept, sweep * (third + 1) / 3.0));
+    }
     if (lateralCoordinate(frame, end) > lateralCoordinate(frame, start)) {
       arc.theta_start = annulusAngle(frame, end);
       arc.sweep = -sweep;
+      std::swap(arc.commissure_start, arc.commissure_end);
+      std::swap(arc.ring_third[0], arc.ring_third[1]);
     }
     map.arcs.push_back(arc);
     i = j + 1;
@@ -141,6 +173,37 @@ int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
   const ArcPosition position = arcPositionOf(map, p, leaflet);
   if (position.leaflet < 0) return -1;
   const int index = std::min(2, static_cast<int>(position.fraction * 3.0));
+  return position.leaflet * 3 + index;
+}
+
+namespace {
+
+double cross2(const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+  return u.x() * v.y() - u.y() * v.x();
+}
+
+}  // namespace
+
+int closedSegmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
+  const ArcPosition position = arcPositionOf(map, p, leaflet);
+  if (position.leaflet < 0) return -1;
+  const LeafletArc* arc = nullptr;
+  for (const LeafletArc& a : map.arcs)
+    if (a.leaflet == position.leaflet) arc = &a;
+  const Eigen::Vector2d chord = arc->commissure_end - arc->commissure_start;
+  if (chord.norm() < 1e-9) return segmentOf(map, p, leaflet);
+  const Eigen::Vector2d q = inPlane(map.frame, p);
+  int index = 0;
+  for (int k = 0; k < 2; ++k) {
+    // Boundary k: ring point at (k + 1)/3 of the arc -> point at (k + 1)/3 of the chord. The
+    // start commissure lies on the side of segment 0; past the boundary means the other side.
+    const Eigen::Vector2d& from = arc->ring_third[k];
+    Eigen::Vector2d direction = arc->commissure_start + chord * ((k + 1) / 3.0) - from;
+    if (direction.norm() < 1e-9) direction = Eigen::Vector2d(-chord.y(), chord.x());
+    const double start_side = cross2(direction, arc->commissure_start - from);
+    if (cross2(direction, q - from) * start_side > 0.0) break;
+    index = k + 1;
+  }
   return position.leaflet * 3 + index;
 }
 

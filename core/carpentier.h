@@ -20,6 +20,11 @@ struct LeafletArc {
   int leaflet = 0;
   double theta_start = 0.0;  // angle (rad) of the end nearer the anterolateral side
   double sweep = 0.0;        // signed angular extent from theta_start to the other end
+  // For closedSegmentOf, in the frame's in-plane coordinates (a, l) about the centre: the
+  // commissures at fraction 0 and 1, and the ring points at 1/3 and 2/3 of the sweep.
+  Eigen::Vector2d commissure_start = Eigen::Vector2d::Zero();
+  Eigen::Vector2d commissure_end = Eigen::Vector2d::Zero();
+  Eigen::Vector2d ring_third[2] = {Eigen::Vector2d::Zero(), Eigen::Vector2d::Zero()};
 };
 
 struct SegmentMap {
@@ -56,6 +61,19 @@ ArcPosition arcPositionOf(const SegmentMap& map, const Eigen::Vector3d& p, int l
 // If leaflet < 0 the leaflet whose arc contains the point's angle is used.
 // Returns a global segment id = leaflet * 3 + index, or -1 if the leaflet has no arc.
 int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet);
+
+// Segment id (as segmentOf) of a point of the CLOSED valve on leaflet `leaflet` (< 0: the
+// leaflet whose arc contains its angle), localised as the tracing reader and 3D echo
+// segmentation do: Carpentier's segments run from the annulus to the free edge, and in the
+// closed valve the free edges lie along the coaptation line between the commissures. So the
+// boundary between segments k and k + 1 is the straight line, in the annulus plane, from the
+// ring point at (k + 1)/3 of the leaflet's arc to the point at (k + 1)/3 of the chord between
+// its commissures (the coaptation line's straight approximation). segmentOf's rays from the
+// centre agree at the annulus but not near the coaptation line, where every point lies near
+// the commissure-to-commissure axis: a P2 flap billowing over the centre, cut by a plane 60 or
+// 90 degrees off the anteroposterior axis, would be read as P1 or P3. Falls back to segmentOf
+// for a leaflet that goes all round (no commissures).
+int closedSegmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet);
 
 // "A2", "P1", ...: first letter of the leaflet name, upper-cased, + (index + 1).
 std::string segmentName(const std::vector<std::string>& leaflet_names, int segment_id);

@@ -206,7 +206,7 @@ ProlapseResult prolapseOfLabelledPoints(const ClosedAnnulus& annulus, const Eige
                                         const ProlapseOptions& options) {
   Eigen::VectorXi segment_ids(points.rows());
   for (Eigen::Index i = 0; i < points.rows(); ++i) {
-    segment_ids(i) = segmentOf(annulus.segments, points.row(i).transpose(), leaflets(i));
+    segment_ids(i) = closedSegmentOf(annulus.segments, points.row(i).transpose(), leaflets(i));
   }
   return prolapseOfPoints(annulus, points, segment_ids, options);
 }

@@ -83,7 +83,8 @@ ClosedAnnulus closedAnnulus(const ValveCase& valve_case);
 ProlapseResult prolapseOfPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
                                 const Eigen::VectorXi& segment_ids, const ProlapseOptions& options);
 // Same, localising each point by its closed position and leaflet label (-1 = decide by
-// angle): what is known of a tracing point.
+// angle): what is known of a tracing point (closedSegmentOf: segments as strips from the
+// annulus to the coaptation line).
 ProlapseResult prolapseOfLabelledPoints(const ClosedAnnulus& annulus, const Eigen::MatrixXd& points,
                                         const Eigen::VectorXi& leaflets,
                                         const ProlapseOptions& options);
