@@ -125,8 +125,8 @@ struct ValveMetrics {
   // with tracings.
   bool prolapse_reconstructed = false;
   // The tissue judgement: mesh_prolapse.segments (every vertex, open-state localisation) ==
-  // tracing_prolapse.segments. A diagnostic: a flap leaning over the valve centre is P2 in
-  // the tissue and P1/P3 in the planes, so the truth itself can fail it.
+  // tracing_prolapse.segments. A diagnostic: the planes may miss the highest tissue or cut a
+  // neighbouring segment's bulge above the criterion, so the truth itself can fail it.
   bool tissue_prolapse_reconstructed = false;
   // Is the valve closed: the leaflets' projection onto the closed annulus plane against the
   // orifice the closed annulus vertices of the mesh enclose (orifice_coverage.h).
