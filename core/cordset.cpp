@@ -95,17 +95,6 @@ Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V) {
   return cord.point ? pointPosition(*cord.point, V) : Eigen::Vector3d(V.row(cord.vertex));
 }
 
-Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed) {
-  Eigen::VectorXd spans(static_cast<Eigen::Index>(set.cords.size()));
-  for (std::size_t c = 0; c < set.cords.size(); ++c) {
-    const Cord& cord = set.cords[c];
-    const PmTip& tip = set.tips.at(cord.tip);
-    const Eigen::Vector3d end = tip.closed_position ? *tip.closed_position : tip.position;
-    spans(static_cast<Eigen::Index>(c)) = (insertionPosition(cord, V_closed) - end).norm();
-  }
-  return spans;
-}
-
 int scaleAllCords(CordSet& set, double scale) {
   int changed = 0;
   for (Cord& cord : set.cords) changed += applyScale(cord, scale) ? 1 : 0;

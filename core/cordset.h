@@ -76,15 +76,8 @@ Eigen::Vector3d pointPosition(const CordPoint& point, const Eigen::MatrixXd& V);
 // Where a cord inserts on a mesh state V: its point, else its vertex.
 Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V);
 
-// Each cord's span in a closed state: |insertion - tip|, the tip at its closed position
-// (or its open one when it has none, as the simulator keeps it). A cord is slack there when
-// its span is below its rest length (paper eq. 1: no force), and then any rest length down to
-// its span closes the valve the same way: the closed state bounds a slack cord's length from
-// below only. #cords values, mm.
-Eigen::VectorXd closedSpans(const CordSet& set, const Eigen::MatrixXd& V_closed);
-
-// Slack by more than this at the closed state (mm): an inextensible taut cord ends within the
-// solver's tolerance of its rest length, far inside it.
+// Slack by more than this at the closed state (closedSpans, cord_insertion.h; mm): an inextensible
+// taut cord ends within the solver's tolerance of its rest length, far inside it.
 constexpr double kSlackMarginMm = 0.01;
 
 // Editing, as in the paper's editor: a scale multiplies the seed rest length. Edited cords

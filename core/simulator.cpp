@@ -13,6 +13,7 @@
 
 #include "core/annulus_plane.h"
 #include "core/contact.h"
+#include "core/cord_insertion.h"
 #include "core/json_fields.h"
 #include "core/mesh_topology.h"
 #include "core/xpbd_constraints.h"
@@ -171,13 +172,17 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
   for (const auto& cord : m.cords) {
     CordConstraint c;
     c.tip = cord.tip, c.rest = cord.rest_length, c.compliance = cord.compliance;
+    std::vector<int> point_vertices{cord.vertex};
+    std::vector<double> point_weights{1.0};
     if (cord.point) {
-      c.count = 3, c.vertices = cord.point->vertices;
-      for (int m = 0; m < 3; ++m) c.weights[m] = cord.point->weights(m);
-    } else {
-      c.count = 1, c.vertices = {cord.vertex, cord.vertex, cord.vertex}, c.weights = {1.0, 0, 0};
+      point_vertices.assign(cord.point->vertices.begin(), cord.point->vertices.end());
+      point_weights = {cord.point->weights(0), cord.point->weights(1), cord.point->weights(2)};
     }
-    sys.cords.push_back(c);
+    CordInsertionWeights insertion = cordInsertionWeights(
+        m.V_rest, m.F, point_vertices, point_weights, s.cord_insertion_radius_mm);
+    c.vertices = std::move(insertion.vertices);
+    c.weights = std::move(insertion.weights);
+    sys.cords.push_back(std::move(c));
   }
   // Independent consecutive constraints (see orderByColour); cords and contacts touch one
   // or few leaflet vertices each and stay in input order.
@@ -246,6 +251,10 @@ class Stepper {
         dt_(dt),
         inv_dt2_(1.0 / (dt * dt)),
         max_step_(max_step),
+        // A spread insertion pulled by the whole excess of a far over-stretched cord (the
+        // cohort's, in the open state) moves as a block in one sweep and tears the mesh apart
+        // (the fine normal-1 truth diverged at step 36); a point insertion is left as it was.
+        max_cord_pull_(settings.cord_insertion_radius_mm > 0.0 ? max_step : 0.0),
         drag_decay_(dragDecay(dt, settings.drag_time_ms)),
         warm_(settings.warm_start_lambda),
         x_(3 * n_),
@@ -409,7 +418,8 @@ class Stepper {
       projectBending(sys_.bends, inv_dt2_, x, w, lambda_bends_.data(), acc);
       projectAreaFloors(sys_.area_floors, x, w, lambda_floors_.data(), acc);
       projectContacts(contacts_, x, w, lambda_contacts_.data(), contact_acc);
-      projectCords(sys_.cords, inv_dt2_, tips_.data(), x, w, lambda_cords_.data(), acc);
+      projectCords(sys_.cords, inv_dt2_, tips_.data(), x, w, lambda_cords_.data(), acc,
+                   max_cord_pull_);
     }
     // Area floors are checked every sweep but not counted: ns per projection stays comparable
     // with the measurements made before the floor existed (docs/performance.md), and can
@@ -495,7 +505,7 @@ class Stepper {
   const SimulationSettings& settings_;
   const System sys_;
   const int n_;
-  const double dt_, inv_dt2_, max_step_;
+  const double dt_, inv_dt2_, max_step_, max_cord_pull_;
   double drag_decay_;
   const bool warm_;
   std::vector<double> x_, x_prev_, v_, force_;
@@ -789,6 +799,7 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"contact_margin_mm", s.contact_margin_mm, 0.0, false, 10.0},
       {"contact_exclusion_mm", s.contact_exclusion_mm, 0.0, false, 100.0},
       {"area_floor_fraction", s.area_floor_fraction, 0.0, false, 0.99},
+      {"cord_insertion_radius_mm", s.cord_insertion_radius_mm, 0.0, false, 20.0},
       {"iterations", static_cast<double>(s.iterations), 1.0, false, 1000.0},
       {"window", static_cast<double>(s.window), 1.0, false, 1e6},
       {"max_steps", static_cast<double>(s.max_steps), 1.0, false, 1e8},
@@ -862,6 +873,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
       {"contact_margin_mm", &s.contact_margin_mm},
       {"contact_exclusion_mm", &s.contact_exclusion_mm},
       {"area_floor_fraction", &s.area_floor_fraction},
+      {"cord_insertion_radius_mm", &s.cord_insertion_radius_mm},
   };
   struct IntKey {
     const char* key;

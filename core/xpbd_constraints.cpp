@@ -265,17 +265,18 @@ void areaFloorSweep(const std::vector<AreaConstraint>& constraints, double* x, c
 
 template <bool kAcc>
 void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, const double* tips,
-               double* x, const double* w, double* lambda, double* acc) {
+               double* x, const double* w, double* lambda, double* acc, double max_pull) {
   const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const CordConstraint& k = constraints[c];
+    const int count = static_cast<int>(k.vertices.size());
     double denominator = 0.0;
     Vec3 xv = Vec3::Zero();
-    if (k.count == 1) {
+    if (count == 1) {
       denominator = w[k.vertices[0]];
       xv = at(x, k.vertices[0]);
     } else {
-      for (int m = 0; m < k.count; ++m) {
+      for (int m = 0; m < count; ++m) {
         denominator += k.weights[m] * k.weights[m] * w[k.vertices[m]];
         xv += k.weights[m] * at(x, k.vertices[m]);
       }
@@ -289,17 +290,19 @@ void cordSweep(const std::vector<CordConstraint>& constraints, double inv_dt2, c
     if (C < 0.0 && lambda[c] == 0.0) continue;  // slack: k^CT = 0 (paper eq. 1)
     const double alpha = k.compliance * inv_dt2;
     double dl = (-C - alpha * lambda[c]) / (denominator + alpha);
+    // The insertion moves by dl * denominator along n: at most max_pull toward the tip.
+    if (max_pull > 0.0 && -dl * denominator > max_pull) dl = -max_pull / denominator;
     // A cord only pulls: accumulated lambda stays <= 0.
     const double total = std::min(lambda[c] + dl, 0.0);
     dl = total - lambda[c];
     lambda[c] = total;
     const Vec3 g = d / len;
-    if (k.count == 1) {
+    if (count == 1) {
       at(x, k.vertices[0]) += (w[k.vertices[0]] * dl) * g;
       if (kAcc) accumulate(acc, k.vertices[0], g, total);
       continue;
     }
-    for (int m = 0; m < k.count; ++m) {
+    for (int m = 0; m < count; ++m) {
       at(x, k.vertices[m]) += (k.weights[m] * w[k.vertices[m]] * dl) * g;
       if (kAcc) accumulate(acc, k.vertices[m], k.weights[m] * g, total);
     }
@@ -420,11 +423,12 @@ void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2
 }
 
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
-                  const double* tips, double* x, const double* w, double* lambda, double* acc) {
+                  const double* tips, double* x, const double* w, double* lambda, double* acc,
+                  double max_pull) {
   if (acc)
-    cordSweep<true>(constraints, inv_dt2, tips, x, w, lambda, acc);
+    cordSweep<true>(constraints, inv_dt2, tips, x, w, lambda, acc, max_pull);
   else
-    cordSweep<false>(constraints, inv_dt2, tips, x, w, lambda, acc);
+    cordSweep<false>(constraints, inv_dt2, tips, x, w, lambda, acc, max_pull);
 }
 
 void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,

@@ -66,16 +66,17 @@ struct AreaConstraint {
 //
 // Paper eq. 1: C = |x_v - tip| - rest, active only when C >= 0 (the cord pulls, never
 // pushes). The tip is Dirichlet: its position is read from a separate array, never moved.
-// The insertion x_v is a leaflet vertex or a point between vertices, x_v = sum_m b_m x_m
-// (barycentric, core/cordset.h CordPoint); then grad_m C = b_m n, n = (x_v - tip) / |x_v - tip|,
-// and the XPBD update (Macklin et al. 2016, eq. 18) is
+// The insertion x_v is a leaflet vertex or a weighted mean of vertices, x_v = sum_m b_m x_m
+// (a point of a triangle, core/cordset.h CordPoint, or a patch around it, cord_insertion.h);
+// then grad_m C = b_m n, n = (x_v - tip) / |x_v - tip|, and the XPBD update (Macklin et al.
+// 2016, eq. 18) is
 //   dlambda = (-C - alpha lambda) / (sum_m b_m^2 w_m + alpha),  dx_m = b_m w_m n dlambda,
-// which is the one-vertex update when the insertion is a vertex (count 1, b_0 = 1).
+// which is the one-vertex update when the insertion is a vertex (one vertex, b_0 = 1). The
+// cord's tension acts on vertex m as the force b_m T n.
 struct CordConstraint {
-  int tip = 0;                      // index into the tip position array
-  int count = 1;                    // 1: at vertices[0]; 3: between vertices[0..2]
-  std::array<int, 3> vertices{};    // leaflet vertices
-  std::array<double, 3> weights{};  // b_m >= 0, sum 1
+  int tip = 0;                  // index into the tip position array
+  std::vector<int> vertices;    // leaflet vertices of the insertion (>= 1)
+  std::vector<double> weights;  // b_m >= 0, sum 1, one per vertex
   double rest = 0.0;
   double compliance = 0.0;
 };
@@ -112,9 +113,12 @@ void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2
 void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
                        double* lambda, double* acc = nullptr);
 // tips: flat tip positions tips[3 * t + d].
+// max_pull > 0: one projection moves a cord's insertion by at most max_pull toward its tip
+// (dlambda clamped to -max_pull / sum_m b_m^2 w_m): no insertion is dragged across the mesh in
+// one sweep, and as dlambda vanishes at equilibrium the equilibrium is the same.
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
                   const double* tips, double* x, const double* w, double* lambda,
-                  double* acc = nullptr);
+                  double* acc = nullptr, double max_pull = 0.0);
 void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
                      double* lambda, double* acc = nullptr);
 

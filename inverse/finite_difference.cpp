@@ -36,8 +36,9 @@ bool sameTip(const PmTip& a, const PmTip& b) {
 // True when every cord that `perturbed` changes against `base` (rest length or tip) is slack
 // at `closed` by more than `margin`.
 bool onlySlackCordsChange(const CordSet& base, const CordSet& perturbed,
+                          const std::vector<CordInsertionWeights>& insertions,
                           const Eigen::MatrixXd& closed, double margin) {
-  const Eigen::VectorXd spans = closedSpans(perturbed, closed);
+  const Eigen::VectorXd spans = closedSpans(perturbed, insertions, closed);
   for (std::size_t c = 0; c < perturbed.cords.size(); ++c) {
     const Cord& now = perturbed.cords[c];
     const Cord& before = base.cords[c];
@@ -50,8 +51,9 @@ bool onlySlackCordsChange(const CordSet& base, const CordSet& perturbed,
 
 }  // namespace
 
-std::vector<bool> slackParameters(const FitParameterization& parameters, const Eigen::VectorXd& x,
-                                  const Eigen::MatrixXd& base_closed,
+std::vector<bool> slackParameters(const FitParameterization& parameters,
+                                  const std::vector<CordInsertionWeights>& insertions,
+                                  const Eigen::VectorXd& x, const Eigen::MatrixXd& base_closed,
                                   const FiniteDifferenceOptions& options) {
   const int n = static_cast<int>(x.size());
   std::vector<bool> slack(n, false);
@@ -62,8 +64,8 @@ std::vector<bool> slackParameters(const FitParameterization& parameters, const E
     for (double sign : {1.0, -1.0}) {
       Eigen::VectorXd xp = x;
       xp(p) += sign * stepOf(parameters, p, options);
-      all = all &&
-            onlySlackCordsChange(base, parameters.apply(xp), base_closed, options.slack_margin_mm);
+      all = all && onlySlackCordsChange(base, parameters.apply(xp), insertions, base_closed,
+                                        options.slack_margin_mm);
     }
     slack[p] = all;
   }
@@ -75,7 +77,8 @@ JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const 
                                          const FiniteDifferenceOptions& options) {
   const int n = static_cast<int>(x.size());
   const FitParameterization& parameters = residual.parameters();
-  const std::vector<bool> slack = slackParameters(parameters, x, base_closed, options);
+  const std::vector<bool> slack =
+      slackParameters(parameters, residual.cordInsertions(), x, base_closed, options);
   std::vector<int> simulated;  // parameters whose columns need closures
   for (int p = 0; p < n; ++p)
     if (!slack[p]) simulated.push_back(p);

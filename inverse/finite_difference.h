@@ -65,9 +65,12 @@ JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const 
 
 // Per parameter: true when both of its perturbations (x +- step) change only cords whose span
 // at base_closed stays below their perturbed rest length by more than the margin (closedSpans,
-// cordset.h), so its column is exactly zero. All false without skip_slack.
-std::vector<bool> slackParameters(const FitParameterization& parameters, const Eigen::VectorXd& x,
-                                  const Eigen::MatrixXd& base_closed,
+// cord_insertion.h, with the cords' insertions as the closures spread them:
+// ForwardResidual::cordInsertions), so its column is exactly zero. All false without
+// skip_slack.
+std::vector<bool> slackParameters(const FitParameterization& parameters,
+                                  const std::vector<CordInsertionWeights>& insertions,
+                                  const Eigen::VectorXd& x, const Eigen::MatrixXd& base_closed,
                                   const FiniteDifferenceOptions& options);
 
 // Runs task(i) for i in [0, count) on `threads` threads (work stealing by an atomic counter).

@@ -135,6 +135,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
       cord.provenance = Provenance::kFitted;
     }
   }
+  outcome.closed_spans = closedSpans(outcome.fitted, residual.cordInsertions(), best->closed_V);
   outcome.unsettled_sims = seed_residual.unsettledClosures() + residual.unsettledClosures();
   outcome.seconds = seconds();
   if (options.uncertainty && parameters.size() > 0) {

@@ -51,7 +51,10 @@ struct FitOutcome {
   CordSet fitted;     // provenance kFitted where the rest length differs from the seed
   ForwardEvaluation seed_evaluation;   // full closure of the seed
   ForwardEvaluation final_evaluation;  // full closure of the fitted set
-  double prefit_factor = 1.0;          // common factor of the global pre-fit, then per kind:
+  // Each fitted cord's span there (closedSpans, cord_insertion.h): below its rest length by
+  // more than kSlackMarginMm = slack.
+  Eigen::VectorXd closed_spans;
+  double prefit_factor = 1.0;  // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
   std::vector<std::string> tissue_prefit_changes;   // "A2 0.1", per accepted segment

@@ -76,7 +76,8 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::jacobian(const Eigen::Vecto
 int FitObjective::jacobianSims(const Eigen::VectorXd& x) {
   const auto base = cached(x);
   if (!base || !base->ok()) return jacobianSims();
-  const std::vector<bool> slack = slackParameters(residual_.parameters(), x, base->closed_V, fd_);
+  const std::vector<bool> slack =
+      slackParameters(residual_.parameters(), residual_.cordInsertions(), x, base->closed_V, fd_);
   return 2 * static_cast<int>(std::count(slack.begin(), slack.end(), false));
 }
 

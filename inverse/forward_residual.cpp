@@ -44,6 +44,8 @@ ForwardResidual::ForwardResidual(const ValveCase& valve_case, const FitParameter
     : case_(valve_case),
       parameters_(parameters),
       settings_(settings),
+      insertions_(chordfit::cordInsertions(valve_case.mesh, parameters.apply(parameters.initial()),
+                                           settings.cord_insertion_radius_mm)),
       options_(options),
       face_leaflets_(faceLeaflets(valve_case.mesh.F, valve_case.mesh.leaflet)),
       sections_(valve_case, options.section),

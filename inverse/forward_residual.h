@@ -43,6 +43,7 @@
 #include <Eigen/Core>
 
 #include "core/case_data.h"
+#include "core/cord_insertion.h"
 #include "core/section_mismatch.h"
 #include "core/simulator.h"
 #include "inverse/fit_parameters.h"
@@ -88,6 +89,8 @@ class ForwardResidual {
                   const SimulationSettings& settings, const ResidualOptions& options);
 
   const ValveCase& valveCase() const { return case_; }
+  // Where each cord inserts, as the closures spread it (cord_insertion.h; the same for every x).
+  const std::vector<CordInsertionWeights>& cordInsertions() const { return insertions_; }
   const FitParameterization& parameters() const { return parameters_; }
   // Data residuals: pointCount() tracing-point distances (Huber loss), then the section
   // residuals (no loss).
@@ -131,6 +134,7 @@ class ForwardResidual {
   const ValveCase& case_;
   const FitParameterization& parameters_;
   SimulationSettings settings_;
+  std::vector<CordInsertionWeights> insertions_;
   ResidualOptions options_;
   Eigen::MatrixXd tracing_points_;
   Eigen::VectorXi tracing_leaflets_;  // per point, -1 unlabelled

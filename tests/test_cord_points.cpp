@@ -11,6 +11,7 @@
 
 #include "core/case_io.h"
 #include "core/cord_attachments.h"
+#include "core/cord_insertion.h"
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
@@ -158,7 +159,8 @@ TEST(CordPointSimulation, TautPointCordsEndAtTheirRestLength) {
   for (Cord& cord : shorter.cords) cord.rest_length *= 0.8;  // the cohort's cords are ~0.8
   const SimulationResult r = simulateClosure(valve_case, shorter, SimulationSettings{});
   ASSERT_TRUE(r.ok()) << r.error;
-  const Eigen::VectorXd spans = closedSpans(shorter, r.V);
+  const Eigen::VectorXd spans =
+      closedSpans(shorter, cordInsertions(valve_case.mesh, shorter, 0.0), r.V);
   int taut = 0;
   for (std::size_t c = 0; c < shorter.cords.size(); ++c) {
     if (r.cord_force(static_cast<Eigen::Index>(c)) <= 0.0) {

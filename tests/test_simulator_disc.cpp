@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "core/cord_insertion.h"
 #include "core/simulator.h"
 #include "tests/test_xpbd_disc.h"
 
@@ -27,17 +28,36 @@ bool bitIdentical(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
          std::memcmp(a.data(), b.data(), sizeof(double) * a.size()) == 0;
 }
 
-TEST(SimulatorCords, StretchedInextensibleCordHoldsItsVertexAtRestLengthUnderFullPressure) {
-  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+// Where the cord at the centre vertex inserts in `V`: the weighted mean of its insertion patch
+// (cord_insertion.h), the vertex itself when the radius is 0.
+Eigen::Vector3d centreInsertion(const SimulationModel& model, const SimulationSettings& settings,
+                                const Eigen::MatrixXd& V) {
+  const CordInsertionWeights w =
+      cordInsertionWeights(model.V_rest, model.F, {0}, {1.0}, settings.cord_insertion_radius_mm);
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();
+  for (std::size_t m = 0; m < w.vertices.size(); ++m)
+    point += w.weights[m] * V.row(w.vertices[m]).transpose();
+  return point;
+}
+
+TEST(SimulatorCords, StretchedInextensibleCordHoldsItsInsertionAtRestLengthUnderFullPressure) {
   // Without the cord the centre bulges ~1.6 mm toward +z; the cord from the tip 10 mm below
-  // allows 0.5 mm.
-  model.cords.push_back({0, 0, 10.5, 0.0, std::nullopt});
-  const SimulationResult result = simulate(model, discSettings());
-  ASSERT_TRUE(result.ok()) << result.error;
-  EXPECT_TRUE(result.converged);
-  const double length = (result.V.row(0) - model.tip_end.row(0)).norm();
-  EXPECT_NEAR(length, 10.5, kCordLengthTolerance);
-  EXPECT_GT(result.cord_force(0), 0.0);  // taut
+  // allows 0.5 mm. At a point (radius 0) the cord holds its vertex; spread (the default 2 mm)
+  // it holds the weighted mean of its patch, and the vertex under it bulges a little higher.
+  for (double radius : {0.0, 2.0}) {
+    SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+    model.cords.push_back({0, 0, 10.5, 0.0, std::nullopt});
+    SimulationSettings settings = discSettings();
+    settings.cord_insertion_radius_mm = radius;
+    const SimulationResult result = simulate(model, settings);
+    ASSERT_TRUE(result.ok()) << result.error;
+    EXPECT_TRUE(result.converged);
+    const Eigen::Vector3d tip = model.tip_end.row(0).transpose();
+    EXPECT_NEAR((centreInsertion(model, settings, result.V) - tip).norm(), 10.5,
+                kCordLengthTolerance)
+        << "radius " << radius;
+    EXPECT_GT(result.cord_force(0), 0.0);  // taut
+  }
 }
 
 TEST(SimulatorCords, ElasticCordStretchesByForceTimesCompliance) {
@@ -48,7 +68,8 @@ TEST(SimulatorCords, ElasticCordStretchesByForceTimesCompliance) {
   settings.tolerance_mm = 1e-6;
   const SimulationResult result = simulate(model, settings);
   ASSERT_TRUE(result.ok()) << result.error;
-  const double stretch = (result.V.row(0) - model.tip_end.row(0)).norm() - 10.5;
+  const double stretch =
+      (centreInsertion(model, settings, result.V) - model.tip_end.row(0).transpose()).norm() - 10.5;
   EXPECT_GT(stretch, 0.0);
   EXPECT_NEAR(stretch, kCompliance * result.cord_force(0), 1e-3);
 }

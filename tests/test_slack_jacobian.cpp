@@ -34,9 +34,11 @@ TEST(SlackJacobian, ParametersOfCordsSlackBeyondTheStepAndMarginAreSlack) {
   const inverse::FitParameterization& parameters = setUp().scales;
   const inverse::FiniteDifferenceOptions options;
   const Eigen::VectorXd x = parameters.initial();
-  const std::vector<bool> slack = inverse::slackParameters(parameters, x, seed.closed_V, options);
+  const std::vector<bool> slack = inverse::slackParameters(
+      parameters, setUp().residual.cordInsertions(), x, seed.closed_V, options);
   const CordSet cords = parameters.apply(x);
-  const Eigen::VectorXd spans = closedSpans(cords, seed.closed_V);
+  const Eigen::VectorXd spans =
+      closedSpans(cords, setUp().residual.cordInsertions(), seed.closed_V);
   int slack_count = 0;
   for (std::size_t c = 0; c < cords.cords.size(); ++c) {
     const int p = parameters.cordParameter()[c];
@@ -52,7 +54,8 @@ TEST(SlackJacobian, ParametersOfCordsSlackBeyondTheStepAndMarginAreSlack) {
 
   inverse::FiniteDifferenceOptions off = options;
   off.skip_slack = false;
-  const std::vector<bool> none = inverse::slackParameters(parameters, x, seed.closed_V, off);
+  const std::vector<bool> none = inverse::slackParameters(
+      parameters, setUp().residual.cordInsertions(), x, seed.closed_V, off);
   EXPECT_EQ(std::count(none.begin(), none.end(), true), 0);
 }
 
@@ -65,7 +68,8 @@ TEST(SlackJacobian, ATipIsSlackOnlyWhenAllItsCordsStaySlackAsItMoves) {
   const inverse::FitParameterization parameters(
       seed.traced, start, inverse::ParameterMode::kScalesAndTips, inverse::ParameterBounds{});
   const Eigen::VectorXd x = parameters.initial();
-  const Eigen::VectorXd spans = closedSpans(parameters.apply(x), seed.closed_V);
+  const Eigen::VectorXd spans =
+      closedSpans(parameters.apply(x), setUp().residual.cordInsertions(), seed.closed_V);
   bool tip1_has_taut = false;
   for (std::size_t c = 0; c < start.cords.size(); ++c) {
     if (start.cords[c].tip == 0) {
@@ -76,7 +80,8 @@ TEST(SlackJacobian, ATipIsSlackOnlyWhenAllItsCordsStaySlackAsItMoves) {
   }
   ASSERT_TRUE(tip1_has_taut);
   const std::vector<bool> slack =
-      inverse::slackParameters(parameters, x, seed.closed_V, inverse::FiniteDifferenceOptions{});
+      inverse::slackParameters(parameters, setUp().residual.cordInsertions(), x, seed.closed_V,
+                               inverse::FiniteDifferenceOptions{});
   for (int k = 0; k < 3; ++k) {
     EXPECT_TRUE(slack[parameters.tipParameter(0) + k]) << "tip 0 coordinate " << k;
     EXPECT_FALSE(slack[parameters.tipParameter(1) + k]) << "tip 1 coordinate " << k;
@@ -92,7 +97,8 @@ TEST(SlackJacobian, SlackColumnsAreZeroWithoutClosuresAndTheOthersUnchanged) {
   skip.warm_start = true;
   inverse::FiniteDifferenceOptions all = skip;
   all.skip_slack = false;
-  const std::vector<bool> slack = inverse::slackParameters(parameters, x, seed.closed_V, skip);
+  const std::vector<bool> slack = inverse::slackParameters(
+      parameters, setUp().residual.cordInsertions(), x, seed.closed_V, skip);
   const int slack_count = static_cast<int>(std::count(slack.begin(), slack.end(), true));
 
   const inverse::JacobianResult skipped =
@@ -132,7 +138,8 @@ TEST(SlackJacobian, TheObjectiveCountsAndChargesOnlyTheClosuresItRuns) {
   EXPECT_EQ(objective.jacobianSims(x), 2 * parameters.size());
   const auto base = objective.evaluate(x);
   ASSERT_TRUE(base->ok()) << base->error;
-  const std::vector<bool> slack = inverse::slackParameters(parameters, x, base->closed_V, fd);
+  const std::vector<bool> slack =
+      inverse::slackParameters(parameters, residual.cordInsertions(), x, base->closed_V, fd);
   const int taut = static_cast<int>(std::count(slack.begin(), slack.end(), false));
   EXPECT_EQ(objective.jacobianSims(x), 2 * taut);
   ASSERT_LT(taut, parameters.size());

@@ -86,7 +86,7 @@ TEST(ProjectDistances, InextensibleEdgeReachesRestLengthInOneProjection) {
 
 CordConstraint vertexCord(int vertex, double rest) {
   CordConstraint c;
-  c.count = 1, c.vertices = {vertex, vertex, vertex}, c.weights = {1.0, 0.0, 0.0};
+  c.vertices = {vertex}, c.weights = {1.0};
   c.rest = rest;
   return c;
 }
@@ -111,7 +111,7 @@ TEST(ProjectCords, CordBetweenVerticesPullsItsPointToRestLengthSharedByWeight) {
   const std::vector<double> w{1.0, 1.0, 1.0};
   std::vector<double> x{-1, 0, 0, 1, 0, 0, 0, 5, 0}, lambda{0.0};
   CordConstraint c;
-  c.count = 3, c.vertices = {0, 1, 2}, c.weights = {0.75, 0.25, 0.0}, c.rest = 8.0;
+  c.vertices = {0, 1, 2}, c.weights = {0.75, 0.25, 0.0}, c.rest = 8.0;
   const double before = std::hypot(-0.5, 10.0);  // insertion (-0.5, 0, 0)
   projectCords({c}, 1e4, tips.data(), x.data(), w.data(), lambda.data());
   const Eigen::Vector3d a(x[0], x[1], x[2]), b(x[3], x[4], x[5]);
@@ -124,6 +124,23 @@ TEST(ProjectCords, CordBetweenVerticesPullsItsPointToRestLengthSharedByWeight) {
   EXPECT_EQ(x[6], 0.0);
   EXPECT_EQ(x[7], 5.0);
   EXPECT_LT(lambda[0], 0.0);
+}
+
+// A cord stretched far beyond its rest length (the cohort's cords in the open state) moves its
+// insertion by at most max_pull per projection, toward the same end state: a point 5 mm too
+// far gets there in 20 projections of 0.25 mm, not in one jump.
+TEST(ProjectCords, MaxPullLimitsEachProjectionButNotWhereTheCordEnds) {
+  const std::vector<double> tips{0, 0, -10};
+  const std::vector<double> w{1.0};
+  std::vector<double> x{0, 0, 0}, lambda{0.0};
+  const CordConstraint cord = vertexCord(0, 5.0);
+  projectCords({cord}, 1e4, tips.data(), x.data(), w.data(), lambda.data(), nullptr, 0.25);
+  EXPECT_NEAR(x[2], -0.25, 1e-12);
+  for (int k = 1; k < 20; ++k)
+    projectCords({cord}, 1e4, tips.data(), x.data(), w.data(), lambda.data(), nullptr, 0.25);
+  EXPECT_NEAR(x[2], -5.0, 1e-12);
+  projectCords({cord}, 1e4, tips.data(), x.data(), w.data(), lambda.data(), nullptr, 0.25);
+  EXPECT_NEAR(x[2], -5.0, 1e-12);  // at rest length: nothing left to pull
 }
 
 TEST(ProjectContacts, PushesAVertexOutToTheThicknessOnItsOwnSide) {

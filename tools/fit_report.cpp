@@ -47,7 +47,7 @@ CordUncertaintyText cordUncertainty(const inverse::FitOutcome& fit, std::size_t 
 
 std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
-  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
+  const Eigen::VectorXd& spans = fit.closed_spans;
   std::ostringstream md;
   md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Closed span (mm) "
         "| "
@@ -117,7 +117,7 @@ std::string uncertaintyCsv(const inverse::FitOutcome& fit) {
 }
 
 int slackCords(const inverse::FitOutcome& fit) {
-  const Eigen::VectorXd spans = closedSpans(fit.fitted, fit.final_evaluation.closed_V);
+  const Eigen::VectorXd& spans = fit.closed_spans;
   int count = 0;
   for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i)
     count += spans(static_cast<Eigen::Index>(i)) < fit.fitted.cords[i].rest_length - kSlackMarginMm;
