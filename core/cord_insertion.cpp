@@ -84,20 +84,20 @@ CordInsertionWeights cordInsertionWeights(const Eigen::MatrixXd& V, const Eigen:
   return result;
 }
 
+CordInsertionWeights cordInsertionWeights(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                          int vertex, const std::optional<CordPoint>& point,
+                                          double radius_mm) {
+  if (!point) return cordInsertionWeights(V, F, std::vector<int>{vertex}, {1.0}, radius_mm);
+  return cordInsertionWeights(V, F, {point->vertices.begin(), point->vertices.end()},
+                              {point->weights(0), point->weights(1), point->weights(2)}, radius_mm);
+}
+
 std::vector<CordInsertionWeights> cordInsertions(const ValveMesh& mesh, const CordSet& set,
                                                  double radius_mm) {
   std::vector<CordInsertionWeights> insertions;
   insertions.reserve(set.cords.size());
-  for (const Cord& cord : set.cords) {
-    if (cord.point) {
-      const CordPoint& p = *cord.point;
-      insertions.push_back(
-          cordInsertionWeights(mesh.V, mesh.F, {p.vertices.begin(), p.vertices.end()},
-                               {p.weights(0), p.weights(1), p.weights(2)}, radius_mm));
-    } else {
-      insertions.push_back(cordInsertionWeights(mesh.V, mesh.F, {cord.vertex}, {1.0}, radius_mm));
-    }
-  }
+  for (const Cord& cord : set.cords)
+    insertions.push_back(cordInsertionWeights(mesh.V, mesh.F, cord.vertex, cord.point, radius_mm));
   return insertions;
 }
 

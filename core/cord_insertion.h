@@ -19,6 +19,7 @@
 // weights become p0's barycentric coordinates, the point insertion.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,6 +40,12 @@ struct CordInsertionWeights {
 CordInsertionWeights cordInsertionWeights(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                                           const std::vector<int>& point_vertices,
                                           const std::vector<double>& point_weights,
+                                          double radius_mm);
+
+// The same for a cord that inserts at `point` (a point of a triangle) or, without one, at
+// `vertex`.
+CordInsertionWeights cordInsertionWeights(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                          int vertex, const std::optional<CordPoint>& point,
                                           double radius_mm);
 
 // Every cord's insertion as the simulator builds it: cordInsertionWeights of its point (or

@@ -172,14 +172,8 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
   for (const auto& cord : m.cords) {
     CordConstraint c;
     c.tip = cord.tip, c.rest = cord.rest_length, c.compliance = cord.compliance;
-    std::vector<int> point_vertices{cord.vertex};
-    std::vector<double> point_weights{1.0};
-    if (cord.point) {
-      point_vertices.assign(cord.point->vertices.begin(), cord.point->vertices.end());
-      point_weights = {cord.point->weights(0), cord.point->weights(1), cord.point->weights(2)};
-    }
-    CordInsertionWeights insertion = cordInsertionWeights(
-        m.V_rest, m.F, point_vertices, point_weights, s.cord_insertion_radius_mm);
+    CordInsertionWeights insertion =
+        cordInsertionWeights(m.V_rest, m.F, cord.vertex, cord.point, s.cord_insertion_radius_mm);
     c.vertices = std::move(insertion.vertices);
     c.weights = std::move(insertion.weights);
     sys.cords.push_back(std::move(c));
