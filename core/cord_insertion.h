@@ -1,12 +1,13 @@
 // Where a cord's tension acts on the leaflet.
 //
 // The paper links a PM tip to one leaflet vertex, and the synthetic cohort links it to a point
-// of a triangle (CordPoint); either way the whole tension acts at one point of the mesh. A
-// point force on a membrane has no finite continuum limit (the deflection under it grows like
-// log(1/h) as the mesh size h shrinks), so the tent a taut cord pulls into its leaflet deepens
-// with every refinement: the closed valve does not converge with the mesh, and on fine meshes
-// the tents cycle instead of settling (docs/performance.md, "Cord insertion patch"). Chordae
-// do not insert at a point either: they branch and fan out into the leaflet over millimetres.
+// of a triangle (CordPoint); either way the whole tension acts at one point of the mesh, up to
+// ~20 N on the cohort's fine truths, and the tent it pulls into the leaflet is as sharp as the
+// mesh allows. On fine meshes the two-sweep warm-started solver cycles around such tents
+// instead of settling, and the normal valves converge poorly with the mesh (docs/performance.md,
+// "Cord insertion patch"; the leaflet's bending stiffness keeps a point load finite, so it is
+// not a continuum singularity). Chordae do not insert at a point either: they branch and fan
+// out into the leaflet over millimetres.
 //
 // The patch spreads the tension over the rest surface with a smooth kernel of radius r about
 // the insertion point p0, k(d) = (1 - d^2/r^2)^2 for d < r (a compact bump), lumped to the
