@@ -27,13 +27,6 @@ Disc disc(int rings) {
   return d;
 }
 
-Eigen::Vector3d weightedMean(const Disc& d, const CordInsertionWeights& w) {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-  for (std::size_t m = 0; m < w.vertices.size(); ++m)
-    mean += w.weights[m] * d.V.row(w.vertices[m]).transpose();
-  return mean;
-}
-
 double secondMoment(const Disc& d, const CordInsertionWeights& w, const Eigen::Vector3d& p0) {
   double moment = 0.0;
   for (std::size_t m = 0; m < w.vertices.size(); ++m)
@@ -62,7 +55,7 @@ TEST(CordInsertion, SpreadsTheSameLoadOverEveryMesh) {
       EXPECT_GT(w.weights[m], 0.0);
       EXPECT_LT(d.V.row(w.vertices[m]).norm(), kRadius + edge + 1e-9);
     }
-    EXPECT_LT(weightedMean(d, w).norm(), 1e-3) << rings << " rings";
+    EXPECT_LT(insertionPosition(w, d.V).norm(), 1e-3) << rings << " rings";
     EXPECT_NEAR(secondMoment(d, w, Eigen::Vector3d::Zero()), kMoment, 0.5 * edge * edge)
         << rings << " rings";
   }
@@ -76,7 +69,7 @@ TEST(CordInsertion, OffCentreInsertionBetweenVerticesIsCentredOnItsPoint) {
   Eigen::Vector3d p0 = Eigen::Vector3d::Zero();
   for (int m = 0; m < 3; ++m) p0 += weights[m] * d.V.row(vertices[m]).transpose();
   const CordInsertionWeights w = cordInsertionWeights(d.V, d.F, vertices, weights, kRadius);
-  EXPECT_LT((weightedMean(d, w) - p0).norm(), 1e-3);
+  EXPECT_LT((insertionPosition(w, d.V) - p0).norm(), 1e-3);
   EXPECT_GT(w.vertices.size(), 20u);
 }
 

@@ -32,18 +32,16 @@ bool bitIdentical(const Eigen::MatrixXd& a, const Eigen::MatrixXd& b) {
 // (cord_insertion.h), the vertex itself when the radius is 0.
 Eigen::Vector3d centreInsertion(const SimulationModel& model, const SimulationSettings& settings,
                                 const Eigen::MatrixXd& V) {
-  const CordInsertionWeights w =
-      cordInsertionWeights(model.V_rest, model.F, {0}, {1.0}, settings.cord_insertion_radius_mm);
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();
-  for (std::size_t m = 0; m < w.vertices.size(); ++m)
-    point += w.weights[m] * V.row(w.vertices[m]).transpose();
-  return point;
+  return insertionPosition(
+      cordInsertionWeights(model.V_rest, model.F, {0}, {1.0}, settings.cord_insertion_radius_mm),
+      V);
 }
 
 TEST(SimulatorCords, StretchedInextensibleCordHoldsItsInsertionAtRestLengthUnderFullPressure) {
   // Without the cord the centre bulges ~1.6 mm toward +z; the cord from the tip 10 mm below
-  // allows 0.5 mm. At a point (radius 0) the cord holds its vertex; spread (the default 2 mm)
-  // it holds the weighted mean of its patch, and the vertex under it bulges a little higher.
+  // allows 0.5 mm. At a point (radius 0, the default) the cord holds its vertex; spread over
+  // 2 mm it holds the weighted mean of its patch (the vertex under the cord, where the pull is
+  // densest, then sits lower than the mean).
   for (double radius : {0.0, 2.0}) {
     SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
     model.cords.push_back({0, 0, 10.5, 0.0, std::nullopt});
