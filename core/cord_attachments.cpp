@@ -14,7 +14,6 @@ namespace chordfit {
 
 namespace {
 
-constexpr double kTwoPi = 6.283185307179586;
 // Samples per leaflet when measuring the free-edge and belly-line lengths.
 constexpr int kLengthSamples = 256;
 
@@ -32,14 +31,6 @@ struct LeafletColumns {
   std::vector<Column> columns;
 };
 
-// Fraction of angle theta along a Carpentier arc (0 at theta_start, 1 at its far end).
-double arcFraction(const LeafletArc& arc, double theta) {
-  const double direction = arc.sweep >= 0.0 ? 1.0 : -1.0;
-  double along = std::fmod(direction * (theta - arc.theta_start), kTwoPi);
-  if (along < 0.0) along += kTwoPi;
-  return along / std::abs(arc.sweep);
-}
-
 LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
   const ValveMesh& mesh = valve.valve_case.mesh;
   const Eigen::Index count = mesh.annulus.size();
@@ -47,12 +38,11 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
     throw std::invalid_argument("parametric valve: free edge and annulus differ in size");
   }
   const SegmentMap map = openStateSegmentMap(mesh);
-  const LeafletArc* arc = nullptr;
-  for (const LeafletArc& a : map.arcs) {
-    if (a.leaflet == leaflet) arc = &a;
-  }
   LeafletColumns result;
-  if (arc == nullptr) return result;
+  if (std::none_of(map.arcs.begin(), map.arcs.end(),
+                   [&](const LeafletArc& a) { return a.leaflet == leaflet; })) {
+    return result;
+  }
   for (Eigen::Index k = 0; k < count; ++k) {
     if (mesh.leaflet(mesh.annulus(k)) != leaflet) continue;
     Column column;
@@ -63,7 +53,7 @@ LeafletColumns leafletColumns(const ParametricValve& valve, int leaflet) {
     column.fraction =
         valve.column_fraction.size() == count
             ? valve.column_fraction(k)
-            : arcFraction(*arc, annulusAngle(map.frame, mesh.V.row(column.first).transpose()));
+            : arcPositionOf(map, mesh.V.row(column.first).transpose(), leaflet).fraction;
     column.arc.push_back(0.0);
     for (int v = column.first + 1; v <= column.last; ++v) {
       column.arc.push_back(column.arc.back() + (mesh.V.row(v) - mesh.V.row(v - 1)).norm());
