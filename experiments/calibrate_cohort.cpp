@@ -38,6 +38,8 @@ options:
   --edge MM          case mesh edge; the truth mesh is half of it (default 3)
   --max-steps N      truth step cap (default that of make-case, 6000)
   --ramp MS          truth pressure ramp (default that of make-case, 6 ms)
+  --insertion-radius MM   truth cord insertion spread (SimulationSettings::
+                     cord_insertion_radius_mm; default that of make-case)
 
 KEY=VALUE changes the preset before the cases are made:
   normal=S           normal cord scale (kNormalCordScale)
@@ -148,6 +150,11 @@ int main(int argc, char** argv) {
         return usageError("--ramp: expected a positive duration in ms");
       }
       settings.ramp_ms = value;
+    } else if (arg == "--insertion-radius") {
+      if (!has_value || !parseNumber(argv[++i], value) || !(value >= 0.0)) {
+        return usageError("--insertion-radius: expected a length >= 0 in mm");
+      }
+      settings.cord_insertion_radius_mm = value;
     } else if (const std::string problem = applySetting(arg, preset); !problem.empty()) {
       return usageError(problem);
     }
