@@ -1,6 +1,9 @@
 #include "inverse/fit_cords.h"
 
+#include <algorithm>
 #include <chrono>
+
+#include "core/metrics.h"
 
 namespace chordfit::inverse {
 
@@ -41,6 +44,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   record("seed", 0, outcome.seed_evaluation, outcome.seed_evaluation.cost);
 
   CordSet start_set = seed;
+  std::vector<int> segment_prefit_ids;  // segments the segment pre-fit rescaled
   ForwardEvaluation start_evaluation = outcome.seed_evaluation;
   // The pre-fit stages run only when their closures fit in the budget, leaving the final one.
   auto budget_allows = [&](int sims) {
@@ -70,6 +74,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
                                                           options.bounds, seed_residual, segment);
     outcome.forward_sims += result.forward_sims;
     outcome.segment_prefit_changes = result.changed;
+    segment_prefit_ids = result.changed_segments;
     start_set = result.start;
     start_evaluation = result.best;
     record("segments", 2, start_evaluation, start_evaluation.cost);
@@ -96,8 +101,12 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
 
   const FitParameterization parameters(working_case, start_set, options.mode, options.bounds);
   const ForwardResidual residual(working_case, parameters, settings, options.residual);
-  FitObjective objective(residual, options.finite_difference, options.max_sims,
-                         outcome.forward_sims, start, options.on_iteration);
+  const bool release_slack = options.slack_release.enabled && parameters.size() > 0 &&
+                             options.mode != ParameterMode::kGroups &&
+                             outcome.forward_sims + 2 <= options.max_sims;
+  FitObjective objective(residual, options.finite_difference,
+                         options.max_sims - (release_slack ? 1 : 0), outcome.forward_sims, start,
+                         options.on_iteration);
   if (!parameters.startClamped()) {
     // The start's closure is already known (the same cords): reuse it, with this
     // parameterisation's x and regularisation (zero at the start).
@@ -121,6 +130,36 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.error = "closure at the pre-fit start failed: " + best->error;
     return outcome;
   }
+  std::shared_ptr<const ForwardEvaluation> optimiser_best = best;
+  if (release_slack) {
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(best->regularisation.size());
+    const CordSet at_best = parameters.apply(best->x);
+    const Eigen::VectorXi vertex_segment = openStateSegments(working_case.mesh);
+    std::vector<int> cord_segment;
+    for (const Cord& cord : at_best.cords) cord_segment.push_back(vertex_segment(cord.vertex));
+    outcome.slack_release = proposeSlackRelease(
+        at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
+        cord_segment, segment_prefit_ids, options.bounds.scale_upper);
+    if (!outcome.slack_release.empty()) {
+      Eigen::VectorXd x = best->x;
+      for (std::size_t i = 0; i < outcome.slack_release.cords.size(); ++i)
+        x(parameters.cordParameter()[outcome.slack_release.cords[i]]) =
+            outcome.slack_release.scales[i];
+      auto released = std::make_shared<ForwardEvaluation>(residual.evaluate(x));
+      ++outcome.forward_sims;
+      outcome.optimiser_data_cost = residual.cost(best->data, zero);
+      if (released->ok()) {
+        outcome.slack_release_data_cost = residual.cost(released->data, zero);
+        outcome.slack_release_kept =
+            outcome.slack_release_data_cost <=
+            outcome.optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance);
+      } else {
+        outcome.slack_release_error = released->error;
+      }
+      record("release", 0, *released, outcome.slack_release_kept ? released->cost : best->cost);
+      if (outcome.slack_release_kept) best = released;
+    }
+  }
   outcome.x = best->x;
   outcome.final_evaluation = *best;
   outcome.fitted = parameters.apply(best->x);
@@ -139,7 +178,10 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   outcome.unsettled_sims = seed_residual.unsettledClosures() + residual.unsettledClosures();
   outcome.seconds = seconds();
   if (options.uncertainty && parameters.size() > 0) {
-    std::shared_ptr<const Eigen::MatrixXd> J = objective.cachedJacobian(best->x);
+    // The optimiser's Jacobian also holds at the release when the release closed the valve
+    // to the same state (its cords slack throughout): the data depend on x only through it.
+    std::shared_ptr<const Eigen::MatrixXd> J = objective.cachedJacobian(optimiser_best->x);
+    if (best != optimiser_best && best->closed_V != optimiser_best->closed_V) J = nullptr;
     int jacobian_sims = 0;
     std::string jacobian_error;
     if (!J) {

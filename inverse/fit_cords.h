@@ -23,6 +23,7 @@
 #include "inverse/global_prefit.h"
 #include "inverse/optimizer.h"
 #include "inverse/segment_prefit.h"
+#include "inverse/slack_release.h"
 #include "inverse/tissue_prefit.h"
 
 namespace chordfit::inverse {
@@ -35,6 +36,9 @@ struct FitOptions {
   PrefitOptions prefit;
   SegmentPrefitOptions segment_prefit;  // runs after the global pre-fit
   TissuePrefitOptions tissue_prefit;    // opt-in; runs after the segment pre-fit
+  // After the optimiser, per-cord modes only (slack_release.h); one closure of the budget is
+  // kept back for it.
+  SlackReleaseOptions slack_release;
   std::string optimizer = "ceres";
   OptimizerSettings optimizer_settings;
   int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
@@ -58,6 +62,12 @@ struct FitOutcome {
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
   std::vector<std::string> tissue_prefit_changes;   // "A2 0.1", per accepted segment
+  // The slack release (slack_release.h): what it proposed at the optimiser's best point, and
+  // whether its closure was kept (then `fitted` has it); the data costs of the two closures.
+  SlackReleaseProposal slack_release;
+  bool slack_release_kept = false;
+  double slack_release_data_cost = 0.0, optimiser_data_cost = 0.0;
+  std::string slack_release_error;  // its closure failed (then not kept)
   // Per-vertex tissue the cords were fitted on (tissue pre-fit); empty = the case's own.
   Eigen::VectorXd tissue;
   std::vector<std::string> parameter_names;

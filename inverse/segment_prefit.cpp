@@ -61,6 +61,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
     std::ostringstream change;
     change << segmentName(valve_case.mesh.leaflet_names, segment) << " " << scales[best];
     result.changed.push_back(change.str());
+    result.changed_segments.push_back(segment);
   }
   return result;
 }

@@ -34,9 +34,10 @@ struct SegmentPrefitOptions {
 };
 
 struct SegmentPrefitResult {
-  CordSet start;                     // the input set with the accepted segment scales
-  ForwardEvaluation best;            // full closure of `start`
-  std::vector<std::string> changed;  // "P2 1.3", one per accepted segment, in order
+  CordSet start;                      // the input set with the accepted segment scales
+  ForwardEvaluation best;             // full closure of `start`
+  std::vector<std::string> changed;   // "P2 1.3", one per accepted segment, in order
+  std::vector<int> changed_segments;  // their segment ids (openStateSegments), same order
   int forward_sims = 0;
 };
 

@@ -133,6 +133,7 @@ struct FitCommandOptions {
   double tip_box_mm = 8.0;
   bool prefit = true;                    // global and segment pre-fits before the optimiser
   bool tissue_prefit = false;            // softer tissue per segment, after the cord pre-fits
+  bool slack_release = true;             // slack cords to the kind's typical scale at the end
   double fd_scale_step = 0.01;           // central-difference step on a scale
   double fd_tip_step_mm = 0.1;           // ... on a tip offset coordinate
   bool fd_warm_start = false;            // perturbed closures start from the base closed state

@@ -92,6 +92,7 @@ int runFit(const FitCommandOptions& o) {
   options.prefit.enabled = o.prefit;
   options.segment_prefit.enabled = o.prefit;
   options.tissue_prefit.enabled = o.tissue_prefit;
+  options.slack_release.enabled = o.slack_release;
   options.optimizer = o.optimizer;
   options.max_sims = o.max_sims;
   options.finite_difference.threads = o.threads;
@@ -155,6 +156,10 @@ int runFit(const FitCommandOptions& o) {
   metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["tissue_prefit"] = fit.tissue_prefit_changes;
+  metrics["slack_release"] = {{"proposed_cords", fit.slack_release.cords.size()},
+                              {"kept", fit.slack_release_kept},
+                              {"primary_reference", fit.slack_release.primary_reference},
+                              {"secondary_reference", fit.slack_release.secondary_reference}};
   metrics["distance"] = o.distance;  // the data residual the fit minimised
   metrics["section_weight"] = o.section_weight;
   metrics["scale_bounds"] = o.scale_bounds;

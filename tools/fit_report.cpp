@@ -69,6 +69,31 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   return md.str();
 }
 
+// What the slack release did (inverse/slack_release.h), for report.md.
+std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled) {
+  if (!enabled) return "off (--no-slack-release)";
+  const inverse::SlackReleaseProposal& p = fit.slack_release;
+  auto reference = [&](double value) {
+    return value > 0.0 ? formatFixed(value, 3) : std::string("none taut");
+  };
+  const std::string typical = "typical scale: primaries " + reference(p.primary_reference) +
+                              ", secondaries " + reference(p.secondary_reference);
+  if (p.empty()) return "no slack cord below its kind's typical scale (" + typical + ")";
+  std::string line =
+      std::to_string(p.cords.size()) + " slack cord(s) raised to their kind's " + typical + "; ";
+  if (fit.slack_release_kept) {
+    line += "kept (data cost " + formatFixed(fit.optimiser_data_cost, 3) + " -> " +
+            formatFixed(fit.slack_release_data_cost, 3) + ")";
+  } else if (!fit.slack_release_error.empty()) {
+    line += "not kept: its closure failed (" + fit.slack_release_error + ")";
+  } else {
+    line += "not kept: its closure fits worse (data cost " +
+            formatFixed(fit.optimiser_data_cost, 3) + " -> " +
+            formatFixed(fit.slack_release_data_cost, 3) + ")";
+  }
+  return line;
+}
+
 }  // namespace
 
 std::string convergenceCsv(const std::vector<IterationRecord>& history) {
@@ -172,6 +197,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                                    "tissue (tissue.json)")
        << "\n";
   }
+  md << "- slack release: " << slackReleaseLine(fit, o.slack_release) << "\n";
   md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
      << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";

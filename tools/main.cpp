@@ -214,6 +214,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
   cmd->add_flag("--tissue-prefit", o.tissue_prefit,
                 "Also try softer tissue per segment (0.3, 0.1, 0.05 of the modulus) before the "
                 "optimiser; writes tissue.json");
+  cmd->add_flag("!--no-slack-release", o.slack_release,
+                "Keep slack cords where the optimiser left them instead of raising them to the "
+                "valve's typical scale of their kind (the median of its taut cords)");
   cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
       ->capture_default_str();
   cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")

@@ -1,0 +1,67 @@
+#include "inverse/slack_release.h"
+
+#include <algorithm>
+
+#include "inverse/global_prefit.h"
+
+namespace chordfit::inverse {
+
+namespace {
+
+// Median of a non-empty list (the mean of the middle two for an even count).
+double median(std::vector<double> values) {
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+}  // namespace
+
+SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& seed,
+                                         const Eigen::VectorXd& closed_spans,
+                                         const std::vector<int>& cord_segment,
+                                         const std::vector<int>& excluded_segments,
+                                         double scale_upper) {
+  SlackReleaseProposal proposal;
+  const std::size_t count = fitted.cords.size();
+  if (seed.cords.size() != count || static_cast<std::size_t>(closed_spans.size()) != count ||
+      cord_segment.size() != count) {
+    return proposal;
+  }
+  auto scaleOf = [&](std::size_t c) {
+    const Cord& cord = fitted.cords[c];
+    return cord.seed_rest_length > 0.0 ? cord.rest_length / cord.seed_rest_length : 0.0;
+  };
+  auto slack = [&](std::size_t c) {
+    return closed_spans(c) < fitted.cords[c].rest_length - kSlackMarginMm;
+  };
+  auto excluded = [&](std::size_t c) {
+    return std::find(excluded_segments.begin(), excluded_segments.end(), cord_segment[c]) !=
+           excluded_segments.end();
+  };
+
+  double* reference_of[2] = {&proposal.primary_reference, &proposal.secondary_reference};
+  const CordKind kinds[2] = {CordKind::kPrimary, CordKind::kSecondary};
+  for (int k = 0; k < 2; ++k) {
+    std::vector<double> taut;
+    for (std::size_t c = 0; c < count; ++c) {
+      if (fitted.cords[c].kind == kinds[k] && !slack(c) && !excluded(c) && scaleOf(c) > 0.0)
+        taut.push_back(scaleOf(c));
+    }
+    if (!taut.empty()) *reference_of[k] = median(std::move(taut));
+  }
+
+  for (std::size_t c = 0; c < count; ++c) {
+    const Cord& cord = fitted.cords[c];
+    if (!isFreeNonManual(seed.cords[c]) || !slack(c) || cord.seed_rest_length <= 0.0) continue;
+    const double reference = std::min(
+        cord.kind == CordKind::kPrimary ? proposal.primary_reference : proposal.secondary_reference,
+        scale_upper);
+    if (!(reference > scaleOf(c))) continue;
+    proposal.cords.push_back(static_cast<int>(c));
+    proposal.scales.push_back(reference);
+  }
+  return proposal;
+}
+
+}  // namespace chordfit::inverse
