@@ -92,13 +92,8 @@ inline double atan2Fast(double y, double x) {
   return y < 0.0 ? -r : r;
 }
 
-// Forced inline: GCC kept it out of line, so the four gradients went through memory; inlined
-// into the bending sweep it takes 11 % fewer instructions there (callgrind, the 506-vertex
-// bench closure), with bit-identical results.
 template <class V>
-__attribute__((always_inline)) inline double dihedralAngleImpl(const V& xi, const V& xj,
-                                                               const V& xk, const V& xl,
-                                                               Vec3* grad) {
+inline double dihedralAngleImpl(const V& xi, const V& xj, const V& xk, const V& xl, Vec3* grad) {
   // Bridson et al. 2003 with x3 = xi, x4 = xj (hinge E = x4 - x3), x1 = xk, x2 = xl:
   // N1 = (x1 - x3) x (x1 - x4), N2 = (x2 - x4) x (x2 - x3) (= the faces' winding normals).
   const Vec3 e = xj - xi;
