@@ -141,10 +141,12 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
         at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
         cord_segment, segment_prefit_ids, options.bounds.scale_upper);
     if (!outcome.slack_release.empty()) {
+      // Free non-manual cords are parameters of their own in the per-cord modes.
       Eigen::VectorXd x = best->x;
-      for (std::size_t i = 0; i < outcome.slack_release.cords.size(); ++i)
-        x(parameters.cordParameter()[outcome.slack_release.cords[i]]) =
-            outcome.slack_release.scales[i];
+      for (std::size_t i = 0; i < outcome.slack_release.cords.size(); ++i) {
+        const int parameter = parameters.cordParameter()[outcome.slack_release.cords[i]];
+        if (parameter >= 0) x(parameter) = outcome.slack_release.scales[i];
+      }
       auto released = std::make_shared<ForwardEvaluation>(residual.evaluate(x));
       ++outcome.forward_sims;
       outcome.optimiser_data_cost = residual.cost(best->data, zero);
