@@ -139,9 +139,14 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   for (const char* key :
        {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims", "fit_seconds",
-        "initial_mean_mm", "unsettled_sims", "averaged_steps", "distance"}) {
+        "initial_mean_mm", "unsettled_sims", "averaged_steps", "distance", "slack_release"}) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
+  for (const char* key : {"proposed_cords", "kept", "primary_reference", "secondary_reference"}) {
+    EXPECT_TRUE(metrics["slack_release"].contains(key)) << key;
+  }
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("- slack release: "),
+            std::string::npos);
   EXPECT_EQ(metrics["optimizer"], "ceres");
   EXPECT_EQ(metrics["distance"], "own-leaflet");     // the default data residual
   EXPECT_LE(metrics["forward_sims"].get<int>(), 5);  // budget 4 + the closure written
