@@ -10,9 +10,12 @@
 //
 // What: each free, non-manual slack cord whose scale (rest length / seed rest length) lies
 // below the typical scale of its kind on this valve is raised to it. The typical scale is
-// the median scale of the taut cords of that kind outside the segments the segment pre-fit
-// rescaled (a prolapsing segment's elongated cords would drag it up): the valve's own taut
-// cords are the data's estimate of where cords of the kind sit, an empirical prior. A raised
+// the median scale of the taut cords of that kind outside the atypical segments, those the
+// segment pre-fit rescaled and those prolapsing in the fitted closure (a prolapsing segment's
+// elongated cords would drag it up: at the make-case default edge prolapse-P2 seed 3's P2
+// primaries, taut and never rescaled, set it at 1.05 where the truth's other primaries sit at
+// ~0.8): the valve's own taut cords are the data's estimate of where cords of the kind sit,
+// an empirical prior. A raised
 // cord is longer than before, so it stays slack in the fitted closed state; fitCords keeps the
 // release only when a full closure with it fits the tracings as well (data cost within
 // SlackReleaseOptions::cost_tolerance), since on the way from the open state a cord may pull
@@ -46,7 +49,7 @@ struct SlackReleaseProposal {
 //               which cords are free and not manual)
 // closed_spans  #cords each fitted cord's span in the fitted closure (closedSpans)
 // cord_segment  #cords each cord's Carpentier segment id (openStateSegments of its vertex)
-// excluded_segments  segment ids whose cords do not enter the typical scale
+// excluded_segments  segment ids whose cords do not enter the typical scale (the atypical ones)
 // scale_upper   the fit's upper scale bound (a raised scale never exceeds it)
 SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& seed,
                                          const Eigen::VectorXd& closed_spans,
