@@ -80,6 +80,13 @@ Eigen::Vector3d insertionPosition(const Cord& cord, const Eigen::MatrixXd& V);
 // taut cord ends within the solver's tolerance of its rest length, far inside it.
 constexpr double kSlackMarginMm = 0.01;
 
+// A cord of rest length `rest_length` whose span in a closed state is `span` (closedSpans)
+// pulls on nothing there: slack by more than kSlackMarginMm. The one definition the fit's
+// report and its slack release share.
+inline bool slackAtSpan(double span, double rest_length) {
+  return span < rest_length - kSlackMarginMm;
+}
+
 // Editing, as in the paper's editor: a scale multiplies the seed rest length. Edited cords
 // become provenance kManual. Locked cords are left alone and counted in the return value.
 // Returns the number of cords changed.

@@ -1,9 +1,7 @@
 #include "inverse/fit_cords.h"
 
-#include <algorithm>
 #include <chrono>
 
-#include "core/carpentier.h"
 #include "core/metrics.h"
 
 namespace chordfit::inverse {
@@ -138,19 +136,10 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     const Eigen::VectorXi vertex_segment = openStateSegments(working_case.mesh);
     std::vector<int> cord_segment;
     for (const Cord& cord : at_best.cords) cord_segment.push_back(vertex_segment(cord.vertex));
-    // Atypical segments: those the segment pre-fit rescaled and those prolapsing in the fit
-    // (their taut cords are the elongated ones that hold a flap).
-    std::vector<int> atypical = segment_prefit_ids;
-    const ProlapseResult prolapse = prolapseOfMesh(working_case, best->closed_V);
-    const int segment_count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
-    for (int id = 0; id < segment_count; ++id) {
-      if (std::find(prolapse.segments.begin(), prolapse.segments.end(),
-                    segmentName(working_case.mesh.leaflet_names, id)) != prolapse.segments.end())
-        atypical.push_back(id);
-    }
     outcome.slack_release = proposeSlackRelease(
         at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
-        cord_segment, atypical, options.bounds.scale_upper);
+        cord_segment, atypicalSegments(working_case, best->closed_V, segment_prefit_ids),
+        options.bounds.scale_upper);
     if (!outcome.slack_release.empty()) {
       // Free non-manual cords are parameters of their own in the per-cord modes.
       Eigen::VectorXd x = best->x;

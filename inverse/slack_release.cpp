@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "core/carpentier.h"
+#include "core/metrics.h"
 #include "inverse/global_prefit.h"
 
 namespace chordfit::inverse {
@@ -16,6 +18,19 @@ double median(std::vector<double> values) {
 }
 
 }  // namespace
+
+std::vector<int> atypicalSegments(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                                  std::vector<int> rescaled) {
+  const std::vector<std::string> prolapsing = prolapseOfMesh(valve_case, closed_V).segments;
+  // Segment ids are leaflet * 3 + index (carpentier.h).
+  const int segment_count = 3 * static_cast<int>(valve_case.mesh.leaflet_names.size());
+  for (int id = 0; id < segment_count; ++id) {
+    if (std::find(prolapsing.begin(), prolapsing.end(),
+                  segmentName(valve_case.mesh.leaflet_names, id)) != prolapsing.end())
+      rescaled.push_back(id);
+  }
+  return rescaled;
+}
 
 SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& seed,
                                          const Eigen::VectorXd& closed_spans,
@@ -33,7 +48,7 @@ SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& s
     return cord.seed_rest_length > 0.0 ? cord.rest_length / cord.seed_rest_length : 0.0;
   };
   auto slack = [&](std::size_t c) {
-    return closed_spans(c) < fitted.cords[c].rest_length - kSlackMarginMm;
+    return slackAtSpan(closed_spans(c), fitted.cords[c].rest_length);
   };
   auto excluded = [&](std::size_t c) {
     return std::find(excluded_segments.begin(), excluded_segments.end(), cord_segment[c]) !=

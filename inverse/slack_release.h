@@ -26,6 +26,7 @@
 
 #include <Eigen/Core>
 
+#include "core/case_data.h"
 #include "core/cordset.h"
 
 namespace chordfit::inverse {
@@ -51,6 +52,12 @@ struct SlackReleaseProposal {
 // cord_segment  #cords each cord's Carpentier segment id (openStateSegments of its vertex)
 // excluded_segments  segment ids whose cords do not enter the typical scale (the atypical ones)
 // scale_upper   the fit's upper scale bound (a raised scale never exceeds it)
+// The atypical segment ids: `rescaled` (those the segment pre-fit rescaled) and the segments
+// prolapsing in the closed state closed_V of valve_case (prolapseOfMesh: their taut cords are
+// the elongated ones that hold a flap).
+std::vector<int> atypicalSegments(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                                  std::vector<int> rescaled);
+
 SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& seed,
                                          const Eigen::VectorXd& closed_spans,
                                          const std::vector<int>& cord_segment,

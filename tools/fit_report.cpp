@@ -62,7 +62,7 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
     std::snprintf(line, sizeof line,
                   "| %zu | %s | %s | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
                   groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
-                  span, span < f.rest_length - kSlackMarginMm ? " (slack)" : "", u.sd.c_str(),
+                  span, slackAtSpan(span, f.rest_length) ? " (slack)" : "", u.sd.c_str(),
                   u.sensitivity.c_str(), toString(f.provenance), f.locked ? "yes" : "no");
     md << line;
   }
@@ -145,7 +145,7 @@ int slackCords(const inverse::FitOutcome& fit) {
   const Eigen::VectorXd& spans = fit.closed_spans;
   int count = 0;
   for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i)
-    count += spans(static_cast<Eigen::Index>(i)) < fit.fitted.cords[i].rest_length - kSlackMarginMm;
+    count += slackAtSpan(spans(static_cast<Eigen::Index>(i)), fit.fitted.cords[i].rest_length);
   return count;
 }
 
