@@ -40,7 +40,26 @@ ContactDetector::ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::Mat
   sorted_rest_.assign(3 * static_cast<size_t>(n), 0.0);
 }
 
-void ContactDetector::buildCandidates(const double* x, const double* w) {
+namespace {
+
+// Runs task(part, begin, end) over [0, count) cut into one contiguous part per thread of
+// `team` (all of it as part 0 without one).
+template <class Task>
+void inParts(SweepTeam* team, size_t count, Task task) {
+  const int parts = team ? team->threads() : 1;
+  auto run = [&](int part) {
+    const size_t begin = count * part / parts, end = count * (part + 1) / parts;
+    task(part, begin, end);
+  };
+  if (team)
+    team->run(run);
+  else
+    run(0);
+}
+
+}  // namespace
+
+void ContactDetector::buildCandidates(const double* x, const double* w, SweepTeam* team) {
   ++rebuilds_;
   candidates_.clear();
   candidate_distance_.clear();
@@ -61,10 +80,12 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
   if (!(volume_cells <= max_cells)) cell *= std::cbrt(volume_cells / max_cells) * 1.01;
   if (!std::isfinite(cell)) return;  // non-finite positions: the simulator reports them
   const double inv_cell = 1.0 / cell;
-  int dims[3];
+  int* dims = dims_;
   for (int d = 0; d < 3; ++d)
     dims[d] = std::max(1, static_cast<int>(std::ceil(extent(d) * inv_cell)));
   const long num_cells = static_cast<long>(dims[0]) * dims[1] * dims[2];
+  grid_lo_ = lo;
+  inv_cell_ = inv_cell;
 
   // Counting sort by cell id = ix + dims0 (iy + dims1 iz): rows along x are contiguous.
   cell_start_.assign(num_cells + 1, 0);
@@ -88,9 +109,29 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
     }
   }
 
+  // The triangles in parts, each part's candidates in triangle order: concatenated, the list
+  // is the one a single pass makes.
+  parts_.resize(team ? team->threads() : 1);
+  inParts(team, static_cast<size_t>(F_.rows()), [&](int part, size_t begin, size_t end) {
+    candidatesOf(static_cast<int>(begin), static_cast<int>(end), x, w, parts_[part]);
+  });
+  for (const Part& part : parts_) {
+    candidates_.insert(candidates_.end(), part.candidates.begin(), part.candidates.end());
+    candidate_distance_.insert(candidate_distance_.end(), part.distance.begin(),
+                               part.distance.end());
+  }
+}
+
+void ContactDetector::candidatesOf(int f_begin, int f_end, const double* x, const double* w,
+                                   Part& part) const {
+  part.candidates.clear();
+  part.distance.clear();
+  const Vec3& lo = grid_lo_;
+  const double inv_cell = inv_cell_;
+  const int* dims = dims_;
   const double reach = options_.thickness_mm + options_.margin_mm + options_.skin_mm;
   const double exclusion2 = options_.exclusion_radius_mm * options_.exclusion_radius_mm;
-  for (int f = 0; f < F_.rows(); ++f) {
+  for (int f = f_begin; f < f_end; ++f) {
     const int ia = F_(f, 0), ib = F_(f, 1), ic = F_(f, 2);
     const CMap3 a(x + 3 * ia), b(x + 3 * ib), c(x + 3 * ic);
     const bool triangle_fixed = w[ia] == 0.0 && w[ib] == 0.0 && w[ic] == 0.0;
@@ -110,7 +151,9 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
       chi[d] = cellOf(bhi(d), lo(d), inv_cell, dims[d]);
     }
     const double *ra = &rest_[3 * ia], *rb = &rest_[3 * ib], *rc = &rest_[3 * ic];
-    hits_.clear();
+    std::vector<int>& near = part.near;
+    std::vector<std::pair<int, double>>& hits = part.hits;
+    hits.clear();
     for (int iz = clo[2]; iz <= chi[2]; ++iz)
       for (int iy = clo[1]; iy <= chi[1]; ++iy) {
         const long row = static_cast<long>(dims[0]) * (iy + static_cast<long>(dims[1]) * iz);
@@ -119,7 +162,7 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
         // the row's vertices inside the bounding sphere and not excluded, i.e. at least the
         // exclusion radius from each of the triangle's vertices in the rest state. Most
         // vertices near a triangle are its own sheet's neighbours and fail the second test.
-        if (static_cast<int>(near_.size()) < end - begin) near_.resize(end - begin);
+        if (static_cast<int>(near.size()) < end - begin) near.resize(end - begin);
         int count = 0;
         for (int e = begin; e < end; ++e) {
           const double* xp = &sorted_x_[3 * e];
@@ -128,14 +171,14 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
           const double ax = rp[0] - ra[0], ay = rp[1] - ra[1], az = rp[2] - ra[2];
           const double bx = rp[0] - rb[0], by = rp[1] - rb[1], bz = rp[2] - rb[2];
           const double cx = rp[0] - rc[0], cy = rp[1] - rc[1], cz = rp[2] - rc[2];
-          near_[count] = e;
+          near[count] = e;
           count += (dx * dx + dy * dy + dz * dz <= sphere2) &
                    (ax * ax + ay * ay + az * az >= exclusion2) &
                    (bx * bx + by * by + bz * bz >= exclusion2) &
                    (cx * cx + cy * cy + cz * cz >= exclusion2);
         }
         for (int k = 0; k < count; ++k) {
-          const int e = near_[k];
+          const int e = near[k];
           const CMap3 xpm(&sorted_x_[3 * e]);
           const int p = sorted_[e];
           if (triangle_fixed && w[p] == 0.0) continue;
@@ -144,20 +187,20 @@ void ContactDetector::buildCandidates(const double* x, const double* w) {
           closestPointOnTriangle(xpm, a, b, c, ba, bb, bc);
           const double dist2 = (xpm - (ba * a + bb * b + bc * c)).squaredNorm();
           if (dist2 >= reach * reach) continue;
-          hits_.emplace_back(p, std::sqrt(dist2));
+          hits.emplace_back(p, std::sqrt(dist2));
         }
       }
     // Rows are visited in grid order; this triangle's vertices go in by index.
-    std::sort(hits_.begin(), hits_.end());
-    for (const auto& [p, dist] : hits_) {
-      candidates_.emplace_back(f, p);
-      candidate_distance_.push_back(dist);
+    std::sort(hits.begin(), hits.end());
+    for (const auto& [p, dist] : hits) {
+      part.candidates.emplace_back(f, p);
+      part.distance.push_back(dist);
     }
   }
 }
 
 void ContactDetector::detect(const double* x_start, const double* x_pred, const double* w,
-                             std::vector<ContactConstraint>& out) {
+                             std::vector<ContactConstraint>& out, SweepTeam* team) {
   out.clear();
   const int n = static_cast<int>(sorted_.size());
   if (n == 0) return;
@@ -173,10 +216,21 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
     rebuild = !(max_moved <= 0.5 * options_.skin_mm);
   }
   if (rebuild) {
-    buildCandidates(x_pred, w);
+    buildCandidates(x_pred, w, team);
     std::fill(moved_.begin(), moved_.end(), 0.0);
   }
+  // The candidates in parts; concatenated, the constraints are those of a single pass, in
+  // the same order.
+  parts_.resize(team ? team->threads() : 1);
+  inParts(team, candidates_.size(), [&](int part, size_t begin, size_t end) {
+    filterCandidates(begin, end, x_start, x_pred, parts_[part]);
+  });
+  for (const Part& part : parts_) out.insert(out.end(), part.contacts.begin(), part.contacts.end());
+}
 
+void ContactDetector::filterCandidates(size_t e_begin, size_t e_end, const double* x_start,
+                                       const double* x_pred, Part& part) const {
+  part.contacts.clear();
   // Constraints: every pair within thickness + margin. (Keeping only the triangle "under" a
   // vertex and adding edge-region pairs once violated cut the count ~5x but made pairs switch
   // in and out at rest, and the 2000-vertex closure never settled.)
@@ -190,7 +244,7 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
   bool have_sphere = false;
   Vec3 centroid = Vec3::Zero();
   double sphere2 = 0.0;
-  for (size_t e = 0; e < candidates_.size(); ++e) {
+  for (size_t e = e_begin; e < e_end; ++e) {
     const auto [f, p] = candidates_[e];
     if (f != face) {  // candidates are grouped by triangle
       face = f;
@@ -213,7 +267,8 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
     double ba, bb, bc;
     closestPointOnTriangle(xp, a, b, c, ba, bb, bc);
     if ((xp - (ba * a + bb * b + bc * c)).squaredNorm() >= reach2) continue;
-    out.push_back(contactConstraint(p, ia, ib, ic, x_start, x_pred, options_.thickness_mm));
+    part.contacts.push_back(
+        contactConstraint(p, ia, ib, ic, x_start, x_pred, options_.thickness_mm));
   }
 }
 

@@ -34,6 +34,7 @@
 
 #include <Eigen/Core>
 
+#include "core/sweep_team.h"
 #include "core/xpbd_constraints.h"
 
 namespace chordfit {
@@ -61,15 +62,32 @@ class ContactDetector {
   // x_start, x_pred  flat positions (3 #V) at the start of the step and predicted
   // w                inverse masses; pairs whose vertices all have w = 0 are skipped
   // out              replaced with the step's contact constraints
+  // team             optional: the candidate build's triangles and the per-step filter's
+  //                  candidates are cut into one contiguous part per thread, and the parts'
+  //                  results concatenated in order, so `out` is the same with or without it
   void detect(const double* x_start, const double* x_pred, const double* w,
-              std::vector<ContactConstraint>& out);
+              std::vector<ContactConstraint>& out, SweepTeam* team = nullptr);
 
   const ContactOptions& options() const { return options_; }
   int rebuilds() const { return rebuilds_; }  // candidate-list builds so far
   int candidates() const { return static_cast<int>(candidates_.size()); }
 
  private:
-  void buildCandidates(const double* x, const double* w);
+  // One thread's share of the work, and its scratch.
+  struct Part {
+    std::vector<std::pair<int, int>> candidates;  // build: (triangle, vertex) pairs found
+    std::vector<double> distance;                 // build: their distances
+    std::vector<int> near;  // one grid row's vertices in the triangle's sphere, not excluded
+    std::vector<std::pair<int, double>> hits;  // one triangle's (vertex, distance)
+    std::vector<ContactConstraint> contacts;   // filter: the part's constraints
+  };
+  // The grid of the build at positions x (serial), then candidatesOf over the triangles.
+  void buildCandidates(const double* x, const double* w, SweepTeam* team);
+  // Candidates of triangles [f_begin, f_end) into part.candidates / part.distance.
+  void candidatesOf(int f_begin, int f_end, const double* x, const double* w, Part& part) const;
+  // Constraints of candidates [e_begin, e_end) into part.contacts.
+  void filterCandidates(size_t e_begin, size_t e_end, const double* x_start, const double* x_pred,
+                        Part& part) const;
 
   ContactOptions options_;
   Eigen::MatrixXi F_;
@@ -85,8 +103,11 @@ class ContactDetector {
   std::vector<std::pair<int, int>> candidates_;
   std::vector<double> candidate_distance_;
   std::vector<double> x_built_, moved_;
-  std::vector<int> near_;  // one grid row's vertices in the triangle's sphere and not excluded
-  std::vector<std::pair<int, double>> hits_;  // one triangle's (vertex, distance), build scratch
+  // The build's grid (set by buildCandidates, read by candidatesOf).
+  Eigen::Vector3d grid_lo_ = Eigen::Vector3d::Zero();
+  double inv_cell_ = 1.0;
+  int dims_[3] = {1, 1, 1};
+  std::vector<Part> parts_;  // one per thread
   int rebuilds_ = 0;
 };
 

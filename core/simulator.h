@@ -34,10 +34,11 @@
 // NaN or an exploding position (or a jump of more than half the model radius in one step)
 // ends the run with `error` set and no positions.
 //
-// Determinism: single-threaded Gauss-Seidel over constraint arrays in a fixed order (sorted
-// by a greedy colouring for instruction-level parallelism); contact detection is
-// order-deterministic; no static mutable state. Same input => bit-identical output, whatever
-// the thread count of the caller (the inverse layer parallelises over forward runs instead).
+// Determinism: Gauss-Seidel over constraint arrays in a fixed order (sorted by a greedy
+// colouring, for instruction-level parallelism and for `threads`: a colour class split between
+// threads gives the same bits as the class in order); contact detection is order-deterministic;
+// no static mutable state. Same input => bit-identical output, whatever `threads` and the thread
+// count of the caller (the inverse layer parallelises over forward runs instead).
 #pragma once
 
 #include <functional>
@@ -112,6 +113,11 @@ struct SimulationSettings {
   // kinetic energy drops, all velocities are set to zero.
   bool kinetic_damping = true;
   int iterations = 2;  // Gauss-Seidel sweeps per time step
+  // Threads of one closure: each large colour class of the material constraints is split
+  // between them (sweep_team.h); contacts, cords and the rest of the step stay on the calling
+  // thread. Bit-identical results for any value. 1 where closures already run in parallel
+  // (the fit's finite differences, sweeps over cords); a run option, not read from a case.
+  int threads = 1;
   // Carry lambda across steps and apply the last step's constraint impulses in the
   // prediction (xpbd_constraints.h): the equilibrium is then the elastic one for any number
   // of iterations. false = textbook XPBD (lambda reset every step).

@@ -205,6 +205,7 @@ SyntheticCase makeSyntheticCase(const SyntheticCaseOptions& options) {
 
   // 4. Truth closure.
   s.truth_settings = options.truth_settings ? *options.truth_settings : truthSimulationSettings();
+  s.truth_settings.threads = options.threads;
   if (options.simulation_progress) {
     s.truth_settings.progress_every = 50;
     s.truth_settings.progress = options.simulation_progress;

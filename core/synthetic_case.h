@@ -50,6 +50,8 @@ struct SyntheticCaseOptions {
   bool attach_at_vertices = false;
   // Solver settings of the truth closure; default truthSimulationSettings().
   std::optional<SimulationSettings> truth_settings;
+  // Threads of the truth closure (SimulationSettings::threads; the same truth for any count).
+  int threads = 1;
   // Stage messages ("building meshes", ...) and simulator progress; both optional.
   std::function<void(const std::string&)> message;
   std::function<void(const SimulationProgress&)> simulation_progress;

@@ -23,9 +23,8 @@ inline void accumulate(double* acc, int i, const Vec3& g, double lambda) {
 }
 
 template <bool kAcc>
-void distanceSweep(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+void distanceSweep(const DistanceConstraint* constraints, int n, double inv_dt2, double* x,
                    const double* w, double* lambda, double* acc) {
-  const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const DistanceConstraint& k = constraints[c];
     const double wsum = w[k.i] + w[k.j];
@@ -50,12 +49,12 @@ void distanceSweep(const std::vector<DistanceConstraint>& constraints, double in
 
 }  // namespace
 
-void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+void projectDistances(const DistanceConstraint* constraints, int count, double inv_dt2, double* x,
                       const double* w, double* lambda, double* acc) {
   if (acc)
-    distanceSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+    distanceSweep<true>(constraints, count, inv_dt2, x, w, lambda, acc);
   else
-    distanceSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+    distanceSweep<false>(constraints, count, inv_dt2, x, w, lambda, acc);
 }
 
 namespace {
@@ -154,9 +153,8 @@ double triangleArea(const Eigen::Vector3d& xa, const Eigen::Vector3d& xb, const 
 namespace {
 
 template <bool kAcc>
-void bendingSweep(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+void bendingSweep(const BendingConstraint* constraints, int n, double inv_dt2, double* x,
                   const double* w, double* lambda, double* acc) {
-  const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const BendingConstraint& k = constraints[c];
     const double wi = w[k.i], wj = w[k.j], wk = w[k.k], wl = w[k.l];
@@ -228,9 +226,8 @@ inline void applyAreaCorrection(const AreaConstraint& k, const AreaTriangle& t, 
 }
 
 template <bool kAcc>
-void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
-               const double* w, double* lambda, double* acc) {
-  const int n = static_cast<int>(constraints.size());
+void areaSweep(const AreaConstraint* constraints, int n, double inv_dt2, double* x, const double* w,
+               double* lambda, double* acc) {
   for (int c = 0; c < n; ++c) {
     const AreaConstraint& k = constraints[c];
     if (w[k.a] + w[k.b] + w[k.c] == 0.0) continue;
@@ -245,9 +242,8 @@ void areaSweep(const std::vector<AreaConstraint>& constraints, double inv_dt2, d
 }
 
 template <bool kAcc>
-void areaFloorSweep(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+void areaFloorSweep(const AreaConstraint* constraints, int n, double* x, const double* w,
                     double* lambda, double* acc) {
-  const int n = static_cast<int>(constraints.size());
   for (int c = 0; c < n; ++c) {
     const AreaConstraint& k = constraints[c];
     if (w[k.a] + w[k.b] + w[k.c] == 0.0) continue;
@@ -406,20 +402,20 @@ void contactSweep(const std::vector<ContactConstraint>& constraints, double* x, 
 
 }  // namespace
 
-void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+void projectBending(const BendingConstraint* constraints, int count, double inv_dt2, double* x,
                     const double* w, double* lambda, double* acc) {
   if (acc)
-    bendingSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+    bendingSweep<true>(constraints, count, inv_dt2, x, w, lambda, acc);
   else
-    bendingSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+    bendingSweep<false>(constraints, count, inv_dt2, x, w, lambda, acc);
 }
 
-void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+void projectAreas(const AreaConstraint* constraints, int count, double inv_dt2, double* x,
                   const double* w, double* lambda, double* acc) {
   if (acc)
-    areaSweep<true>(constraints, inv_dt2, x, w, lambda, acc);
+    areaSweep<true>(constraints, count, inv_dt2, x, w, lambda, acc);
   else
-    areaSweep<false>(constraints, inv_dt2, x, w, lambda, acc);
+    areaSweep<false>(constraints, count, inv_dt2, x, w, lambda, acc);
 }
 
 void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2,
@@ -431,12 +427,12 @@ void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2
     cordSweep<false>(constraints, inv_dt2, tips, x, w, lambda, acc, max_pull);
 }
 
-void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+void projectAreaFloors(const AreaConstraint* constraints, int count, double* x, const double* w,
                        double* lambda, double* acc) {
   if (acc)
-    areaFloorSweep<true>(constraints, x, w, lambda, acc);
+    areaFloorSweep<true>(constraints, count, x, w, lambda, acc);
   else
-    areaFloorSweep<false>(constraints, x, w, lambda, acc);
+    areaFloorSweep<false>(constraints, count, x, w, lambda, acc);
 }
 
 void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,

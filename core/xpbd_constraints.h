@@ -100,18 +100,39 @@ struct ContactConstraint {
   double thickness = 0.0;
 };
 
-// Batch projections. inv_dt2 = 1 / dt^2; lambda has one entry per constraint; acc optional
-// (see above).
-void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2, double* x,
+// Batch projections of constraints[0 .. count). inv_dt2 = 1 / dt^2; lambda has one entry per
+// constraint; acc optional (see above). The vector forms project the whole array.
+void projectDistances(const DistanceConstraint* constraints, int count, double inv_dt2, double* x,
                       const double* w, double* lambda, double* acc = nullptr);
-void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2, double* x,
+void projectBending(const BendingConstraint* constraints, int count, double inv_dt2, double* x,
                     const double* w, double* lambda, double* acc = nullptr);
-void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+void projectAreas(const AreaConstraint* constraints, int count, double inv_dt2, double* x,
                   const double* w, double* lambda, double* acc = nullptr);
 // Area floors (rest_area = the floor, compliance ignored): like the contacts, lambda starts
 // at 0 each step and stays >= 0; a floor that is not violated is skipped.
-void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x, const double* w,
+void projectAreaFloors(const AreaConstraint* constraints, int count, double* x, const double* w,
                        double* lambda, double* acc = nullptr);
+
+inline void projectDistances(const std::vector<DistanceConstraint>& constraints, double inv_dt2,
+                             double* x, const double* w, double* lambda, double* acc = nullptr) {
+  projectDistances(constraints.data(), static_cast<int>(constraints.size()), inv_dt2, x, w, lambda,
+                   acc);
+}
+inline void projectBending(const std::vector<BendingConstraint>& constraints, double inv_dt2,
+                           double* x, const double* w, double* lambda, double* acc = nullptr) {
+  projectBending(constraints.data(), static_cast<int>(constraints.size()), inv_dt2, x, w, lambda,
+                 acc);
+}
+inline void projectAreas(const std::vector<AreaConstraint>& constraints, double inv_dt2, double* x,
+                         const double* w, double* lambda, double* acc = nullptr) {
+  projectAreas(constraints.data(), static_cast<int>(constraints.size()), inv_dt2, x, w, lambda,
+               acc);
+}
+inline void projectAreaFloors(const std::vector<AreaConstraint>& constraints, double* x,
+                              const double* w, double* lambda, double* acc = nullptr) {
+  projectAreaFloors(constraints.data(), static_cast<int>(constraints.size()), x, w, lambda, acc);
+}
+
 // tips: flat tip positions tips[3 * t + d].
 // max_pull > 0: one projection moves a cord's insertion by at most max_pull toward its tip
 // (dlambda clamped to -max_pull / sum_m b_m^2 w_m): no insertion is dragged across the mesh in
@@ -122,13 +143,24 @@ void projectCords(const std::vector<CordConstraint>& constraints, double inv_dt2
 void projectContacts(const std::vector<ContactConstraint>& constraints, double* x, const double* w,
                      double* lambda, double* acc = nullptr);
 
+// The colour classes of an array ordered by orderByColour: class k is [starts[k],
+// starts[k + 1]). Constraints of one class share no vertex, except in the last class when
+// `last_shared` (every one of the 64 colours was taken at some vertex).
+struct ColourClasses {
+  std::vector<int> starts{0};
+  bool last_shared = false;
+  int count() const { return static_cast<int>(starts.size()) - 1; }
+};
+
 // Reorders constraints by a greedy vertex colouring (stable within a colour): constraints of
 // one colour share no vertex, so consecutive projections do not wait on each other's writes
 // (a Gauss-Seidel sweep in natural order is latency-bound: each projection reads the vertex
-// the previous one just wrote). Any fixed order is a valid Gauss-Seidel order; this one is a
+// the previous one just wrote), and a colour can be split between threads without changing a
+// bit (sweep_team.h). Any fixed order is a valid Gauss-Seidel order; this one is a
 // deterministic function of the input order. vertices_of(c) returns a std::array<int, N>.
 template <class Constraint, class VerticesOf>
-void orderByColour(std::vector<Constraint>& constraints, VerticesOf vertices_of) {
+ColourClasses orderByColour(std::vector<Constraint>& constraints, VerticesOf vertices_of) {
+  constexpr int kShared = 64;  // all 64 colours taken: a last, shared class
   int max_vertex = -1;
   for (const Constraint& c : constraints)
     for (int v : vertices_of(c)) max_vertex = std::max(max_vertex, v);
@@ -137,21 +169,29 @@ void orderByColour(std::vector<Constraint>& constraints, VerticesOf vertices_of)
   for (size_t k = 0; k < constraints.size(); ++k) {
     std::uint64_t mask = 0;
     for (int v : vertices_of(constraints[k])) mask |= used[v];
-    int colour = 64;  // all 64 colours taken: a last, shared class
-    for (int b = 0; b < 64; ++b)
+    int colour = kShared;
+    for (int b = 0; b < kShared; ++b)
       if (!(mask & (std::uint64_t{1} << b))) {
         colour = b;
         break;
       }
-    if (colour < 64)
+    if (colour < kShared)
       for (int v : vertices_of(constraints[k])) used[v] |= std::uint64_t{1} << colour;
     key[k] = {colour, static_cast<int>(k)};
   }
   std::sort(key.begin(), key.end());
   std::vector<Constraint> sorted;
   sorted.reserve(constraints.size());
-  for (const auto& [colour, k] : key) sorted.push_back(constraints[k]);
+  ColourClasses classes;
+  for (size_t k = 0; k < key.size(); ++k) {
+    sorted.push_back(constraints[key[k].second]);
+    if (k + 1 == key.size() || key[k + 1].first != key[k].first) {
+      classes.starts.push_back(static_cast<int>(k + 1));
+      classes.last_shared = key[k].first == kShared;
+    }
+  }
   constraints.swap(sorted);
+  return classes;
 }
 
 // Single-constraint evaluations (used to set up rest values and in tests).

@@ -322,7 +322,7 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
                  {"make-case", "--preset", spec.preset, "--seed", std::to_string(spec.seed),
                   "--edge", formatNumber(spec.edge_mm), "--planes", std::to_string(spec.planes),
                   "--noise", formatNumber(spec.noise_mm), "--dropout", formatNumber(spec.dropout),
-                  "--out", staging.string(), "--quiet"},
+                  "--threads", "1", "--out", staging.string(), "--quiet"},
                  log, error)) {
     fs::remove_all(staging);
     return failure("case " + spec.id + ": " + error);
@@ -395,7 +395,7 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       }
       if (!runChordfit(paths,
                        {"simulate", case_dir.string(), "--cords", cords_file.string(), "--quiet",
-                        "--out", run_dir.string()},
+                        "--threads", "1", "--out", run_dir.string()},
                        log, error, &command)) {
         return failure("job " + job.id + ": " + error);
       }

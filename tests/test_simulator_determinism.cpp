@@ -1,9 +1,8 @@
 // Determinism of the closure (issue 3: same input => identical bytes, whatever the threads).
-// The simulator is single-threaded by design (simulator.h: one Gauss-Seidel sweep in a fixed
-// order, no static mutable state, no internal threads), so there is no "1 vs 2 simulator
-// threads" to compare. What can break determinism is shared state between runs or a
-// dependence on the calling thread; so this checks that two runs, and two runs made at the
-// same time on two threads, write bit-identical closed.ply files.
+// Two ways threads enter: the caller's (the fit runs closures in parallel), where shared state
+// between runs or a dependence on the calling thread would break it, and the closure's own
+// (SimulationSettings::threads: colour classes and contact detection split between threads,
+// simulator.h), which must give the bytes of the single-threaded closure.
 #include <cstring>
 #include <thread>
 
@@ -86,6 +85,44 @@ TEST(SimulatorDeterminism, WarmStartedRunsAreBitIdentical) {
   ASSERT_EQ(runs[0].V.size(), runs[1].V.size());
   EXPECT_EQ(std::memcmp(runs[0].V.data(), runs[1].V.data(), sizeof(double) * runs[0].V.size()), 0);
   EXPECT_EQ(runs[0].steps, runs[1].steps);
+}
+
+// A valve fine enough that its colour classes are split between the threads (classes of at
+// least 128 constraints; ~500 vertices, edge 1.65 mm) and its contact detection too.
+SimulationResult closeWithThreads(const ParametricValve& valve, const CordSet& cords, int threads,
+                                  bool edge_contact, const Eigen::MatrixXd* start = nullptr) {
+  SimulationSettings settings;
+  settings.threads = threads;
+  settings.edge_contact = edge_contact;
+  return simulateClosure(valve.valve_case, cords, settings, start);
+}
+
+bool sameBytes(const SimulationResult& a, const SimulationResult& b) {
+  return a.V.size() == b.V.size() && a.steps == b.steps &&
+         std::memcmp(a.V.data(), b.V.data(), sizeof(double) * a.V.size()) == 0;
+}
+
+TEST(SimulatorDeterminism, TwoSimulatorThreadsGiveTheBytesOfOne) {
+  ValveParameters parameters;
+  parameters.target_edge_mm = 1.65;
+  const ParametricValve valve = makeParametricValve(parameters);
+  const CordSet cords = heuristicCordSet(valve.valve_case);
+  for (const bool edge_contact : {false, true}) {
+    SCOPED_TRACE(edge_contact ? "vertex and edge contact" : "vertex contact");
+    const SimulationResult one = closeWithThreads(valve, cords, 1, edge_contact);
+    const SimulationResult two = closeWithThreads(valve, cords, 2, edge_contact);
+    ASSERT_TRUE(one.ok() && two.ok()) << one.error << two.error;
+    EXPECT_TRUE(one.converged);
+    EXPECT_GT(one.contact_rebuilds, 1);
+    EXPECT_TRUE(sameBytes(one, two));
+    // A warm start from the closed state, as the fit's finite differences run.
+    CordSet scaled = cords;
+    scaled.cords[0].rest_length *= 0.99;
+    const SimulationResult warm_one = closeWithThreads(valve, scaled, 1, edge_contact, &one.V);
+    const SimulationResult warm_two = closeWithThreads(valve, scaled, 2, edge_contact, &one.V);
+    ASSERT_TRUE(warm_one.ok() && warm_two.ok());
+    EXPECT_TRUE(sameBytes(warm_one, warm_two));
+  }
 }
 
 }  // namespace

@@ -220,8 +220,22 @@ TEST(OrderByColour, ConsecutiveConstraintsOfAColourShareNoVertex) {
   for (int k = 1; k <= 8; ++k) edges.push_back({k, k % 8 + 1, 1.0, 0.0});
   std::vector<DistanceConstraint> ordered = edges;
   auto vertices = [](const DistanceConstraint& c) { return std::array<int, 2>{c.i, c.j}; };
-  orderByColour(ordered, vertices);
+  const ColourClasses classes = orderByColour(ordered, vertices);
   ASSERT_EQ(ordered.size(), edges.size());
+  // The classes cover the array in order, and no two constraints of a class share a vertex
+  // (what lets the simulator split a class between threads).
+  EXPECT_FALSE(classes.last_shared);
+  ASSERT_EQ(classes.starts.front(), 0);
+  ASSERT_EQ(classes.starts.back(), static_cast<int>(ordered.size()));
+  EXPECT_GE(classes.count(), 8) << "vertex 0 is in 8 edges";
+  for (int k = 0; k < classes.count(); ++k) {
+    ASSERT_LT(classes.starts[k], classes.starts[k + 1]);
+    std::set<int> seen;
+    for (int c = classes.starts[k]; c < classes.starts[k + 1]; ++c) {
+      EXPECT_TRUE(seen.insert(ordered[c].i).second) << "class " << k;
+      EXPECT_TRUE(seen.insert(ordered[c].j).second) << "class " << k;
+    }
+  }
   // Same multiset of constraints.
   std::multiset<std::pair<int, int>> before, after;
   for (const auto& c : edges) before.insert({c.i, c.j});
@@ -231,6 +245,18 @@ TEST(OrderByColour, ConsecutiveConstraintsOfAColourShareNoVertex) {
   std::vector<DistanceConstraint> again = edges;
   orderByColour(again, vertices);
   for (size_t k = 0; k < again.size(); ++k) EXPECT_EQ(again[k].j, ordered[k].j);
+}
+
+TEST(OrderByColour, MoreThan64ConstraintsAtOneVertexEndInASharedLastClass) {
+  std::vector<DistanceConstraint> star;
+  for (int k = 1; k <= 70; ++k) star.push_back({0, k, 1.0, 0.0});
+  const ColourClasses classes = orderByColour(star, [](const DistanceConstraint& c) {
+    return std::array<int, 2>{c.i, c.j};
+  });
+  ASSERT_EQ(classes.count(), 65);
+  EXPECT_TRUE(classes.last_shared);
+  EXPECT_EQ(classes.starts[64], 64);
+  EXPECT_EQ(classes.starts[65], 70) << "the six edges no colour was left for, together";
 }
 
 TEST(Material, SpringScaleKeepsTheMembraneModulusAndGivesPoissonOneThirdWithoutAreaTerm) {

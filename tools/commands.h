@@ -55,6 +55,8 @@ struct SimulateOptions {
   std::string tissue_file;      // optional; else the case's tissue (uniform when it has none)
   std::string phase = "close";  // close | open (open = close, then open from the closed state)
   std::string out_dir;
+  // Threads of the closure (SimulationSettings::threads): the same bytes for any count.
+  int threads = 2;
   bool quiet = false;
   bool sections = true;  // sections.svg (fit writes its own, with the seed closure beside it)
 };
@@ -75,6 +77,7 @@ struct MakeCaseOptions {
   double noise_mm = 0.3;
   double dropout = 0.1;
   double edge_mm = 1.5;
+  int threads = 2;                  // of the truth closure (the same truth for any count)
   bool attach_at_vertices = false;  // cords at the nearest vertex of each mesh (older cohorts)
   bool list = false;                // print the presets and exit
   bool quiet = false;

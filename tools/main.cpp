@@ -85,6 +85,10 @@ void addSimulate(CLI::App& app, SimulateOptions& o) {
                   "close, or open (close, then reverse the fields and open again)")
       ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
+  cmd->add_option("--threads", o.threads,
+                  "Threads of the closure (the result is the same, bit for bit, for any count)")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
 }
 
@@ -123,6 +127,10 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_option("--dropout", o.dropout, "Fraction of the traced length lost to dropout")
       ->capture_default_str();
   cmd->add_option("--edge", o.edge_mm, "Case mesh edge length, mm (truth: edge / 2)")
+      ->capture_default_str();
+  cmd->add_option("--threads", o.threads,
+                  "Threads of the truth closure (the same truth, bit for bit, for any count)")
+      ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_flag("--attach-at-vertices", o.attach_at_vertices,
                 "Cords insert at the vertex nearest their anatomical point on each mesh (up to "

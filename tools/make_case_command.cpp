@@ -71,6 +71,7 @@ int runMakeCase(const MakeCaseOptions& options) {
   o.preset = options.preset;
   o.seed = options.seed;
   o.edge_mm = options.edge_mm;
+  o.threads = options.threads;
   o.attach_at_vertices = options.attach_at_vertices;
   o.tracing.planes = options.planes;
   o.tracing.noise_mm = options.noise_mm;

@@ -105,6 +105,7 @@ int runSimulate(const SimulateOptions& options) {
   auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
   if (!case_settings) return kExitBadInput;
   SimulationSettings& settings = *case_settings;
+  settings.threads = options.threads;
 
   const SimulationResult closed =
       simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));
@@ -124,6 +125,7 @@ int runSimulate(const SimulateOptions& options) {
   j["averaged_steps"] = closed.averaged_steps;
   j["edge_contact"] = closed.edge_contact;
   j["sim_seconds"] = closed.seconds;
+  j["threads"] = options.threads;
   j["cords"] = cords->cords.size();
   if (options.phase == "open") {
     j["open_phase"] = {{"converged", opened.converged},
