@@ -42,10 +42,14 @@ ContactDetector::ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::Mat
 
 namespace {
 
+// Fewer items than this are not worth a barrier: handled as one part on the calling thread.
+constexpr size_t kMinItemsToSplit = 512;
+
 // Runs task(part, begin, end) over [0, count) cut into one contiguous part per thread of
-// `team` (all of it as part 0 without one).
+// `team` (all of it as part 0 without one, or when count is small).
 template <class Task>
 void inParts(SweepTeam* team, size_t count, Task task) {
+  if (count < kMinItemsToSplit) team = nullptr;
   const int parts = team ? team->threads() : 1;
   auto run = [&](int part) {
     const size_t begin = count * part / parts, end = count * (part + 1) / parts;
@@ -112,6 +116,7 @@ void ContactDetector::buildCandidates(const double* x, const double* w, SweepTea
   // The triangles in parts, each part's candidates in triangle order: concatenated, the list
   // is the one a single pass makes.
   parts_.resize(team ? team->threads() : 1);
+  for (Part& part : parts_) part.candidates.clear(), part.distance.clear();
   inParts(team, static_cast<size_t>(F_.rows()), [&](int part, size_t begin, size_t end) {
     candidatesOf(static_cast<int>(begin), static_cast<int>(end), x, w, parts_[part]);
   });
@@ -222,6 +227,7 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
   // The candidates in parts; concatenated, the constraints are those of a single pass, in
   // the same order.
   parts_.resize(team ? team->threads() : 1);
+  for (Part& part : parts_) part.contacts.clear();
   inParts(team, candidates_.size(), [&](int part, size_t begin, size_t end) {
     filterCandidates(begin, end, x_start, x_pred, parts_[part]);
   });

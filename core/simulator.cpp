@@ -507,6 +507,7 @@ class Stepper {
   // Copies the final state into `result`.
   void finish(SimulationResult& result) const {
     result.projections = projections_;
+    result.threads_gave_up = team_ && team_->alone();
     if (detector_) {
       result.contact_rebuilds = detector_->rebuilds();
       result.edge_contact = contact_edges_.rows() > 0;
@@ -551,8 +552,10 @@ class Stepper {
   long long projections_ = 0;
   // Threads of the colour-parallel sweeps (SimulationSettings::threads > 1), else none.
   std::unique_ptr<SweepTeam> team_;
-  // Smallest colour class worth a barrier: ~2 us of projections against ~0.2 us of barrier
-  // (measured on the ~2,000-vertex valve, docs/performance.md, "Two threads").
+  // Smallest colour class split between threads: 128 constraints are 3-6 us of projections,
+  // several times a barrier's round trip between two running cores. Not tuned: the 506-vertex
+  // valve, whose classes hold ~150-1,000, gains nothing from two threads, the ~2,000-vertex one
+  // 1.26-1.40x (docs/performance.md, "Two threads").
   static constexpr int kMinParallelClass = 128;
 };
 

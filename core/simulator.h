@@ -278,9 +278,13 @@ struct SimulationResult {
   int kinetic_stops = 0;             // velocity resets by kinetic damping
   bool late_drag = false;            // the late drag (SimulationSettings) was switched on
   bool edge_contact = false;         // edge midpoints were contact points (set or coarse mesh)
-  int averaged_steps = 0;            // > 0: not settled, V is the mean over this many final steps
-  std::string error;                 // non-empty: invalid input or divergence (NaN/explosion)
-  bool diverged = false;             // the error is a divergence (not invalid input)
+  // threads > 1 only: the helper threads were stopped because the calling thread kept waiting
+  // for them (a machine with more runnable threads than cores; sweep_team.h); the rest of the
+  // closure ran on one thread, with the same result.
+  bool threads_gave_up = false;
+  int averaged_steps = 0;  // > 0: not settled, V is the mean over this many final steps
+  std::string error;       // non-empty: invalid input or divergence (NaN/explosion)
+  bool diverged = false;   // the error is a divergence (not invalid input)
   bool ok() const { return error.empty(); }
 };
 

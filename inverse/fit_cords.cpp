@@ -15,11 +15,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto optimizer = makeOptimizer(options.optimizer);
   if (!optimizer) {
     outcome.error = "unknown optimizer \"" + options.optimizer + "\"";
+    outcome.error_is_input = true;
     return outcome;
   }
   if (!(options.bounds.scale_lower > 0.0 &&
         options.bounds.scale_lower < options.bounds.scale_upper)) {
     outcome.error = "scale bounds: need 0 < lower < upper";
+    outcome.error_is_input = true;
     return outcome;
   }
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -31,10 +33,14 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     if (options.on_iteration) options.on_iteration(r);
   };
 
-  // Seed closure (full, from the open state): the "before" of every report.
+  // Seed closure (full, from the open state): the "before" of every report, of the seed as
+  // given. A seed outside the bounds (a manual cord edited past them) is closed as it is here;
+  // the optimiser then starts from it clamped into the bounds, and closes that itself.
   const FitParameterization seed_parameters(valve_case, seed, options.mode, options.bounds);
   const ForwardResidual seed_residual(valve_case, seed_parameters, settings, options.residual);
-  outcome.seed_evaluation = seed_residual.evaluate(seed_parameters.initial());
+  outcome.seed_evaluation = seed_parameters.startClamped()
+                                ? closeForData(valve_case, seed, seed_residual)
+                                : seed_residual.evaluate(seed_parameters.initial());
   outcome.forward_sims = 1;
   if (!outcome.seed_evaluation.ok()) {
     outcome.error = "seed closure failed: " + outcome.seed_evaluation.error;
@@ -125,6 +131,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto best = objective.best();
   if (!best) best = objective.evaluate(parameters.initial());
   outcome.forward_sims = objective.forwardSims();
+  if (!best->ok() && objective.budgetRefused() && !objective.best()) {
+    outcome.error = "--max-sims " + std::to_string(options.max_sims) +
+                    " leaves no closure for the optimiser's start (the seed, clamped into the "
+                    "scale bounds); raise it";
+    outcome.error_is_input = true;
+    return outcome;
+  }
   if (!best->ok()) {
     outcome.error = "closure at the pre-fit start failed: " + best->error;
     return outcome;

@@ -53,7 +53,7 @@ struct FitOutcome {
   std::string error;  // bad options or a failed seed closure; the rest is then unset
   CordSet seed;       // as given
   CordSet fitted;     // provenance kFitted where the rest length differs from the seed
-  ForwardEvaluation seed_evaluation;   // full closure of the seed
+  ForwardEvaluation seed_evaluation;   // full closure of the seed as given (even out of bounds)
   ForwardEvaluation final_evaluation;  // full closure of the fitted set
   // Each fitted cord's span there (closedSpans, cord_insertion.h): below its rest length by
   // more than kSlackMarginMm = slack.
@@ -81,6 +81,7 @@ struct FitOutcome {
   FitUncertainty uncertainty;  // empty (sd.size() == 0) when not asked for
   double uncertainty_seconds = 0.0;
   std::string termination;
+  bool error_is_input = false;  // the error is about the options (e.g. too small a budget)
   bool ok() const { return error.empty(); }
 };
 

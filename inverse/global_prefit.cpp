@@ -21,6 +21,19 @@ CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double second
   return set;
 }
 
+CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor,
+                       const ParameterBounds& bounds) {
+  CordSet set = scaleFreeCords(seed, primary_factor, secondary_factor);
+  for (std::size_t c = 0; c < set.cords.size(); ++c) {
+    Cord& cord = set.cords[c];
+    if (cord.rest_length == seed.cords[c].rest_length || !(cord.seed_rest_length > 0.0)) continue;
+    // A heuristic seed (scale 1) stays inside for every factor within the bounds: unchanged.
+    cord.rest_length = std::clamp(cord.rest_length, cord.seed_rest_length * bounds.scale_lower,
+                                  cord.seed_rest_length * bounds.scale_upper);
+  }
+  return set;
+}
+
 ForwardEvaluation closeForData(const ValveCase& valve_case, const CordSet& cords,
                                const ForwardResidual& residual) {
   ForwardEvaluation e;
@@ -71,7 +84,7 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   double best_cost = seed_cost;
   auto consider_pairs = [&](const std::vector<std::pair<double, double>>& pairs) {
     std::vector<CordSet> sets;
-    for (const auto& [p, s] : pairs) sets.push_back(scaleFreeCords(seed, p, s));
+    for (const auto& [p, s] : pairs) sets.push_back(scaleFreeCords(seed, p, s, bounds));
     std::vector<ForwardEvaluation> evaluations =
         closeCordSets(valve_case, sets, residual, options.threads);
     result.forward_sims += static_cast<int>(pairs.size());
@@ -134,7 +147,7 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
     }
     consider_pairs(pairs);
   }
-  result.start = scaleFreeCords(seed, result.primary_factor, result.secondary_factor);
+  result.start = scaleFreeCords(seed, result.primary_factor, result.secondary_factor, bounds);
   return result;
 }
 

@@ -83,5 +83,10 @@ inline bool isFreeNonManual(const Cord& cord) {
 CordSet scaleFreeCords(const CordSet& seed, double factor);
 // The same with one factor per cord kind.
 CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor);
+// The same, each scaled cord's scale (rest / seed_rest_length) kept within `bounds`: a seed
+// whose cords are not at scale 1 (a fit's cords.json as the seed of another fit) would
+// otherwise leave them, and the optimiser's start would be clamped back, losing the pre-fit.
+CordSet scaleFreeCords(const CordSet& seed, double primary_factor, double secondary_factor,
+                       const ParameterBounds& bounds);
 
 }  // namespace chordfit::inverse

@@ -112,6 +112,45 @@ TEST(FitCommand, SectionWeightIsRecordedAndAddsToTheCostNotToAvgD) {
 }
 
 // One free cord (the others locked, as the paper's editor would write them): 1 + 2 + 1 runs.
+// A seed edited past the scale bounds (every cord x 0.6, manual and unlocked): the seed row,
+// initial_mean_mm and the report are the seed as given, the closure `simulate` makes of it,
+// not the seed clamped into the bounds that the optimiser starts from.
+TEST(FitCommand, ReportsTheSeedAsGivenWhenItLiesOutsideTheBounds) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(smallCase()) + " --all 0.6 --out " +
+                        quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  ASSERT_EQ(
+      runChordfit("simulate " + quoted(smallCase()) + " --cords " + quoted(dir / "seed.json") +
+                  " --quiet --threads 1 --out " + quoted(dir / "sim"))
+          .exit_code,
+      0);
+  const auto r = runChordfit(
+      "fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
+      " --no-prefit --no-uncertainty --max-sims 3 --quiet --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto simulated = nlohmann::json::parse(testing::readText(dir / "sim" / "metrics.json"));
+  const auto fitted = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_DOUBLE_EQ(fitted["initial_mean_mm"].get<double>(), simulated["mean_mm"].get<double>());
+}
+
+// The same seed with a budget of one closure: the seed's own closure takes it, and nothing is
+// left to close the clamped start; that is a usage error, not a failed simulation.
+TEST(FitCommand, ABudgetTooSmallForTheClampedStartExitsWith2NamingMaxSims) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(smallCase()) + " --all 0.6 --out " +
+                        quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
+                  " --max-sims 1 --quiet --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--max-sims 1"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   TempDir dir;
   auto seed = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));

@@ -43,6 +43,54 @@ const KindProblem& kindProblem() {
   return problem;
 }
 
+// A seed whose cords are not at scale 1 (a fit's cords.json as the seed of another fit): the
+// pre-fit's factors keep every scale inside the bounds, so the optimiser's start is not
+// clamped back (which threw the pre-fit away); a scale-1 cord is scaled exactly as before,
+// and manual and locked cords not at all.
+TEST(GlobalPrefit, ScaledCordsStayInsideTheScaleBounds) {
+  CordSet seed;
+  for (const double scale : {1.0, 0.75, 1.4, 1.0, 1.0}) {
+    Cord cord;
+    cord.kind = CordKind::kPrimary;
+    cord.seed_rest_length = 20.0;
+    cord.rest_length = 20.0 * scale;
+    seed.cords.push_back(cord);
+  }
+  seed.cords[3].provenance = Provenance::kManual;
+  seed.cords[4].locked = true;
+  const inverse::ParameterBounds bounds;  // [0.7, 1.5]
+  const CordSet shorter = inverse::scaleFreeCords(seed, 0.8, 0.8, bounds);
+  EXPECT_EQ(shorter.cords[0].rest_length, 20.0 * 0.8);
+  EXPECT_EQ(shorter.cords[1].rest_length, 20.0 * 0.7) << "0.75 x 0.8 = 0.6, below the bound";
+  EXPECT_EQ(shorter.cords[2].rest_length, 28.0 * 0.8);
+  EXPECT_EQ(shorter.cords[3].rest_length, 20.0);
+  EXPECT_EQ(shorter.cords[4].rest_length, 20.0);
+  const CordSet longer = inverse::scaleFreeCords(seed, 1.2, 1.2, bounds);
+  EXPECT_EQ(longer.cords[2].rest_length, 20.0 * 1.5) << "1.4 x 1.2 = 1.68, above the bound";
+  // Without bounds (the plain overload) the scale-1 cords get the same bits.
+  EXPECT_EQ(inverse::scaleFreeCords(seed, 0.8, 0.8).cords[0].rest_length,
+            shorter.cords[0].rest_length);
+}
+
+// A cord a pre-fit set to seed * 0.7 has scale() = 0.69999999999999984: the start is on the
+// bound, not beyond it, and the cords it gives back are the start's, bit for bit.
+TEST(FitParameterization, AStartWithinRoundingOfABoundIsNotClamped) {
+  const KindProblem& p = kindProblem();
+  CordSet start = p.seed;
+  for (Cord& cord : start.cords) cord.rest_length = cord.seed_rest_length * 0.7;
+  const inverse::ParameterBounds bounds;
+  const inverse::FitParameterization parameters(p.valve_case, start,
+                                                inverse::ParameterMode::kScales, bounds);
+  EXPECT_FALSE(parameters.startClamped());
+  for (int k = 0; k < parameters.size(); ++k) {
+    EXPECT_GE(parameters.initial()(k), 0.7);
+    EXPECT_NEAR(parameters.initial()(k), 0.7, 1e-12);
+  }
+  const CordSet again = parameters.apply(parameters.initial());
+  for (std::size_t c = 0; c < start.cords.size(); ++c)
+    EXPECT_EQ(again.cords[c].rest_length, start.cords[c].rest_length) << c;
+}
+
 TEST(GlobalPrefit, ScalesEachCordKindOnItsOwn) {
   const KindProblem& p = kindProblem();
   ASSERT_TRUE(std::any_of(p.seed.cords.begin(), p.seed.cords.end(),

@@ -117,7 +117,7 @@ int runFit(const FitCommandOptions& o) {
   const inverse::FitOutcome fit = inverse::fitCords(*valve_case, *seed, settings, options);
   if (!fit.ok()) {
     std::cerr << "error: " << o.case_dir << ": " << fit.error << "\n";
-    return kExitSimulationFailed;
+    return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
   }
 
   const std::filesystem::path out(o.out_dir);

@@ -126,6 +126,7 @@ int runSimulate(const SimulateOptions& options) {
   j["edge_contact"] = closed.edge_contact;
   j["sim_seconds"] = closed.seconds;
   j["threads"] = options.threads;
+  j["threads_gave_up"] = closed.threads_gave_up;
   j["cords"] = cords->cords.size();
   if (options.phase == "open") {
     j["open_phase"] = {{"converged", opened.converged},
