@@ -5,6 +5,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/curve_io.h"
 #include "core/json_fields.h"
@@ -277,7 +278,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   const auto mesh_file = sideFile(document, "", "mesh", true, dir, fields);
   bool mesh_ok =
       mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics, mesh_file->name);
-  mesh_ok = mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics);
+  mesh_ok = mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics) &&
+            checkValveSpan(c.mesh.V, mesh_file->name, diagnostics);
   ok &= mesh_ok;
 
   const json* leaflets = fields.member(document, "", "leaflets", true);
@@ -301,6 +303,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   Curve closed_curve;
   if (closed && readCurve(closed->path, closed_curve, diagnostics, closed->name)) {
     c.annulus_closed = closed_curve.points;
+    if (mesh_ok)
+      ok &= checkPointsNearValve(c.mesh.V, c.annulus_closed, closed->name, "points", diagnostics);
     if (ring_ok && c.annulus_closed.rows() != c.mesh.annulus.size()) {
       diagnostics.error(closed->name, "points",
                         std::to_string(c.annulus_closed.rows()) +
@@ -319,16 +323,27 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
   Diagnostics& diagnostics = fields.diagnostics();
   bool ok = true;
   if (const auto tracings = sideFile(document, "", "tracings", false, dir, fields)) {
-    ok &= readTracings(*tracings, dir, c, diagnostics);
+    const bool read = readTracings(*tracings, dir, c, diagnostics);
+    ok &= read;
+    for (std::size_t t = 0; read && mesh_ok && t < c.tracings.size(); ++t) {
+      ok &= checkPointsNearValve(c.mesh.V, c.tracings[t].points, tracings->name,
+                                 "tracings[" + std::to_string(t) + "].points", diagnostics);
+    }
   }
   if (const auto tips = sideFile(document, "", "pm_tips", false, dir, fields)) {
-    ok &= readTipsFile(*tips, c, diagnostics);
+    const bool read = readTipsFile(*tips, c, diagnostics);
+    ok &= read;
+    if (read && mesh_ok && c.tips)
+      ok &= checkPointsNearValve(c.mesh.V, tipPositions(*c.tips), tips->name, "tips", diagnostics);
   }
   if (const auto cords = sideFile(document, "", "cords", false, dir, fields)) {
     CordSet set;
     if (readCordSet(cords->path, cords->name, set, diagnostics)) {
-      if (mesh_ok)
+      if (mesh_ok) {
         ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name, diagnostics);
+        ok &= checkPointsNearValve(c.mesh.V, tipPositions(set.tips), cords->name, "tips",
+                                   diagnostics);
+      }
       c.cords = set;
     } else {
       ok = false;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <sstream>
+#include <vector>
 
 #include "core/svg_text.h"
 
@@ -54,17 +55,31 @@ struct Transform {
   double y(double w) const { return top + (bounds.y1 - w) * scale; }
 };
 
+// Tick positions k * step within [lo, hi], at most kMaxTicks of them. Counting k rather than
+// adding step to a coordinate: far from the origin a tiny step (a panel of one far point) is
+// below the coordinate's rounding and u += step never advances.
+std::vector<double> ticks(double lo, double hi, double step) {
+  constexpr int kMaxTicks = 100;
+  std::vector<double> out;
+  if (!(step > 0.0) || !std::isfinite(lo) || !std::isfinite(hi)) return out;
+  const double first = std::ceil(lo / step), last = std::floor(hi / step);
+  if (!(last - first < kMaxTicks)) return out;
+  for (double k = first; k <= last; k += 1.0) out.push_back(k * step);
+  return out;
+}
+
 void drawAxes(std::ostringstream& svg, const Transform& t, const SvgFigureOptions& options) {
   const Bounds& b = t.bounds;
   const double width = (b.x1 - b.x0) * t.scale;
   const double height = (b.y1 - b.y0) * t.scale;
   const double step = tickStep(std::max(b.x1 - b.x0, b.y1 - b.y0));
+  const std::vector<double> x_ticks = ticks(b.x0, b.x1, step), y_ticks = ticks(b.y0, b.y1, step);
   svg << "<g stroke=\"#e3e3e3\" stroke-width=\"0.6\">\n";
-  for (double u = std::ceil(b.x0 / step) * step; u <= b.x1; u += step) {
+  for (const double u : x_ticks) {
     svg << "<line x1=\"" << number(t.x(u)) << "\" y1=\"" << number(t.top) << "\" x2=\""
         << number(t.x(u)) << "\" y2=\"" << number(t.top + height) << "\"/>\n";
   }
-  for (double w = std::ceil(b.y0 / step) * step; w <= b.y1; w += step) {
+  for (const double w : y_ticks) {
     svg << "<line x1=\"" << number(t.left) << "\" y1=\"" << number(t.y(w)) << "\" x2=\""
         << number(t.left + width) << "\" y2=\"" << number(t.y(w)) << "\"/>\n";
   }
@@ -73,11 +88,11 @@ void drawAxes(std::ostringstream& svg, const Transform& t, const SvgFigureOption
       << number(width) << "\" height=\"" << number(height)
       << "\" fill=\"none\" stroke=\"#444\" stroke-width=\"0.8\"/>\n";
   svg << "<g font-family=\"sans-serif\" font-size=\"9\" fill=\"#333\">\n";
-  for (double u = std::ceil(b.x0 / step) * step; u <= b.x1; u += step) {
+  for (const double u : x_ticks) {
     svg << "<text x=\"" << number(t.x(u)) << "\" y=\"" << number(t.top + height + 11)
         << "\" text-anchor=\"middle\">" << std::lround(u) << "</text>\n";
   }
-  for (double w = std::ceil(b.y0 / step) * step; w <= b.y1; w += step) {
+  for (const double w : y_ticks) {
     svg << "<text x=\"" << number(t.left - 4) << "\" y=\"" << number(t.y(w) + 3)
         << "\" text-anchor=\"end\">" << std::lround(w) << "</text>\n";
   }

@@ -154,6 +154,41 @@ TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
   expectError("tracings\\.json", "tracings\\[0\\]\\.points: a tracing needs at least 2 points");
 }
 
+// Finite but absurd coordinates pass the format checks and then break the computation (a
+// figure's axis looping, a resampling allocating without bound): case_extent.h.
+TEST_F(ValidateCommand, ReportsATracingPointFarFromTheValve) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": "posterior", "points": [[1e10, 0, -2], [1, 0, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json", "tracings\\[0\\]\\.points\\[0\\]: .* from the valve mesh");
+}
+
+TEST_F(ValidateCommand, ReportsAMeshThatIsNotInMillimetres) {
+  valve_.mesh.V *= 1e6;
+  valve_.annulus_closed *= 1e6;
+  writeCase(dir_.path(), valve_);
+  expectError("open\\.ply", "vertices: the mesh spans .* must be in millimetres");
+  valve_.mesh.V *= 1e-9;  // metres
+  valve_.annulus_closed *= 1e-9;
+  writeCase(dir_.path(), valve_);
+  expectError("open\\.ply", "vertices: the mesh spans .* must be in millimetres");
+}
+
+TEST_F(ValidateCommand, ReportsAPmTipFarFromTheValve) {
+  writeText(dir_ / "pm_tips.json",
+            R"({"tips": [{"name": "anterolateral", "position": [0, 5, -1e6]},
+                         {"name": "posteromedial", "position": [0, -5, -20]}]})");
+  editCaseJson([](nlohmann::json& j) { j["pm_tips"] = "pm_tips.json"; });
+  expectError("pm_tips\\.json", "tips\\[0\\]: .* from the valve mesh");
+}
+
+// validate checks the simulator overrides as simulate and fit read them.
+TEST_F(ValidateCommand, ReportsAnOutOfRangeSimulationOverride) {
+  editCaseJson([](nlohmann::json& j) { j["simulation"] = {{"pressure_mmhg", -100}}; });
+  expectError("[^\\n]*case\\.json", "pressure_mmhg");
+}
+
 TEST_F(ValidateCommand, ReportsACordOnAMissingVertex) {
   CordSet set;
   set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});

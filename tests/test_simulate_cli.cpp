@@ -90,6 +90,16 @@ TEST_F(SimulateCommand, RejectsAThreadCountOutOfRange) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim"));
 }
 
+// An output place that cannot be written is found before the closure, exit 2.
+TEST_F(SimulateCommand, RejectsAnOutputDirectoryInsideAFileBeforeSimulating) {
+  testing::writeText(dir_ / "a-file", "x");
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " +
+                             quoted(dir_ / "a-file" / "sim"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
+}
+
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --phase sideways --out " +
                              quoted(dir_ / "sim"));

@@ -1,11 +1,16 @@
 #include "tools/command_support.h"
 
+#include <unistd.h>
+
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 
+#include "core/case_extent.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
@@ -39,7 +44,9 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   CordSet set;
   if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
       !checkCordVertices(set, static_cast<int>(valve_case.mesh.V.rows()), cords_file,
-                         diagnostics)) {
+                         diagnostics) ||
+      !checkPointsNearValve(valve_case.mesh.V, tipPositions(set.tips), cords_file, "tips",
+                            diagnostics)) {
     diagnostics.print(std::cerr);
     return std::nullopt;
   }
@@ -71,6 +78,26 @@ bool optionsArePositive(const char* command,
     }
   }
   return true;
+}
+
+bool outputDirectoryUsable(const char* command, const std::string& directory) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path existing = fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
+  while (!ec && !fs::exists(existing, ec) && existing.has_parent_path() &&
+         existing != existing.parent_path())
+    existing = existing.parent_path();
+  std::string problem;
+  if (ec) {
+    problem = ec.message();
+  } else if (!fs::is_directory(existing, ec)) {
+    problem = existing.string() + " is not a directory";
+  } else if (::access(existing.c_str(), W_OK) != 0) {
+    problem = existing.string() + " is not writable (" + std::strerror(errno) + ")";
+  }
+  if (problem.empty()) return true;
+  std::cerr << "error: " << command << ": --out: " << directory << ": " << problem << "\n";
+  return false;
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {

@@ -38,6 +38,12 @@ bool optionsArePositive(const char* command,
                         std::initializer_list<std::pair<const char*, double>> options,
                         const char* what);
 
+// Whether the outputs can go to `directory` (created later if missing): its nearest existing
+// ancestor must be a writable directory. On a problem prints "error: <command>: --out:
+// <path>: <reason>" and returns false. Checked before the work starts, so that a fit does not
+// run for minutes and then fail to write.
+bool outputDirectoryUsable(const char* command, const std::string& directory);
+
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 

@@ -131,6 +131,7 @@ int runFit(const FitCommandOptions& o) {
   simulate.cords_file = (out / "cords.json").string();
   if (fit.tissue.size() > 0) simulate.tissue_file = (out / "tissue.json").string();
   simulate.out_dir = o.out_dir;
+  simulate.threads = o.threads;
   simulate.quiet = true;
   simulate.sections = false;  // written below, with the seed closure beside the fitted one
   std::printf("fitted cords: full closure from the open state\n");

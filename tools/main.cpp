@@ -1,10 +1,12 @@
 // chordfit: command-line entry. The only translation unit that includes CLI11 (slow headers);
 // it fills the option structs of commands.h and dispatches.
 #include <exception>
+#include <filesystem>
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
+#include "tools/command_support.h"
 #include "tools/commands.h"
 
 namespace {
@@ -282,6 +284,28 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& e) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
+  }
+  // Before any work: an output place that cannot be written is a usage error (exit 2).
+  const auto parent = [](const std::string& file) {
+    return file.empty() ? std::string() : std::filesystem::path(file).parent_path().string();
+  };
+  const std::pair<const char*, std::string> outputs[] = {
+      {"make-valve", make_valve.out_dir},
+      {"import-mesh", import_mesh.out_dir},
+      {"heuristic", parent(heuristic.out_file)},
+      {"edit-cords", parent(edit_cords.out_file)},
+      {"metrics", parent(metrics.out_file)},
+      {"simulate", simulate.out_dir},
+      {"sweep-cord", sweep_cord.out_dir},
+      {"make-case", make_case.out_dir},
+      {"fit", fit.out_dir},
+      {"compare", compare.out_dir}};
+  for (const auto& [command, directory] : outputs) {
+    const bool optional_and_absent = directory.empty() && (std::string(command) == "metrics" ||
+                                                           std::string(command) == "compare");
+    if (app.got_subcommand(command) && !optional_and_absent &&
+        !outputDirectoryUsable(command, directory))
+      return kExitBadInput;
   }
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);

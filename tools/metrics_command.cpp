@@ -1,6 +1,7 @@
 #include <iostream>
 
 #include "core/atomic_file.h"
+#include "core/case_extent.h"
 #include "core/mesh_checks.h"
 #include "core/mesh_io.h"
 #include "core/metrics.h"
@@ -29,6 +30,9 @@ int runMetrics(const MetricsOptions& options) {
                           std::to_string(valve_case->mesh.F.rows()) + ")");
     return reportProblems(diagnostics);
   }
+  // A closed valve stays within reach of its open state (case_extent.h).
+  if (!checkPointsNearValve(valve_case->mesh.V, V, options.mesh_file, "vertices", diagnostics))
+    return reportProblems(diagnostics);
   const ValveMetrics metrics = computeMetrics(*valve_case, V);
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << closedValveSummary(metrics)

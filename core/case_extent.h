@@ -1,0 +1,44 @@
+// Plausibility of a case's coordinates. The valve mesh must be the size of a mitral valve in
+// millimetres, and every other point of the case (closed annulus, tracings, PM tips, a closed
+// mesh to measure) within reach of it. Finite but absurd coordinates pass every other check
+// and then break the computation: a tracing point at 1e10 mm made a figure's axis loop without
+// end, a mesh scaled by 1e6 (metres taken for micrometres) made the section resampling
+// allocate until the machine ran out of memory, and a mesh in metres has an area of 0 mm².
+#pragma once
+
+#include <string>
+
+#include <Eigen/Core>
+
+#include "core/cordset.h"
+#include "core/diagnostics.h"
+
+namespace chordfit {
+
+// Span (bounding-box diagonal) of an open mitral valve mesh, mm: adult valves span ~30-60 mm;
+// the limits leave room for paediatric and dilated valves and for test geometries, and catch
+// metres (~0.05) and micrometres (~5e4).
+constexpr double kMinValveSpanMm = 2.0;
+constexpr double kMaxValveSpanMm = 500.0;
+
+// The bounding-box diagonal of V (0 for fewer than one vertex).
+double boundingDiagonal(const Eigen::MatrixXd& V);
+
+// Error (file, "vertices") unless the mesh's span lies within the limits above.
+bool checkValveSpan(const Eigen::MatrixXd& V, const std::string& file, Diagnostics& diagnostics);
+
+// Farthest a point of the case may lie from the mesh's bounding box: the larger of 50 mm and
+// the mesh's span (PM tips sit ~20-30 mm below the annulus; tracings and the closed annulus
+// within millimetres of the leaflets).
+double valveReachMm(const Eigen::MatrixXd& mesh_V);
+
+// Error (file, "<where>[k]") for each row of `points` farther than valveReachMm from the
+// bounding box of mesh_V (at most a few lines: the first offenders and a count).
+bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
+                          const std::string& file, const std::string& where,
+                          Diagnostics& diagnostics);
+
+// The positions of the tips, open and (when given) closed, one per row.
+Eigen::MatrixXd tipPositions(const std::vector<PmTip>& tips);
+
+}  // namespace chordfit
