@@ -31,20 +31,29 @@ bool checkValveSpan(const Eigen::MatrixXd& V, const std::string& file, Diagnosti
   return false;
 }
 
-Eigen::MatrixXd tipPositions(const std::vector<PmTip>& tips) {
-  std::vector<Eigen::Vector3d> rows;
-  for (const PmTip& tip : tips) {
-    rows.push_back(tip.position);
-    if (tip.closed_position) rows.push_back(*tip.closed_position);
-  }
-  Eigen::MatrixXd out(static_cast<Eigen::Index>(rows.size()), 3);
-  for (std::size_t k = 0; k < rows.size(); ++k) out.row(static_cast<Eigen::Index>(k)) = rows[k];
-  return out;
-}
-
 double valveReachMm(const Eigen::MatrixXd& mesh_V) {
   return std::max(50.0, boundingDiagonal(mesh_V));
 }
+
+namespace {
+
+// How far p lies from the box [lo, hi] (the per-axis excess beyond it); NaN for NaN.
+double distanceFromBox(const Eigen::RowVector3d& lo, const Eigen::RowVector3d& hi,
+                       const Eigen::RowVector3d& p) {
+  return (lo - p).cwiseMax(p - hi).cwiseMax(0.0).norm();
+}
+
+void reportFarPoint(const Eigen::RowVector3d& p, double distance, double reach,
+                    const std::string& file, const std::string& where, Diagnostics& diagnostics) {
+  char position[96];
+  std::snprintf(position, sizeof position, "(%.4g, %.4g, %.4g)", p(0), p(1), p(2));
+  diagnostics.error(file, where,
+                    std::string(position) + " lies " + millimetres(distance) +
+                        " from the valve mesh (every point must be within " + millimetres(reach) +
+                        " of its bounding box)");
+}
+
+}  // namespace
 
 bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
                           const std::string& file, const std::string& where,
@@ -55,25 +64,37 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
   constexpr int kReported = 3;
   int far = 0;
   for (Eigen::Index k = 0; k < points.rows(); ++k) {
-    // Distance from the box: the per-axis excess beyond it.
     const Eigen::RowVector3d p = points.row(k);
-    const Eigen::RowVector3d excess = (lo - p).cwiseMax(p - hi).cwiseMax(0.0);
-    const double distance = excess.norm();
-    if (distance <= reach) continue;  // also false for NaN: reported below as far
-    if (++far <= kReported) {
-      char position[96];
-      std::snprintf(position, sizeof position, "(%.4g, %.4g, %.4g)", p(0), p(1), p(2));
-      diagnostics.error(file, where + "[" + std::to_string(k) + "]",
-                        std::string(position) + " lies " + millimetres(distance) +
-                            " from the valve mesh (every point must be within " +
-                            millimetres(reach) + " of its bounding box)");
-    }
+    const double distance = distanceFromBox(lo, hi, p);
+    if (distance <= reach) continue;  // false for NaN too: reported as far
+    if (++far <= kReported)
+      reportFarPoint(p, distance, reach, file, where + "[" + std::to_string(k) + "]", diagnostics);
   }
   if (far > kReported) {
     diagnostics.error(file, where,
                       std::to_string(far - kReported) + " more point(s) as far from the valve");
   }
   return far == 0;
+}
+
+bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,
+                        const std::string& file, Diagnostics& diagnostics) {
+  if (mesh_V.rows() == 0) return true;
+  const Eigen::RowVector3d lo = mesh_V.colwise().minCoeff(), hi = mesh_V.colwise().maxCoeff();
+  const double reach = valveReachMm(mesh_V);
+  bool ok = true;
+  auto check = [&](const Eigen::Vector3d& position, const std::string& where) {
+    const double distance = distanceFromBox(lo, hi, position.transpose());
+    if (distance <= reach) return;
+    reportFarPoint(position.transpose(), distance, reach, file, where, diagnostics);
+    ok = false;
+  };
+  for (std::size_t t = 0; t < tips.size(); ++t) {
+    const std::string where = "tips[" + std::to_string(t) + "]";
+    check(tips[t].position, where + ".position");
+    if (tips[t].closed_position) check(*tips[t].closed_position, where + ".closed_position");
+  }
+  return ok;
 }
 
 }  // namespace chordfit

@@ -38,7 +38,8 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
                           const std::string& file, const std::string& where,
                           Diagnostics& diagnostics);
 
-// The positions of the tips, open and (when given) closed, one per row.
-Eigen::MatrixXd tipPositions(const std::vector<PmTip>& tips);
+// The same for PM tips: errors (file, "tips[t].position" or "tips[t].closed_position").
+bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,
+                        const std::string& file, Diagnostics& diagnostics);
 
 }  // namespace chordfit

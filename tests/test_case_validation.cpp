@@ -180,7 +180,7 @@ TEST_F(ValidateCommand, ReportsAPmTipFarFromTheValve) {
             R"({"tips": [{"name": "anterolateral", "position": [0, 5, -1e6]},
                          {"name": "posteromedial", "position": [0, -5, -20]}]})");
   editCaseJson([](nlohmann::json& j) { j["pm_tips"] = "pm_tips.json"; });
-  expectError("pm_tips\\.json", "tips\\[0\\]: .* from the valve mesh");
+  expectError("pm_tips\\.json", "tips\\[0\\]\\.position: .* from the valve mesh");
 }
 
 // validate checks the simulator overrides as simulate and fit read them.

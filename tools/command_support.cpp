@@ -45,8 +45,7 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
       !checkCordVertices(set, static_cast<int>(valve_case.mesh.V.rows()), cords_file,
                          diagnostics) ||
-      !checkPointsNearValve(valve_case.mesh.V, tipPositions(set.tips), cords_file, "tips",
-                            diagnostics)) {
+      !checkTipsNearValve(valve_case.mesh.V, set.tips, cords_file, diagnostics)) {
     diagnostics.print(std::cerr);
     return std::nullopt;
   }
