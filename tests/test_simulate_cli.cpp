@@ -51,6 +51,9 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
       std::string::npos);
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "sections.svg"))
       << "no tracings, no figure of them";
+  // The files were staged and moved in; nothing of the staging is left.
+  for (const auto& entry : std::filesystem::directory_iterator(dir_ / "sim"))
+    EXPECT_NE(entry.path().filename().string().rfind(".staging-", 0), 0u) << entry.path();
 }
 
 TEST(SimulateCommandWithTracings, DrawsTheClosedValveAgainstTheTracingsOfEveryPlane) {

@@ -25,7 +25,8 @@ TEST(SvgLinePlots, WritesOnePathPerSeriesAndEscapesLabels) {
   EXPECT_NE(svg.find("cost &lt;history&gt;"), std::string::npos);
   EXPECT_NE(svg.find("ceres &amp; co"), std::string::npos);
   std::size_t paths = 0;
-  for (std::size_t at = svg.find("<path"); at != std::string::npos; at = svg.find("<path", at + 1)) {
+  for (std::size_t at = svg.find("<path"); at != std::string::npos;
+       at = svg.find("<path", at + 1)) {
     ++paths;
   }
   EXPECT_EQ(paths, 4u);  // 2 series x 2 panels

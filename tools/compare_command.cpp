@@ -19,6 +19,7 @@
 #include "core/simulator.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -226,7 +227,8 @@ int runCompare(const CompareOptions& options) {
               << closedValveSummary(s.metrics, "  ");
   }
   if (!options.out_dir.empty()) {
-    const std::filesystem::path out(options.out_dir);
+    StagedOutput staged(options.out_dir);
+    const std::filesystem::path& out = staged.dir();
     writeFileAtomically(out / "compare.md", compareMarkdown(*valve_case, sets));
     writeFileAtomically(out / "compare.csv", compareCsv(sets));
     const std::string sections = sectionsSvg(*valve_case, sets);
@@ -238,8 +240,9 @@ int runCompare(const CompareOptions& options) {
           enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
                           sets[i].metrics.orifice));
     }
-    std::cout << "wrote " << (out / "compare.md").string() << ", compare.csv"
-              << (sections.empty() ? "" : ", sections.svg") << ", enface_1.svg";
+    staged.publish();
+    std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "compare.md").string()
+              << ", compare.csv" << (sections.empty() ? "" : ", sections.svg") << ", enface_1.svg";
     if (sets.size() > 1) std::cout << " .. enface_" << sets.size() << ".svg";
     std::cout << " (one per cord set, in the order given)\n";
   }

@@ -20,6 +20,7 @@
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/fit_report.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -38,6 +39,12 @@ std::string joinNames(const std::vector<std::string>& names) {
 }  // namespace
 
 int runFit(const FitCommandOptions& o) {
+  std::error_code same_error;
+  if (std::filesystem::equivalent(o.out_dir, o.case_dir, same_error)) {
+    std::cerr << "error: fit: --out: " << o.out_dir
+              << " is the case directory; the fit's cords.json would replace the case's\n";
+    return kExitBadInput;
+  }
   const auto mode = inverse::parseParameterMode(o.params);
   if (!mode) {
     std::cerr << "error: fit: --params: expected scales, groups or scales+tips, got \"" << o.params
@@ -72,6 +79,10 @@ int runFit(const FitCommandOptions& o) {
                            {"--fd-tip-step", o.fd_tip_step_mm}},
                           "a positive number"))
     return kExitBadInput;
+  if (o.threads > 64) {  // as simulate and sweep-cord
+    std::cerr << "error: fit: --threads: at most 64, got " << o.threads << "\n";
+    return kExitBadInput;
+  }
   const auto valve_case = loadCaseOrReport(o.case_dir);
   if (!valve_case) return kExitBadInput;
   if (valve_case->tracings.empty()) {
@@ -120,7 +131,8 @@ int runFit(const FitCommandOptions& o) {
     return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
   }
 
-  const std::filesystem::path out(o.out_dir);
+  StagedOutput staged(o.out_dir);
+  const std::filesystem::path& out = staged.dir();
   writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
   // The tissue the cords were fitted on, when the tissue pre-fit changed it; the closure
   // written below uses it too.
@@ -130,7 +142,7 @@ int runFit(const FitCommandOptions& o) {
   simulate.case_dir = o.case_dir;
   simulate.cords_file = (out / "cords.json").string();
   if (fit.tissue.size() > 0) simulate.tissue_file = (out / "tissue.json").string();
-  simulate.out_dir = o.out_dir;
+  simulate.out_dir = out.string();
   simulate.threads = o.threads;
   simulate.quiet = true;
   simulate.sections = false;  // written below, with the seed closure beside the fitted one
@@ -192,6 +204,7 @@ int runFit(const FitCommandOptions& o) {
                             {"fitted closure", fit.final_evaluation.closed_V, "", false, 2.0}},
                            {valve_case->name + ": seed and fitted closures against the tracings (" +
                             o.optimizer + ", " + o.params + ")"}));
+  staged.publish();
 
   std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
               fit.seconds, fit.termination.c_str());
@@ -211,7 +224,7 @@ int runFit(const FitCommandOptions& o) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
-  std::cout << "wrote " << (out / "cords.json").string()
+  std::cout << "wrote " << (std::filesystem::path(o.out_dir) / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
                "sections.svg, enface.svg, "
             << (fit.uncertainty.ok() ? "uncertainty.csv, " : "") << "report.md\n";

@@ -106,7 +106,9 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
   cmd->add_option("--step", o.step, "Scale step")->capture_default_str();
   cmd->add_option("--window", o.window, "Half-width of the local quadratic fit, points")
       ->capture_default_str();
-  cmd->add_option("--threads", o.threads, "Closures run in parallel")->capture_default_str();
+  cmd->add_option("--threads", o.threads, "Closures run in parallel")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
 }
 

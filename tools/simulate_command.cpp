@@ -15,6 +15,7 @@
 #include "core/simulator.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -135,7 +136,8 @@ int runSimulate(const SimulateOptions& options) {
                        {"mean_distance_to_open_state_mm",
                         (opened.V - valve_case->mesh.V).rowwise().norm().mean()}};
   }
-  const std::filesystem::path out(options.out_dir);
+  StagedOutput staged(options.out_dir);
+  const std::filesystem::path& out = staged.dir();
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
   writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
@@ -148,6 +150,7 @@ int runSimulate(const SimulateOptions& options) {
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
   writeFileAtomically(out / "enface.svg",
                       enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics.orifice));
+  staged.publish();
 
   std::printf("closure: %s after %d steps, %.2f s%s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
@@ -162,7 +165,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << closedValveSummary(metrics);
-  std::cout << "wrote " << (out / "closed.ply").string() << ", closed.vtk, metrics.json, enface.svg"
+  std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "closed.ply").string()
+            << ", closed.vtk, metrics.json, enface.svg"
             << (sections.empty() ? "" : ", sections.svg") << "\n";
   return kExitOk;
 }
