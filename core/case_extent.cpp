@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <vector>
 
+#include <Eigen/Geometry>
+
 namespace chordfit {
 namespace {
 
@@ -75,6 +77,47 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
                       std::to_string(far - kReported) + " more point(s) as far from the valve");
   }
   return far == 0;
+}
+
+namespace {
+
+// Newell's normal of a closed polygon (twice its vector area) and its perimeter.
+Eigen::Vector3d polygonNormal(const Eigen::MatrixXd& P) {
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  for (Eigen::Index k = 0; k < P.rows(); ++k) {
+    const Eigen::Vector3d a = P.row(k).transpose(), b = P.row((k + 1) % P.rows()).transpose();
+    n += a.cross(b);
+  }
+  return n;
+}
+
+double perimeter(const Eigen::MatrixXd& P) {
+  double length = 0.0;
+  for (Eigen::Index k = 0; k < P.rows(); ++k)
+    length += (P.row((k + 1) % P.rows()) - P.row(k)).norm();
+  return length;
+}
+
+}  // namespace
+
+bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
+                        const std::string& file, Diagnostics& diagnostics) {
+  if (open_ring.rows() < 3 || closed.rows() != open_ring.rows()) return true;  // checked elsewhere
+  const double open_length = perimeter(open_ring), closed_length = perimeter(closed);
+  if (!(closed_length >= 0.25 * open_length && closed_length <= 4.0 * open_length)) {
+    diagnostics.error(file, "points",
+                      "the closed annulus is " + millimetres(closed_length) +
+                          " around against the ring's " + millimetres(open_length) +
+                          " (accepted: 0.25 to 4 times)");
+    return false;
+  }
+  if (!(polygonNormal(open_ring).dot(polygonNormal(closed)) > 0.0)) {
+    diagnostics.error(file, "points",
+                      "the closed annulus runs the other way round than the annulus ring: its "
+                      "points must follow the ring's vertex order");
+    return false;
+  }
+  return true;
 }
 
 bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,

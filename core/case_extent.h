@@ -38,6 +38,13 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
                           const std::string& file, const std::string& where,
                           Diagnostics& diagnostics);
 
+// The closed annulus against the open ring it moves (row k of `closed` is where ring vertex k
+// goes): the same winding (Newell normals of the two polygons at less than 90 degrees) and a
+// perimeter within 0.25-4 times the ring's. Errors name (file, "points"). A reversed order or
+// a collapsed annulus passed every other check and then made the closure diverge (exit 3).
+bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
+                        const std::string& file, Diagnostics& diagnostics);
+
 // The same for PM tips: errors (file, "tips[t].position" or "tips[t].closed_position").
 bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,
                         const std::string& file, Diagnostics& diagnostics);

@@ -311,6 +311,11 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
                             " closed-state annulus positions for an annulus ring of " +
                             std::to_string(c.mesh.annulus.size()) + " vertices");
       ok = false;
+    } else if (ring_ok && mesh_ok) {
+      Eigen::MatrixXd open_ring(c.mesh.annulus.size(), 3);
+      for (Eigen::Index k = 0; k < c.mesh.annulus.size(); ++k)
+        open_ring.row(k) = c.mesh.V.row(c.mesh.annulus(k));
+      ok &= checkClosedAnnulus(open_ring, c.annulus_closed, closed->name, diagnostics);
     }
   } else {
     ok = false;

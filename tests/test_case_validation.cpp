@@ -146,6 +146,21 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusCountThatDoesNotMatchTheRing) {
   expectError("annulus_closed\\.json", "3 closed-state annulus positions for an annulus ring of 8");
 }
 
+// The closed annulus in the reverse order of the ring, or collapsed to a point: both passed
+// before and made the closure diverge (exit 3).
+TEST_F(ValidateCommand, ReportsAClosedAnnulusRunningTheOtherWayOrCollapsed) {
+  Eigen::MatrixXd reversed = valve_.annulus_closed.colwise().reverse();
+  nlohmann::json points = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < reversed.rows(); ++k)
+    points.push_back({reversed(k, 0), reversed(k, 1), reversed(k, 2)});
+  writeText(dir_ / "annulus_closed.json", nlohmann::json{{"points", points}}.dump());
+  expectError("annulus_closed\\.json", "points: the closed annulus runs the other way round");
+  points = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < reversed.rows(); ++k) points.push_back({1.0, 2.0, 3.0});
+  writeText(dir_ / "annulus_closed.json", nlohmann::json{{"points", points}}.dump());
+  expectError("annulus_closed\\.json", "points: the closed annulus is 0 mm around");
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
   writeText(dir_ / "tracings.json",
             R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
