@@ -26,8 +26,12 @@ std::string lineColumn(const std::string& text, std::size_t byte) {
 
 // nlohmann's message starts with "[json.exception.parse_error.101] parse error at line ..";
 // keep only the reason after the last ": ".
+// nlohmann's message: "[json.exception.parse_error.101] parse error at line 1, column 3:
+// syntax error while parsing value - invalid literal; last read: '[[N'". The reason is what
+// follows the position (the last ": " would cut it to "'[[N'").
 std::string parseReason(const std::string& message) {
-  const std::size_t colon = message.rfind(": ");
+  const std::size_t column = message.find("column ");
+  const std::size_t colon = message.find(": ", column == std::string::npos ? 0 : column);
   return colon == std::string::npos ? message : message.substr(colon + 2);
 }
 

@@ -70,7 +70,9 @@ TEST_F(ValidateCommand, ReportsAMissingCaseDirectory) {
 
 TEST_F(ValidateCommand, ReportsMalformedJsonWithLineAndColumn) {
   writeText(dir_ / "case.json", "{\n  \"version\": 1,\n  \"mesh\": \"open.ply\",,\n}");
-  expectError("case\\.json", "line 3, column [0-9]+: malformed JSON");
+  // The whole reason, not the part after its last ": " (which cut it to the last characters read).
+  expectError("case\\.json",
+              "line 3, column [0-9]+: malformed JSON: syntax error while parsing object key");
 }
 
 TEST_F(ValidateCommand, ReportsAWrongJsonType) {
