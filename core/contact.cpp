@@ -43,22 +43,26 @@ ContactDetector::ContactDetector(const Eigen::MatrixXd& V_rest, const Eigen::Mat
 namespace {
 
 // Fewer items than this are not worth a barrier: handled as one part on the calling thread.
-constexpr size_t kMinItemsToSplit = 512;
+constexpr int kMinItemsToSplit = 512;
 
 // Runs task(part, begin, end) over [0, count) cut into one contiguous part per thread of
-// `team` (all of it as part 0 without one, or when count is small).
-template <class Task>
-void inParts(SweepTeam* team, size_t count, Task task) {
+// `team` (all of it as part 0 without one, or when count is small), with `parts` at least
+// that many scratch parts. Returns how many parts ran: parts[0 .. n) hold the results.
+template <class Part, class Task>
+int inParts(SweepTeam* team, int count, std::vector<Part>& parts, Task task) {
   if (count < kMinItemsToSplit) team = nullptr;
-  const int parts = team ? team->threads() : 1;
+  const int used = team ? team->threads() : 1;
+  if (static_cast<int>(parts.size()) < used) parts.resize(used);
   auto run = [&](int part) {
-    const size_t begin = count * part / parts, end = count * (part + 1) / parts;
-    task(part, begin, end);
+    int begin, end;
+    partRange(count, used, part, begin, end);
+    task(parts[part], begin, end);
   };
   if (team)
     team->run(run);
   else
     run(0);
+  return used;
 }
 
 }  // namespace
@@ -115,12 +119,11 @@ void ContactDetector::buildCandidates(const double* x, const double* w, SweepTea
 
   // The triangles in parts, each part's candidates in triangle order: concatenated, the list
   // is the one a single pass makes.
-  parts_.resize(team ? team->threads() : 1);
-  for (Part& part : parts_) part.candidates.clear(), part.distance.clear();
-  inParts(team, static_cast<size_t>(F_.rows()), [&](int part, size_t begin, size_t end) {
-    candidatesOf(static_cast<int>(begin), static_cast<int>(end), x, w, parts_[part]);
-  });
-  for (const Part& part : parts_) {
+  const int used =
+      inParts(team, static_cast<int>(F_.rows()), parts_,
+              [&](Part& part, int begin, int end) { candidatesOf(begin, end, x, w, part); });
+  for (int p = 0; p < used; ++p) {
+    const Part& part = parts_[p];
     candidates_.insert(candidates_.end(), part.candidates.begin(), part.candidates.end());
     candidate_distance_.insert(candidate_distance_.end(), part.distance.begin(),
                                part.distance.end());
@@ -226,12 +229,11 @@ void ContactDetector::detect(const double* x_start, const double* x_pred, const 
   }
   // The candidates in parts; concatenated, the constraints are those of a single pass, in
   // the same order.
-  parts_.resize(team ? team->threads() : 1);
-  for (Part& part : parts_) part.contacts.clear();
-  inParts(team, candidates_.size(), [&](int part, size_t begin, size_t end) {
-    filterCandidates(begin, end, x_start, x_pred, parts_[part]);
-  });
-  for (const Part& part : parts_) out.insert(out.end(), part.contacts.begin(), part.contacts.end());
+  const int used = inParts(
+      team, static_cast<int>(candidates_.size()), parts_,
+      [&](Part& part, int begin, int end) { filterCandidates(begin, end, x_start, x_pred, part); });
+  for (int p = 0; p < used; ++p)
+    out.insert(out.end(), parts_[p].contacts.begin(), parts_[p].contacts.end());
 }
 
 void ContactDetector::filterCandidates(size_t e_begin, size_t e_end, const double* x_start,
