@@ -39,21 +39,32 @@ double valveReachMm(const Eigen::MatrixXd& mesh_V) {
 
 namespace {
 
-// How far p lies from the box [lo, hi] (the per-axis excess beyond it); NaN for NaN.
-double distanceFromBox(const Eigen::RowVector3d& lo, const Eigen::RowVector3d& hi,
-                       const Eigen::RowVector3d& p) {
-  return (lo - p).cwiseMax(p - hi).cwiseMax(0.0).norm();
-}
+// The region a case's other points must lie in: within `reach` of the mesh's bounding box.
+struct ValveReach {
+  Eigen::RowVector3d lo, hi;
+  double reach;
+  explicit ValveReach(const Eigen::MatrixXd& mesh_V)
+      : lo(mesh_V.colwise().minCoeff()),
+        hi(mesh_V.colwise().maxCoeff()),
+        reach(valveReachMm(mesh_V)) {}
 
-void reportFarPoint(const Eigen::RowVector3d& p, double distance, double reach,
-                    const std::string& file, const std::string& where, Diagnostics& diagnostics) {
-  char position[96];
-  std::snprintf(position, sizeof position, "(%.4g, %.4g, %.4g)", p(0), p(1), p(2));
-  diagnostics.error(file, where,
-                    std::string(position) + " lies " + millimetres(distance) +
-                        " from the valve mesh (every point must be within " + millimetres(reach) +
-                        " of its bounding box)");
-}
+  // True when p lies within reach; otherwise reports it as (file, where) and returns false.
+  // NaN lies nowhere.
+  bool check(const Eigen::RowVector3d& p, const std::string& file, const std::string& where,
+             Diagnostics& diagnostics, bool report = true) const {
+    const double distance = (lo - p).cwiseMax(p - hi).cwiseMax(0.0).norm();  // from the box
+    if (distance <= reach) return true;
+    if (report) {
+      char position[96];
+      std::snprintf(position, sizeof position, "(%.4g, %.4g, %.4g)", p(0), p(1), p(2));
+      diagnostics.error(file, where,
+                        std::string(position) + " lies " + millimetres(distance) +
+                            " from the valve mesh (every point must be within " +
+                            millimetres(reach) + " of its bounding box)");
+    }
+    return false;
+  }
+};
 
 }  // namespace
 
@@ -61,16 +72,13 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
                           const std::string& file, const std::string& where,
                           Diagnostics& diagnostics) {
   if (mesh_V.rows() == 0) return true;
-  const Eigen::RowVector3d lo = mesh_V.colwise().minCoeff(), hi = mesh_V.colwise().maxCoeff();
-  const double reach = valveReachMm(mesh_V);
+  const ValveReach valve(mesh_V);
   constexpr int kReported = 3;
   int far = 0;
   for (Eigen::Index k = 0; k < points.rows(); ++k) {
-    const Eigen::RowVector3d p = points.row(k);
-    const double distance = distanceFromBox(lo, hi, p);
-    if (distance <= reach) continue;  // false for NaN too: reported as far
-    if (++far <= kReported)
-      reportFarPoint(p, distance, reach, file, where + "[" + std::to_string(k) + "]", diagnostics);
+    if (!valve.check(points.row(k), file, where + "[" + std::to_string(k) + "]", diagnostics,
+                     far < kReported))
+      ++far;
   }
   if (far > kReported) {
     diagnostics.error(file, where,
@@ -123,19 +131,14 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
 bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,
                         const std::string& file, Diagnostics& diagnostics) {
   if (mesh_V.rows() == 0) return true;
-  const Eigen::RowVector3d lo = mesh_V.colwise().minCoeff(), hi = mesh_V.colwise().maxCoeff();
-  const double reach = valveReachMm(mesh_V);
+  const ValveReach valve(mesh_V);
   bool ok = true;
-  auto check = [&](const Eigen::Vector3d& position, const std::string& where) {
-    const double distance = distanceFromBox(lo, hi, position.transpose());
-    if (distance <= reach) return;
-    reportFarPoint(position.transpose(), distance, reach, file, where, diagnostics);
-    ok = false;
-  };
   for (std::size_t t = 0; t < tips.size(); ++t) {
     const std::string where = "tips[" + std::to_string(t) + "]";
-    check(tips[t].position, where + ".position");
-    if (tips[t].closed_position) check(*tips[t].closed_position, where + ".closed_position");
+    ok &= valve.check(tips[t].position.transpose(), file, where + ".position", diagnostics);
+    if (tips[t].closed_position)
+      ok &= valve.check(tips[t].closed_position->transpose(), file, where + ".closed_position",
+                        diagnostics);
   }
   return ok;
 }
