@@ -287,27 +287,30 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
   }
-  // Before any work: an output place that cannot be written is a usage error (exit 2).
+  // Before any work: an output place that cannot be written is a usage error (exit 2). The
+  // directory a command writes to (a file's directory); metrics and compare write only when
+  // given --out.
+  struct OutputPlace {
+    const char* command;
+    std::string directory;
+    bool optional;
+  };
   const auto parent = [](const std::string& file) {
     return file.empty() ? std::string() : std::filesystem::path(file).parent_path().string();
   };
-  const std::pair<const char*, std::string> outputs[] = {
-      {"make-valve", make_valve.out_dir},
-      {"import-mesh", import_mesh.out_dir},
-      {"heuristic", parent(heuristic.out_file)},
-      {"edit-cords", parent(edit_cords.out_file)},
-      {"metrics", parent(metrics.out_file)},
-      {"simulate", simulate.out_dir},
-      {"sweep-cord", sweep_cord.out_dir},
-      {"make-case", make_case.out_dir},
-      {"fit", fit.out_dir},
-      {"compare", compare.out_dir}};
-  for (const auto& [command, directory] : outputs) {
-    const bool optional_and_absent = directory.empty() && (std::string(command) == "metrics" ||
-                                                           std::string(command) == "compare");
-    if (app.got_subcommand(command) && !optional_and_absent &&
-        !outputDirectoryUsable(command, directory))
-      return kExitBadInput;
+  const OutputPlace places[] = {{"make-valve", make_valve.out_dir, false},
+                                {"import-mesh", import_mesh.out_dir, false},
+                                {"heuristic", parent(heuristic.out_file), false},
+                                {"edit-cords", parent(edit_cords.out_file), false},
+                                {"metrics", parent(metrics.out_file), true},
+                                {"simulate", simulate.out_dir, false},
+                                {"sweep-cord", sweep_cord.out_dir, false},
+                                {"make-case", make_case.out_dir, false},
+                                {"fit", fit.out_dir, false},
+                                {"compare", compare.out_dir, true}};
+  for (const OutputPlace& place : places) {
+    if (!app.got_subcommand(place.command) || (place.optional && place.directory.empty())) continue;
+    if (!outputDirectoryUsable(place.command, place.directory)) return kExitBadInput;
   }
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);
