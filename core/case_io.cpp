@@ -1,6 +1,8 @@
 #include "core/case_io.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <nlohmann/json.hpp>
 
@@ -132,6 +134,34 @@ bool readTracingLeaflet(const json& value, const std::string& where,
   return true;
 }
 
+// A tracing is drawn on its image plane; its points must lie on it. The metrics and the fit
+// cut the closed mesh by the plane (section prolapse, section figure), so points off it would
+// be compared with a section they were not drawn on. The tolerance allows for rounding and an
+// image slice's thickness.
+constexpr double kTracingPlaneToleranceMm = 1.0;
+
+bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, JsonFields& fields) {
+  int off = 0;
+  double farthest = 0.0;
+  Eigen::Index first = -1;
+  for (Eigen::Index k = 0; k < tracing.points.rows(); ++k) {
+    const double distance = std::abs(
+        tracing.plane_normal.dot(tracing.points.row(k).transpose() - tracing.plane_origin));
+    if (distance <= kTracingPlaneToleranceMm) continue;
+    if (off++ == 0) first = k;
+    farthest = std::max(farthest, distance);
+  }
+  if (off == 0) return true;
+  char what[200];
+  std::snprintf(what, sizeof what,
+                "%d of %d points lie off the tracing's plane (first: point %ld; farthest %.3g mm; "
+                "at most %g mm): the plane or the points are wrong",
+                off, static_cast<int>(tracing.points.rows()), static_cast<long>(first), farthest,
+                kTracingPlaneToleranceMm);
+  fields.error(where, what);
+  return false;
+}
+
 bool readTracing(const json& entry, const std::string& where, const fs::path& dir,
                  const std::vector<std::string>& leaflet_names, JsonFields& fields,
                  Tracing& tracing) {
@@ -181,11 +211,13 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     fields.error(where, "a tracing needs \"points\" or \"file\"");
     return false;
   }
+  const std::string points_where = fieldPath(where, points != nullptr ? "points" : "file");
   if (ok && tracing.points.rows() < 2) {
-    fields.error(fieldPath(where, points != nullptr ? "points" : "file"),
+    fields.error(points_where,
                  "a tracing needs at least 2 points, got " + std::to_string(tracing.points.rows()));
     ok = false;
   }
+  if (ok) ok = checkTracingOnItsPlane(tracing, points_where, fields);
   return ok;
 }
 

@@ -861,6 +861,22 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       problems.push_back({r.key, what});
     }
   }
+  // A given time step must be one a closure can use: kMinDtMs is about a thousandth of the
+  // automatic step of the finest meshes run (0.3 mm edges), below which every step moves the
+  // valve less than the tolerance; and the pressure ramp alone must fit under the step cap, or
+  // no closure can settle (dt_ms = 1e-300 used to pass and fail only in the run, exit 3).
+  constexpr double kMinDtMs = 1e-6;
+  if (s.dt_ms > 0.0 && s.dt_ms < kMinDtMs) {
+    char what[160];
+    std::snprintf(what, sizeof what, "%g is below %g ms (0 = automatic)", s.dt_ms, kMinDtMs);
+    problems.push_back({"dt_ms", what});
+  } else if (s.dt_ms > 0.0 && s.max_steps >= 1 && s.ramp_ms / s.dt_ms > s.max_steps) {
+    char what[200];
+    std::snprintf(what, sizeof what,
+                  "%g: the %g ms pressure ramp alone takes %.0f steps, more than max_steps = %d",
+                  s.dt_ms, s.ramp_ms, std::ceil(s.ramp_ms / s.dt_ms), s.max_steps);
+    problems.push_back({"dt_ms", what});
+  }
   return problems;
 }
 

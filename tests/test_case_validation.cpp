@@ -181,6 +181,22 @@ TEST_F(ValidateCommand, ReportsATracingPointFarFromTheValve) {
   expectError("tracings\\.json", "tracings\\[0\\]\\.points\\[0\\]: .* from the valve mesh");
 }
 
+TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
+  // Near the valve, but 5 mm off the plane y = 0 it claims to be drawn on.
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "points": [[1, 0, -2], [2, 5, -2], [3, 5, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.points: 2 of 3 points lie off the tracing's plane \\(first: "
+              "point 1; farthest 5 mm");
+}
+
+TEST_F(ValidateCommand, ReportsATimeStepTooSmallToUse) {
+  editCaseJson([](nlohmann::json& j) { j["simulation"] = {{"dt_ms", 1e-300}}; });
+  expectError("[^\\n]*case\\.json", "simulation\\.dt_ms: 1e-300 is below");
+}
+
 TEST_F(ValidateCommand, ReportsAMeshThatIsNotInMillimetres) {
   valve_.mesh.V *= 1e6;
   valve_.annulus_closed *= 1e6;

@@ -156,17 +156,21 @@ TEST_F(CompareCommand, RejectsACordSetOfAnotherMesh) {
 }
 
 TEST_F(CompareCommand, ADivergingClosureExitsWith3AndWritesNothing) {
-  // dt = 1e-200 ms is inside the accepted range, but 1 / dt^2 overflows: the first step gives
-  // NaN positions (as in SimulateCommand.ADivergingRunExitsWith3AndWritesNoOutput).
+  // Settings inside their ranges that still diverge (testing::kDivergingSimulationJson), on
+  // the coarse parametric valve where they blow up fastest.
   const fs::path case_copy = *dir_ / "diverging-case";
-  fs::copy(caseDir(), case_copy, fs::copy_options::recursive);
+  ASSERT_EQ(runChordfit("make-valve --edge 3.0 --out " + quoted(case_copy)).exit_code, 0);
+  ASSERT_EQ(runChordfit("heuristic " + quoted(case_copy) + " --out " +
+                        quoted(*dir_ / "diverging-cords.json"))
+                .exit_code,
+            0);
   nlohmann::json c = nlohmann::json::parse(readText(case_copy / "case.json"));
-  c["simulation"] = {{"dt_ms", 1e-200}};
+  c["simulation"] = nlohmann::json::parse(testing::kDivergingSimulationJson);
   testing::writeText(case_copy / "case.json", c.dump());
   const fs::path out = *dir_ / "diverged";
-  const auto r =
-      runChordfit("compare " + quoted(case_copy) + " " + quoted(case_copy / "cords.json") + " " +
-                  quoted(*dir_ / "loose.json") + " --labels a,b --out " + quoted(out));
+  const auto r = runChordfit(
+      "compare " + quoted(case_copy) + " " + quoted(*dir_ / "diverging-cords.json") + " " +
+      quoted(*dir_ / "diverging-cords.json") + " --labels a,b --out " + quoted(out));
   EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
   EXPECT_NE(r.err.find("simulation failed"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(out / "compare.md"));

@@ -147,11 +147,10 @@ TEST_F(SimulateCommand, RejectsOutOfRangeSimulationSettingsNamingFileKeyAndProbl
 }
 
 TEST_F(SimulateCommand, ADivergingRunExitsWith3AndWritesNoOutput) {
-  // Settings inside their ranges can still break a run: with dt = 1e-200 ms, 1 / dt^2
-  // overflows, the first projection yields NaN positions and the step loop must stop with an
-  // error instead of writing them.
+  // Settings inside their ranges can still break a run (testing::kDivergingSimulationJson);
+  // the step loop must stop with an error instead of writing the positions.
   nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
-  c["simulation"] = {{"dt_ms", 1e-200}};
+  c["simulation"] = nlohmann::json::parse(testing::kDivergingSimulationJson);
   testing::writeText(case_dir_ / "case.json", c.dump());
   const auto r =
       runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "sim"));

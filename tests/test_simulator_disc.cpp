@@ -100,16 +100,37 @@ TEST(SimulatorDeterminism, TwoRunsAreBitIdenticalAlsoWhenRunConcurrently) {
   EXPECT_EQ(first.steps, second.steps);
 }
 
-TEST(SimulatorDivergence, NonFiniteStateFromAnAbsurdTimeStepIsReportedAsAnError) {
-  // dt = 1e-200 ms: 1/dt^2 overflows, alpha~ = alpha/dt^2 is infinite and the first
-  // projection produces NaN; the step loop must notice and return an error, no positions.
+TEST(SimulatorDivergence, ExplodingPositionsAreReportedAsAnError) {
+  // Valid input cannot be made to diverge quickly, so the guard is tested with a PM tip that
+  // runs 1e6 mm away during the ramp: its taut cord drags the centre vertex ~1 m per step,
+  // which the step loop must report as an error, returning no positions.
+  SimulationModel model = testing::clampedDiscModel(kDiscRadius, kDiscRings);
+  model.tip_end = Eigen::RowVector3d(0.0, 0.0, -1e6);
+  model.cords.push_back({0, 0, 10.0, 0.0, std::nullopt});  // tip 0 to the centre vertex
+  const SimulationResult result = simulate(model, discSettings());
+  EXPECT_FALSE(result.ok());
+  EXPECT_TRUE(result.diverged);
+  EXPECT_NE(result.error.find("diverged"), std::string::npos) << result.error;
+  EXPECT_LE(result.steps, 3) << "noticed at once";
+  EXPECT_EQ(result.V.size(), 0);
+}
+
+TEST(SimulatorValidation, RejectsATimeStepTooSmallToUse) {
+  // dt = 1e-200 ms overflowed 1 / dt^2 and diverged (exit 3) before it was range-checked.
   SimulationSettings settings = discSettings();
   settings.dt_ms = 1e-200;
-  const SimulationResult result =
-      simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
+  SimulationResult result = simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
   EXPECT_FALSE(result.ok());
-  EXPECT_NE(result.error.find("diverged"), std::string::npos) << result.error;
-  EXPECT_EQ(result.V.size(), 0);
+  EXPECT_FALSE(result.diverged);
+  EXPECT_NE(result.error.find("dt_ms"), std::string::npos) << result.error;
+  // A usable step whose pressure ramp alone outlasts the step cap cannot settle either.
+  settings.dt_ms = 1e-3;  // the 10 ms ramp: 10,000 steps
+  settings.max_steps = 5000;
+  result = simulate(testing::clampedDiscModel(kDiscRadius, kDiscRings), settings);
+  EXPECT_FALSE(result.ok());
+  EXPECT_NE(result.error.find("max_steps"), std::string::npos) << result.error;
+  settings.max_steps = 10001;
+  EXPECT_TRUE(settingsProblems(settings).empty());
 }
 
 TEST(SimulatorDivergence, HugeTimeStepIsRejected) {
