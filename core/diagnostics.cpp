@@ -14,8 +14,9 @@ void Diagnostics::merge(const Diagnostics& other) {
 
 void Diagnostics::print(std::ostream& out) const {
   for (const Problem& p : problems_) {
-    out << "error: " << p.file << ": " << (p.where.empty() ? "-" : p.where) << ": " << p.what
-        << "\n";
+    out << "error: " << p.file << ": ";
+    if (!p.where.empty()) out << p.where << ": ";  // a problem of the whole file names no field
+    out << p.what << "\n";
   }
 }
 

@@ -11,7 +11,7 @@ namespace chordfit {
 
 struct Problem {
   std::string file;   // path as given by the user (or a file name inside a case)
-  std::string where;  // field ("mesh", "tracings[2].points") or location ("line 7", "face 12")
+  std::string where;  // field ("mesh", "tracings[2].points"), location ("line 7"), or empty
   std::string what;   // the problem, in words
 };
 
@@ -22,7 +22,7 @@ class Diagnostics {
   const std::vector<Problem>& problems() const { return problems_; }
   // Appends another collector's problems (used when a sub-reader worked on its own).
   void merge(const Diagnostics& other);
-  // Prints one "error: file: where: what" line per problem.
+  // Prints one "error: file: where: what" line per problem ("error: file: what" without where).
   void print(std::ostream& out) const;
 
  private:

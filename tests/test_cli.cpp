@@ -56,6 +56,24 @@ TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
   EXPECT_GT(metrics["area_mm2"].get<double>(), 500.0);
 }
 
+TEST(ChordfitCli, AFileOutputThatIsADirectoryIsRefusedBeforeTheWork) {
+  // metrics --out and heuristic --out name files; an existing directory there (in the current
+  // directory too, which has no parent to check) used to fail only at the final rename, exit 1.
+  TempDir dir;
+  const std::string example = std::string(CHORDFIT_SOURCE_DIR) + "/docs/example-case";
+  std::filesystem::create_directory(dir / "taken.json");
+  for (const std::string& command :
+       {"metrics '" + example + "' --mesh '" + example + "/open.obj' --out taken.json",
+        "heuristic '" + example + "' --out taken.json"}) {
+    const auto run =
+        testing::runProgram("/bin/sh", "-c \"cd " + quoted(dir.path()) + " && " +
+                                           quoted(CHORDFIT_EXE) + " " + command + "\"");
+    EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.err;
+    EXPECT_NE(run.err.find("--out: taken.json: is a directory"), std::string::npos) << run.err;
+    EXPECT_EQ(run.out.find("| Case"), std::string::npos) << "no work before the check";
+  }
+}
+
 TEST(ChordfitCli, ValidatesTheDocumentedExampleCase) {
   const auto r =
       runChordfit(std::string("validate '") + CHORDFIT_SOURCE_DIR + "/docs/example-case'");

@@ -99,6 +99,16 @@ bool outputDirectoryUsable(const char* command, const std::string& directory) {
   return false;
 }
 
+bool outputFileUsable(const char* command, const std::string& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) {
+    std::cerr << "error: " << command << ": --out: " << file
+              << ": is a directory; give the file to write\n";
+    return false;
+  }
+  return outputDirectoryUsable(command, std::filesystem::path(file).parent_path().string());
+}
+
 std::string joinSegments(const std::vector<std::string>& segments) {
   if (segments.empty()) return "none";
   std::string joined;

@@ -44,6 +44,10 @@ bool optionsArePositive(const char* command,
 // run for minutes and then fail to write.
 bool outputDirectoryUsable(const char* command, const std::string& directory);
 
+// The same for an output file: its directory must be usable as above and the file itself must
+// not be an existing directory (the final rename would fail after the work).
+bool outputFileUsable(const char* command, const std::string& file);
+
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 

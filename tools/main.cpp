@@ -287,30 +287,30 @@ int main(int argc, char** argv) {
     const int code = app.exit(e);
     return code == 0 ? kExitOk : kExitBadInput;
   }
-  // Before any work: an output place that cannot be written is a usage error (exit 2). The
-  // directory a command writes to (a file's directory); metrics and compare write only when
-  // given --out.
+  // Before any work: an output place that cannot be written is a usage error (exit 2). A
+  // directory the command writes into, or a file it writes; metrics and compare write only
+  // when given --out.
   struct OutputPlace {
     const char* command;
-    std::string directory;
+    std::string path;
+    bool is_file;
     bool optional;
   };
-  const auto parent = [](const std::string& file) {
-    return file.empty() ? std::string() : std::filesystem::path(file).parent_path().string();
-  };
-  const OutputPlace places[] = {{"make-valve", make_valve.out_dir, false},
-                                {"import-mesh", import_mesh.out_dir, false},
-                                {"heuristic", parent(heuristic.out_file), false},
-                                {"edit-cords", parent(edit_cords.out_file), false},
-                                {"metrics", parent(metrics.out_file), true},
-                                {"simulate", simulate.out_dir, false},
-                                {"sweep-cord", sweep_cord.out_dir, false},
-                                {"make-case", make_case.out_dir, false},
-                                {"fit", fit.out_dir, false},
-                                {"compare", compare.out_dir, true}};
+  const OutputPlace places[] = {{"make-valve", make_valve.out_dir, false, false},
+                                {"import-mesh", import_mesh.out_dir, false, false},
+                                {"heuristic", heuristic.out_file, true, false},
+                                {"edit-cords", edit_cords.out_file, true, false},
+                                {"metrics", metrics.out_file, true, true},
+                                {"simulate", simulate.out_dir, false, false},
+                                {"sweep-cord", sweep_cord.out_dir, false, false},
+                                {"make-case", make_case.out_dir, false, false},
+                                {"fit", fit.out_dir, false, false},
+                                {"compare", compare.out_dir, false, true}};
   for (const OutputPlace& place : places) {
-    if (!app.got_subcommand(place.command) || (place.optional && place.directory.empty())) continue;
-    if (!outputDirectoryUsable(place.command, place.directory)) return kExitBadInput;
+    if (!app.got_subcommand(place.command) || (place.optional && place.path.empty())) continue;
+    const bool usable = place.is_file ? outputFileUsable(place.command, place.path)
+                                      : outputDirectoryUsable(place.command, place.path);
+    if (!usable) return kExitBadInput;
   }
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);
