@@ -136,6 +136,7 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--all nan", "--all nan: the scale must be a number"},
            {"--move-tip elsewhere=1,2,3", "--move-tip elsewhere=1,2,3: expected NAME=DX,DY,DZ"},
            {"--move-tip anterolateral=1,2", "the offset must be three finite numbers"},
+           {"--move-tip anterolateral=1e9,0,0", "--move-tip: tips[0].position: (1e+09, "},
            {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
            {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"}}) {
     const auto r =

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "core/carpentier.h"
+#include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
 #include "tools/command_support.h"
@@ -242,6 +243,15 @@ int runEditCords(const EditCordsOptions& options) {
   for (const auto& [tip, offset] : moves) {
     set.tips[tip].position += offset;
     if (set.tips[tip].closed_position) *set.tips[tip].closed_position += offset;
+  }
+  // A moved tip must stay within reach of the valve, as a case's tips must (case_extent.h);
+  // otherwise every command reading the set would refuse it.
+  Diagnostics far_tips;
+  if (!checkTipsNearValve(mesh.V, set.tips, "edit-cords: --move-tip", far_tips)) {
+    far_tips.print(std::cerr);
+    return kExitBadInput;
+  }
+  for (const auto& [tip, offset] : moves) {
     std::printf("  --move-tip %-29s moved by (%.2f, %.2f, %.2f) mm to (%.2f, %.2f, %.2f)\n",
                 set.tips[tip].name.c_str(), offset.x(), offset.y(), offset.z(),
                 set.tips[tip].position.x(), set.tips[tip].position.y(), set.tips[tip].position.z());
