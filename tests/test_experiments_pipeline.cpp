@@ -234,6 +234,10 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   EXPECT_NE(md.find("**Missing**"), std::string::npos);
   EXPECT_NE(md.find("`normal-1_s2__fit_groups_ceres`"), std::string::npos);
   EXPECT_EQ(md.find("manual-like |"), std::string::npos) << "no row for a missing job";
+  EXPECT_NE(readText(dir / "acceptance.md")
+                .find("**Not judged** (no heuristic or fit result): normal-1_s2;"),
+            std::string::npos)
+      << "a case without a fit is named, not dropped silently";
 
   // Recovery of the heuristic: |errors| 10 % and 30 % within 1 mm (median 20 %), 2 % at 4 mm.
   const std::string recovery = readText(dir / "recovery.csv");
@@ -256,6 +260,11 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   // Within 3 mm: |errors| 2 % and 4 % (median 3 %: met); the cord at 5 mm does not count.
   nlohmann::json fit =
       fixtureResult("fit_scales_ceres", 0.30, {{0.5, 0.02}, {2.0, -0.04}, {5.0, 0.5}});
+  // A ruptured cord near a plane has no true rest length: left out (its 900 % would count).
+  fit["cords"].push_back(fit["cords"][0]);
+  fit["cords"][3]["index"] = 3;
+  fit["cords"][3]["ruptured"] = true;
+  fit["cords"][3]["relative_error"] = 9.0;
   fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {1.25, 0.30}}};
   // In the planes: none, as traced (reconstructed); the tissue judgement says A1 (not).
   fit["metrics"]["section_prolapse_segments"] = nlohmann::json::array();
@@ -269,16 +278,22 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   ASSERT_EQ(rows.size(), 2u) << readText(dir / "acceptance.csv");
   // Taut in the truth: cords 0 and 2, of which only cord 0 lies within 3 mm (2 %).
   EXPECT_EQ(rows[1],
-            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,2,3.00,1,"
-            "2.00,1");
+            "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,,yes,4,1,2,"
+            "3.00,1,2.00,1");
   const std::string md = readText(dir / "acceptance.md");
-  EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | 3.0 % (2) ✓ | 2.0 % (1) ✓ |"), std::string::npos)
+  // A normal preset: the planes must show no prolapse, as they do.
+  EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | none ✓ | 3.0 % (2 of 4, 1 ruptured) ✓ | 2.0 % (1) "
+                    "✓ |"),
+            std::string::npos)
       << md;
+  EXPECT_NE(md.find("`chordfit make-case --edge 3.00 --planes 3"), std::string::npos) << md;
   // normal-1 is not pathological: the reduction criterion does not apply to it.
   EXPECT_NE(
       md.find("AvgD reduction 0 of 0 cases; within 1.5× the noise floor 1 of 1 cases; "
-              "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); recovery 1 of "
-              "1 cases (cords taut in the truth: 1 of 1 cases)"),
+              "prolapse reconstructed 1 of 1 cases (tissue judgement: 0 of 1 cases); prolapse in "
+              "the preset's segments 1 of 1 cases; recovery 1 of 1 cases (cords taut in the truth: "
+              "1 of 1 cases). Cords within 3 mm of a plane: 2 of 3 unruptured (1 ruptured left "
+              "out)."),
       std::string::npos)
       << md;
 }
