@@ -72,6 +72,12 @@ TEST(ChordfitCli, AFileOutputThatIsADirectoryIsRefusedBeforeTheWork) {
     EXPECT_NE(run.err.find("--out: taken.json: is a directory"), std::string::npos) << run.err;
     EXPECT_EQ(run.out.find("| Case"), std::string::npos) << "no work before the check";
   }
+  // Where no file can be created, even by root (access(W_OK) said yes there).
+  const auto r = runChordfit("heuristic '" + example + "' --out /proc/chordfit-cords.json");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out: /proc/chordfit-cords.json: /proc is not writable"),
+            std::string::npos)
+      << r.err;
 }
 
 TEST(ChordfitCli, ValidatesTheDocumentedExampleCase) {

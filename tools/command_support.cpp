@@ -1,5 +1,6 @@
 #include "tools/command_support.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -79,34 +80,47 @@ bool optionsArePositive(const char* command,
   return true;
 }
 
-bool outputDirectoryUsable(const char* command, const std::string& directory) {
+namespace {
+
+// Why outputs cannot go to `directory` (created later if missing), or "" when they can: its
+// nearest existing ancestor must be a directory in which a file can be created.
+std::string outputPlaceProblem(const std::string& directory) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::path existing = fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
   while (!ec && !fs::exists(existing, ec) && existing.has_parent_path() &&
          existing != existing.parent_path())
     existing = existing.parent_path();
-  std::string problem;
-  if (ec) {
-    problem = ec.message();
-  } else if (!fs::is_directory(existing, ec)) {
-    problem = existing.string() + " is not a directory";
-  } else if (::access(existing.c_str(), W_OK) != 0) {
-    problem = existing.string() + " is not writable (" + std::strerror(errno) + ")";
-  }
+  if (ec) return ec.message();
+  if (!fs::is_directory(existing, ec)) return existing.string() + " is not a directory";
+  // Creating a file is the only reliable test: access(W_OK) says yes to root everywhere,
+  // /proc and read-only mounts included.
+  const fs::path probe = existing / (".chordfit-probe-" + std::to_string(::getpid()));
+  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
+  if (fd < 0) return existing.string() + " is not writable (" + std::strerror(errno) + ")";
+  ::close(fd);
+  ::unlink(probe.c_str());
+  return "";
+}
+
+bool reportOutputProblem(const char* command, const std::string& out, const std::string& problem) {
   if (problem.empty()) return true;
-  std::cerr << "error: " << command << ": --out: " << directory << ": " << problem << "\n";
+  std::cerr << "error: " << command << ": --out: " << out << ": " << problem << "\n";
   return false;
+}
+
+}  // namespace
+
+bool outputDirectoryUsable(const char* command, const std::string& directory) {
+  return reportOutputProblem(command, directory, outputPlaceProblem(directory));
 }
 
 bool outputFileUsable(const char* command, const std::string& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec)) {
-    std::cerr << "error: " << command << ": --out: " << file
-              << ": is a directory; give the file to write\n";
-    return false;
-  }
-  return outputDirectoryUsable(command, std::filesystem::path(file).parent_path().string());
+  if (std::filesystem::is_directory(file, ec))
+    return reportOutputProblem(command, file, "is a directory; give the file to write");
+  return reportOutputProblem(
+      command, file, outputPlaceProblem(std::filesystem::path(file).parent_path().string()));
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {

@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <stdexcept>
 #include <system_error>
+#include <vector>
 
 namespace chordfit::cli {
 
@@ -21,8 +23,19 @@ StagedOutput::~StagedOutput() {
 }
 
 void StagedOutput::publish() {
+  std::vector<fs::path> files;
   for (const fs::directory_entry& entry : fs::directory_iterator(staging_))
-    fs::rename(entry.path(), out_ / entry.path().filename());
+    files.push_back(entry.path().filename());
+  // A rename onto a directory fails; found before the first move, it leaves the output
+  // directory as it was instead of half old, half new.
+  for (const fs::path& name : files) {
+    std::error_code ec;
+    if (fs::is_directory(out_ / name, ec) && !fs::is_directory(staging_ / name, ec))
+      throw std::runtime_error((out_ / name).string() +
+                               ": a directory of that name is in the way of the output file "
+                               "(nothing was written)");
+  }
+  for (const fs::path& name : files) fs::rename(staging_ / name, out_ / name);
 }
 
 }  // namespace chordfit::cli
