@@ -584,6 +584,17 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
     result.error = "settings: dt_ms = " + std::to_string(dt) + " is out of range";
     return result;
   }
+  // A cold closure still ramping up at the step cap cannot settle; with the automatic time
+  // step this is known only now (settingsProblems checks a given dt_ms).
+  if (!start && settings.ramp_ms / dt > settings.max_steps) {
+    char what[240];
+    std::snprintf(what, sizeof what,
+                  "settings: max_steps = %d ends before the %g ms pressure ramp does (%.0f steps "
+                  "at the automatic dt = %.4g ms); raise max_steps or shorten ramp_ms",
+                  settings.max_steps, settings.ramp_ms, std::ceil(settings.ramp_ms / dt), dt);
+    result.error = what;
+    return result;
+  }
   // Selective mass scaling (as explicit FE codes do to keep their time step; dynamic
   // relaxation uses fictitious masses the same way, Underwood 1983): a vertex whose stiffness
   // ratio k_i dt^2 / m_i exceeds max_stiffness_ratio gets the mass that brings it down to it.

@@ -465,7 +465,7 @@ TEST(TruthCase, CarriesTheTruthSolverSettings) {
   options.edge_mm = 3.0;
   options.tracing.planes = 2;
   SimulationSettings settings = truthSimulationSettings();
-  settings.max_steps = 200;  // only the settings matter here
+  settings.max_steps = 400;  // only the settings matter here (the 6 ms ramp: ~200 steps)
   options.truth_settings = settings;
   const SyntheticCase s = makeSyntheticCase(options);
   Diagnostics diagnostics;
@@ -488,7 +488,7 @@ TEST(TruthCaseAtEdge, IsTheSamePhysicalValveOnAnotherMesh) {
   options.edge_mm = 3.0;
   options.tracing.planes = 2;
   SimulationSettings settings = truthSimulationSettings();
-  settings.max_steps = 200;  // only the geometry and cords matter here
+  settings.max_steps = 400;  // only the geometry and cords matter here (past the ramp)
   options.truth_settings = settings;
   const SyntheticCase s = makeSyntheticCase(options);
   const CordSet& truth_cords = *s.truth_case.cords;

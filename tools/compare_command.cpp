@@ -198,9 +198,10 @@ int runCompare(const CompareOptions& options) {
     }
     const SimulationResult closed = simulateClosure(s.valve_case, s.cords, settings);
     if (!closed.ok()) {
-      std::cerr << "error: " << s.file << ": simulation failed: " << closed.error
-                << " (nothing written)\n";
-      return kExitSimulationFailed;
+      // Only a divergence is a failed simulation (exit 3); any other error is the input's.
+      std::cerr << "error: " << s.file << ": " << (closed.diverged ? "simulation failed: " : "")
+                << closed.error << " (nothing written)\n";
+      return closed.diverged ? kExitSimulationFailed : kExitBadInput;
     }
     s.metrics = computeMetrics(*valve_case, closed.V);
     s.converged = closed.converged;

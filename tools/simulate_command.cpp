@@ -76,7 +76,8 @@ SimulationSettings withProgress(SimulationSettings settings, const std::string& 
 
 bool reportFailure(const SimulationResult& result, const std::string& what) {
   if (result.ok()) return false;
-  std::cerr << "error: " << what << ": simulation failed: " << result.error << "\n";
+  std::cerr << "error: " << what << ": " << (result.diverged ? "simulation failed: " : "")
+            << result.error << "\n";
   return true;
 }
 
@@ -110,13 +111,16 @@ int runSimulate(const SimulateOptions& options) {
 
   const SimulationResult closed =
       simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));
-  if (reportFailure(closed, options.case_dir)) return kExitSimulationFailed;
+  // Only a divergence is a failed simulation (exit 3); any other error is the input's.
+  if (reportFailure(closed, options.case_dir))
+    return closed.diverged ? kExitSimulationFailed : kExitBadInput;
   SimulationResult opened;
   if (options.phase == "open") {
     settings.phase = ClosurePhase::kOpen;
     opened = simulateClosure(*valve_case, *cords, withProgress(settings, "open", options.quiet),
                              &closed.V);
-    if (reportFailure(opened, options.case_dir)) return kExitSimulationFailed;
+    if (reportFailure(opened, options.case_dir))
+      return opened.diverged ? kExitSimulationFailed : kExitBadInput;
   }
 
   const ValveMetrics metrics = computeMetrics(*valve_case, closed.V);
