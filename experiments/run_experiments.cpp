@@ -417,9 +417,14 @@ int main(int argc, char** argv) {
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
   if (a.scale_bounds) config.scale_bounds = a.scale_bounds;
+  ExperimentPlan plan;
   try {
-    const ExperimentPlan plan =
-        restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
+    plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
+  } catch (const std::invalid_argument& e) {  // a filter that matches nothing: usage
+    std::cerr << "run_experiments: error: " << e.what() << "\n";
+    return kExitUsage;
+  }
+  try {
     if (a.command == "list") return list(plan, a);
     if (a.command == "merge") return merge(plan, config, a);
     if (a.command == "check") return check(plan, a);

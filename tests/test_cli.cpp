@@ -80,6 +80,13 @@ TEST(ChordfitCli, AFileOutputThatIsADirectoryIsRefusedBeforeTheWork) {
       << r.err;
 }
 
+TEST(ChordfitCli, AnUnknownCommandIsNamed) {
+  const auto r = runChordfit("simulat cases/x --out y");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("\"simulat\" is not a chordfit command (validate, "), std::string::npos)
+      << r.err;
+}
+
 TEST(ChordfitCli, ValidatesTheDocumentedExampleCase) {
   const auto r =
       runChordfit(std::string("validate '") + CHORDFIT_SOURCE_DIR + "/docs/example-case'");

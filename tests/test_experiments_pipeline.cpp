@@ -113,6 +113,9 @@ TEST_F(ExperimentsPipeline, ReducedPlanCoversEveryPresetAtSeedOne) {
   EXPECT_FALSE(jobs.count("prolapse-A2_s1__fit_scales_crs2"));
   EXPECT_FALSE(jobs.count("normal-1_s2__heuristic"));
   EXPECT_EQ(runRunner("list --plan most").exit_code, 2);
+  const auto none = runRunner("list --methods nosuch");
+  EXPECT_EQ(none.exit_code, 2) << "a filter matching no job is a usage error";
+  EXPECT_NE(none.err.find("no job of the plan matches"), std::string::npos) << none.err;
 }
 
 TEST_F(ExperimentsPipeline, ShardsPartitionThePlan) {

@@ -281,6 +281,21 @@ int main(int argc, char** argv) {
   addFit(app, fit);
   CompareOptions compare;
   addCompare(app, compare);
+  // CLI11 reads an unknown first word as a stray argument and says only that a subcommand is
+  // required; name the word and the commands instead.
+  if (argc > 1 && argv[1][0] != '-') {
+    std::string commands;
+    bool known = false;
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+      known |= sub->get_name() == argv[1];
+      commands += (commands.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::cerr << "error: \"" << argv[1] << "\" is not a chordfit command (" << commands
+                << "; chordfit --help)\n";
+      return kExitBadInput;
+    }
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
