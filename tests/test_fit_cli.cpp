@@ -165,6 +165,7 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("ceres   iter"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("| seed |"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find(".staging"), std::string::npos) << "no path of the staging directory";
   for (const char* file : {"cords.json", "closed.ply", "closed.vtk", "metrics.json",
                            "convergence.csv", "convergence.svg", "sections.svg", "report.md"}) {
     EXPECT_TRUE(std::filesystem::exists(dir / "fit" / file)) << file;

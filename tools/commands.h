@@ -59,6 +59,9 @@ struct SimulateOptions {
   int threads = 2;
   bool quiet = false;
   bool sections = true;  // sections.svg (fit writes its own, with the seed closure beside it)
+  // The "wrote ..." line; off when another command (fit) simulates into its own staging
+  // directory and lists the files it publishes.
+  bool report_files = true;
 };
 int runSimulate(const SimulateOptions& options);
 

@@ -145,7 +145,8 @@ int runFit(const FitCommandOptions& o) {
   simulate.out_dir = out.string();
   simulate.threads = o.threads;
   simulate.quiet = true;
-  simulate.sections = false;  // written below, with the seed closure beside the fitted one
+  simulate.sections = false;      // written below, with the seed closure beside the fitted one
+  simulate.report_files = false;  // listed below, where they are published
   std::printf("fitted cords: full closure from the open state\n");
   const int simulated = runSimulate(simulate);
   if (simulated != kExitOk) return simulated;
@@ -227,7 +228,8 @@ int runFit(const FitCommandOptions& o) {
   std::cout << "wrote " << (std::filesystem::path(o.out_dir) / "cords.json").string()
             << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
                "sections.svg, enface.svg, "
-            << (fit.uncertainty.ok() ? "uncertainty.csv, " : "") << "report.md\n";
+            << (fit.uncertainty.ok() ? "uncertainty.csv, " : "")
+            << (fit.tissue.size() > 0 ? "tissue.json, " : "") << "report.md\n";
   return kExitOk;
 }
 

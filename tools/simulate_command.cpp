@@ -169,9 +169,11 @@ int runSimulate(const SimulateOptions& options) {
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << closedValveSummary(metrics);
-  std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "closed.ply").string()
-            << ", closed.vtk, metrics.json, enface.svg"
-            << (sections.empty() ? "" : ", sections.svg") << "\n";
+  if (options.report_files) {
+    std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "closed.ply").string()
+              << ", closed.vtk" << (options.phase == "open" ? ", opened.ply, opened.vtk" : "")
+              << ", metrics.json, enface.svg" << (sections.empty() ? "" : ", sections.svg") << "\n";
+  }
   return kExitOk;
 }
 
