@@ -60,7 +60,7 @@ struct ExperimentConfig {
 // Full run (the default): every cohort preset, seeds 1-3, all optimisers, both sweeps.
 ExperimentConfig fullConfig();
 // Reduced run: every preset at seed 1, the optimiser comparison on prolapse-P2 only, both
-// sweeps (54 of the full plan's 140 jobs; about 20 min on 2 cores).
+// sweeps (61 of the full plan's 161 jobs).
 ExperimentConfig reducedConfig();
 // CI smoke run: one case (normal-1 seed 2, edge 3 mm, 3 planes: the bundled small-normal),
 // small fit budget, every method and table kind but no extra sweep cases.

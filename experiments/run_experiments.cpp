@@ -45,8 +45,8 @@ commands:
 
 options:
   --plan NAME        full (the default and the committed results: every preset, seeds
-                     1-3; about 80 min on 2 cores as two shards), reduced (seed 1,
-                     optimisers on prolapse-P2 only: about 20 min) or smoke (CI: one case,
+                     1-3, 161 jobs; about 21 min on 2 cores as two shards), reduced
+                     (seed 1, optimisers on prolapse-P2 only: 61 jobs) or smoke (CI: one case,
                      one seed, small budget; default directories under the build tree,
                      BUILD/experiments/smoke/)
   --smoke            the same as --plan smoke
