@@ -49,9 +49,8 @@ std::string joined(const std::vector<std::string>& segments, const char* separat
   return text;
 }
 
-// Cords of a fit result: all, the ruptured ones (no true rest length: the flail presets' truth
-// lengthens them tenfold, so they are left out of the recovery), and those within reach of a
-// plane among the rest.
+// Cords of a fit result: all, and the ruptured ones (no true rest length: the flail presets'
+// truth lengthens them tenfold, so the recovery leaves them out).
 struct CordCounts {
   int total = 0, ruptured = 0;
 };
