@@ -22,7 +22,7 @@ expect_header() {
   [[ "$got" == "$want" ]] || { echo "smoke: $1: header '$got', expected '$want'" >&2; exit 1; }
 }
 expect_header table1.csv "case,preset,seed,method,label,area_mm2,min_mm,median_mm,max_mm,mean_mm,sd_mm,prolapse_reconstructed,section_prolapse_segments,prolapse_segments,tracing_prolapse_segments,forward_sims,wall_seconds"
-expect_header acceptance.csv "case,preset,pathological,heuristic_mean_mm,fit_mean_mm,reduction_pct,noise_floor_mean_mm,fit_over_noise_floor,truth_on_case_mesh_mean_mm,tracing_prolapse_segments,fit_section_prolapse_segments,prolapse_reconstructed,fit_tissue_prolapse_segments,tissue_prolapse_reconstructed,cords_within_3mm,recovery_median_pct_within_3mm,taut_cords_within_3mm,recovery_median_pct_taut_within_3mm,forward_sims,wall_seconds"
+expect_header acceptance.csv "case,preset,pathological,heuristic_mean_mm,fit_mean_mm,reduction_pct,noise_floor_mean_mm,fit_over_noise_floor,truth_on_case_mesh_mean_mm,tracing_prolapse_segments,fit_section_prolapse_segments,prolapse_reconstructed,fit_tissue_prolapse_segments,tissue_prolapse_reconstructed,intended_prolapse_segments,prolapse_as_intended,cords,ruptured_cords,cords_within_3mm,recovery_median_pct_within_3mm,taut_cords_within_3mm,recovery_median_pct_taut_within_3mm,forward_sims,wall_seconds"
 expect_header optimizers.csv "case,optimizer,budget_sims,final_mean_mm,final_max_mm,forward_sims,sims_to_within_10pct_of_best,wall_seconds"
 expect_header recovery.csv "label,attachment_distance,cords,median_abs_error_pct,p90_abs_error_pct"
 expect_header sensitivity.csv "sweep,value,case,heuristic_mean_mm,fit_mean_mm,fit_max_mm,noise_floor_mean_mm,recovery_median_pct_all,recovery_median_pct_within_3mm"
