@@ -561,6 +561,34 @@ class Stepper {
 
 }  // namespace
 
+namespace {
+
+// The time step: settings.dt_ms, or 0 = the one that gives the median vertex the stiffness
+// ratio k_i dt^2 / m_i = stiffness_ratio.
+double timeStepMs(const System& sys, const SimulationSettings& settings) {
+  if (settings.dt_ms != 0.0) return settings.dt_ms;
+  return sys.median_stiffness_over_mass > 0.0
+             ? std::sqrt(settings.stiffness_ratio / sys.median_stiffness_over_mass)
+             : 1e-2;
+}
+
+}  // namespace
+
+double closureTimeStepMs(const SimulationModel& model, const SimulationSettings& settings) {
+  return timeStepMs(buildSystem(model, settings), settings);
+}
+
+std::string rampBeyondStepCap(const SimulationSettings& settings, double dt_ms) {
+  if (!(dt_ms > 0.0) || settings.ramp_ms / dt_ms <= settings.max_steps) return "";
+  char what[240];
+  std::snprintf(what, sizeof what,
+                "%d ends before the %g ms pressure ramp does (%.0f steps at dt = %.4g ms%s); "
+                "raise max_steps or shorten ramp_ms",
+                settings.max_steps, settings.ramp_ms, std::ceil(settings.ramp_ms / dt_ms), dt_ms,
+                settings.dt_ms == 0.0 ? ", the automatic step for this mesh" : "");
+  return what;
+}
+
 SimulationResult simulate(const SimulationModel& model, const SimulationSettings& settings,
                           const Eigen::MatrixXd* start) {
   SimulationResult result;
@@ -573,26 +601,16 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
   const auto clock_start = std::chrono::steady_clock::now();
   const double cpu_start = threadCpuSeconds();
   System sys = buildSystem(model, settings);
-  double dt = settings.dt_ms;
-  if (dt == 0.0) {
-    dt = sys.median_stiffness_over_mass > 0.0
-             ? std::sqrt(settings.stiffness_ratio / sys.median_stiffness_over_mass)
-             : 1e-2;
-  }
+  const double dt = timeStepMs(sys, settings);
   result.dt_ms = dt;
   if (!(dt * dt < std::numeric_limits<double>::infinity())) {
     result.error = "settings: dt_ms = " + std::to_string(dt) + " is out of range";
     return result;
   }
   // A cold closure still ramping up at the step cap cannot settle; with the automatic time
-  // step this is known only now (settingsProblems checks a given dt_ms).
-  if (!start && settings.ramp_ms / dt > settings.max_steps) {
-    char what[240];
-    std::snprintf(what, sizeof what,
-                  "settings: max_steps = %d ends before the %g ms pressure ramp does (%.0f steps "
-                  "at the automatic dt = %.4g ms); raise max_steps or shorten ramp_ms",
-                  settings.max_steps, settings.ramp_ms, std::ceil(settings.ramp_ms / dt), dt);
-    result.error = what;
+  // step this is known only once the model is (settingsProblems checks a given dt_ms).
+  if (const std::string problem = rampBeyondStepCap(settings, dt); !start && !problem.empty()) {
+    result.error = "settings: max_steps: " + problem;
     return result;
   }
   // Selective mass scaling (as explicit FE codes do to keep their time step; dynamic
@@ -881,12 +899,9 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
     char what[160];
     std::snprintf(what, sizeof what, "%g is below %g ms (0 = automatic)", s.dt_ms, kMinDtMs);
     problems.push_back({"dt_ms", what});
-  } else if (s.dt_ms > 0.0 && s.max_steps >= 1 && s.ramp_ms / s.dt_ms > s.max_steps) {
-    char what[200];
-    std::snprintf(what, sizeof what,
-                  "%g: the %g ms pressure ramp alone takes %.0f steps, more than max_steps = %d",
-                  s.dt_ms, s.ramp_ms, std::ceil(s.ramp_ms / s.dt_ms), s.max_steps);
-    problems.push_back({"dt_ms", what});
+  } else if (s.dt_ms > 0.0 && s.max_steps >= 1) {
+    if (const std::string problem = rampBeyondStepCap(s, s.dt_ms); !problem.empty())
+      problems.push_back({"max_steps", problem});
   }
   return problems;
 }

@@ -307,6 +307,14 @@ bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhas
 SimulationResult simulate(const SimulationModel& model, const SimulationSettings& settings,
                           const Eigen::MatrixXd* start = nullptr);
 
+// The time step a closure of `model` takes, ms: settings.dt_ms, or the automatic step of its
+// mesh and material when that is 0.
+double closureTimeStepMs(const SimulationModel& model, const SimulationSettings& settings);
+
+// Why a cold closure at time step dt_ms cannot settle because max_steps ends before the
+// pressure ramp does ("" when it can), worded as a problem of max_steps.
+std::string rampBeyondStepCap(const SimulationSettings& settings, double dt_ms);
+
 // closureModel + simulate. For phase kOpen a warm start (the closed state) is required.
 SimulationResult simulateClosure(const ValveCase& valve_case, const CordSet& cords,
                                  const SimulationSettings& settings,

@@ -121,18 +121,22 @@ TEST_F(SimulateCommand, ADirectoryInTheWayOfAnOutputFileLeavesTheOldOutputsAlone
 }
 
 TEST_F(SimulateCommand, AStepCapThatEndsDuringThePressureRampIsAnInputError) {
-  // With the automatic time step the ramp's length in steps is known only when the closure
-  // starts; such a run stopped mid-ramp and reported "not converged" with exit 0.
+  // With the automatic time step the ramp's length in steps depends on the mesh; such a run
+  // stopped mid-ramp and reported "not converged" with exit 0. validate says so too.
   nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
   c["simulation"] = {{"max_steps", 10}};
   testing::writeText(case_dir_ / "case.json", c.dump());
   const auto r =
       runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "sim"));
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
-  EXPECT_NE(r.err.find("max_steps = 10 ends before the 10 ms pressure ramp does"),
+  EXPECT_NE(r.err.find("simulation.max_steps: 10 ends before the 10 ms pressure ramp does"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+  const auto validated = runChordfit("validate " + quoted(case_dir_));
+  EXPECT_EQ(validated.exit_code, 2) << validated.out;
+  EXPECT_NE(validated.err.find("simulation.max_steps: 10 ends before"), std::string::npos)
+      << validated.err;
 }
 
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {

@@ -59,11 +59,22 @@ std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_ca
   SimulationSettings settings =
       settingsFromJson(valve_case.simulation_json, diagnostics, {},
                        (std::filesystem::path(case_dir) / "case.json").string());
+  settings.phase = ClosurePhase::kClose;
+  // The step cap against the pressure ramp at the automatic time step, which only the mesh
+  // gives (settingsFromJson checks a given dt_ms); the cords do not change the step.
+  SimulationModel model;
+  std::string model_error;
+  if (diagnostics.ok() && settings.dt_ms == 0.0 &&
+      closureModel(valve_case, CordSet{}, ClosurePhase::kClose, model, model_error)) {
+    const std::string problem = rampBeyondStepCap(settings, closureTimeStepMs(model, settings));
+    if (!problem.empty())
+      diagnostics.error((std::filesystem::path(case_dir) / "case.json").string(),
+                        "simulation.max_steps", problem);
+  }
   if (!diagnostics.ok()) {
     reportProblems(diagnostics);
     return std::nullopt;
   }
-  settings.phase = ClosurePhase::kClose;
   return settings;
 }
 
