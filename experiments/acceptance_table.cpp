@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 #include <vector>
 
 #include "core/cohort_presets.h"
@@ -64,6 +65,13 @@ CordCounts cordCounts(const json& result) {
   return counts;
 }
 
+// The make-case options a job's case was made with, as the job recorded them.
+std::string caseOptions(const json& result) {
+  return "--edge " + fixed(number(result, "edge_mm"), 2) + " --planes " +
+         fixed(number(result, "planes"), 0) + " --noise " + fixed(number(result, "noise_mm"), 2) +
+         " --dropout " + fixed(number(result, "dropout"), 2);
+}
+
 struct Tally {
   int met = 0, judged = 0;
   void add(bool applies, bool known, bool ok) {
@@ -100,6 +108,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   std::vector<std::string> missing_truth;  // judged, but without the truth's floor columns
   std::vector<std::string> intended_misses;
   int pooled_cords = 0, pooled_ruptured = 0, pooled_near = 0;
+  std::set<std::string> case_options;  // as the fit jobs recorded them
   for (const std::string& preset : config.presets) {
     for (int seed : config.seeds) {
       const std::string case_id = preset + "_s" + std::to_string(seed);
@@ -111,6 +120,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
         continue;
       }
       if (truth == nullptr) missing_truth.push_back(case_id);
+      case_options.insert(caseOptions(*fit));
       const bool pathological = isPathological(preset);
       const json& m = fit->at("metrics");
       const double before = number(heuristic->at("metrics"), "mean_mm");
@@ -199,11 +209,10 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   out.markdown =
       "# Acceptance of the per-cord fit (issue \"Inverse fitting\", item 7)\n\n"
       "Per-cord Ceres fit from the heuristic (`" +
-      std::string(kFitTag) + "` jobs: `chordfit fit " + fit_options + "`) on cases made by " +
-      "`chordfit make-case --edge " + fixed(config.edge_mm, 2) + " --planes " +
-      std::to_string(config.planes) + " --noise " + fixed(config.noise_mm, 2) + " --dropout " +
-      fixed(config.dropout, 2) +
-      "` (make-case's default edge is 1.5 mm; docs/fitting.md reports a run at it). "
+      std::string(kFitTag) + "` jobs: `chordfit fit " + fit_options + "`, the merge's plan) on " +
+      (case_options.size() == 1 ? "cases made by `chordfit make-case " + *case_options.begin() + "`"
+                                : std::string("cases made with differing options")) +
+      " (make-case's default edge is 1.5 mm; docs/fitting.md reports a run at it). "
       "Criteria: AvgD reduced by ≥ " +
       fixed(t.min_reduction_pct, 0) + " % against the heuristic (pathological presets); AvgD ≤ " +
       fixed(t.max_over_noise_floor, 1) +
@@ -216,10 +225,8 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       "|rest-length error| ≤ " +
       fixed(t.max_recovery_median_pct, 0) + " % over the cords attached within " +
       fixed(t.near_plane_mm, 0) +
-      " mm of a tracing plane (in brackets: how many, of how many cords; the long-axis planes "
-      "through the valve centre pass that close to nearly every insertion, so this is in effect "
-      "every cord; ruptured cords have no true rest length and are left out); *taut in the "
-      "truth*: the same over "
+      " mm of a tracing plane (in brackets: how many, of how many cords; ruptured cords have "
+      "no true rest length and are left out); *taut in the truth*: the same over "
       "those of them taut in the true closed state, the only ones whose length the closed valve "
       "depends on (a diagnostic: a slack cord's rest length is bounded below only, "
       "docs/fitting.md \"Uncertainty\"). *True cords on the case mesh*: the true "

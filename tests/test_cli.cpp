@@ -70,14 +70,33 @@ TEST(ChordfitCli, AFileOutputThatIsADirectoryIsRefusedBeforeTheWork) {
                                            quoted(CHORDFIT_EXE) + " " + command + "\"");
     EXPECT_EQ(run.exit_code, 2) << command << "\n" << run.err;
     EXPECT_NE(run.err.find("--out: taken.json: is a directory"), std::string::npos) << run.err;
-    EXPECT_EQ(run.out.find("| Case"), std::string::npos) << "no work before the check";
+    EXPECT_EQ(run.out, "") << "no work before the check";
   }
   // Where no file can be created, even by root (access(W_OK) said yes there).
   const auto r = runChordfit("heuristic '" + example + "' --out /proc/chordfit-cords.json");
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("--out: /proc/chordfit-cords.json: /proc is not writable"),
+  EXPECT_NE(r.err.find("--out: /proc/chordfit-cords.json: no file can be created in /proc"),
             std::string::npos)
       << r.err;
+  // A path ending in '/' names a directory, even one that does not exist yet.
+  const auto slash = runChordfit("heuristic '" + example + "' --out " + quoted(dir / "new") + "/");
+  EXPECT_EQ(slash.exit_code, 2) << slash.err;
+  EXPECT_NE(slash.err.find("is a directory; give the file to write"), std::string::npos)
+      << slash.err;
+}
+
+TEST(ChordfitCli, AFineParametricValveGetsAStepCapItsRampFitsUnder) {
+  // At edge 0.25 mm the automatic time step makes the 10 ms ramp ~7,000 steps, more than the
+  // default cap: the case written must still be one validate and simulate accept.
+  TempDir dir;
+  const auto made = runChordfit("make-valve --edge 0.25 --out " + quoted(dir / "fine"));
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  EXPECT_NE(made.out.find("note: simulation.max_steps = "), std::string::npos) << made.out;
+  const auto r = runChordfit("validate " + quoted(dir / "fine"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  // The default valve keeps the default cap (no simulation block).
+  ASSERT_EQ(runChordfit("make-valve --out " + quoted(dir / "default")).exit_code, 0);
+  EXPECT_EQ(testing::readText(dir / "default" / "case.json").find("simulation"), std::string::npos);
 }
 
 TEST(ChordfitCli, AnUnknownCommandIsNamed) {

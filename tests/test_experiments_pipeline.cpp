@@ -208,7 +208,11 @@ nlohmann::json fixtureResult(const std::string& method, double mean_mm,
                       {"forward_sims", 1},
                       {"wall_seconds", 1.5},
                       {"cords", rows},
-                      {"revision", "abc1234"}};
+                      {"revision", "abc1234"},
+                      {"edge_mm", 3.0},
+                      {"planes", 3},
+                      {"noise_mm", 0.3},
+                      {"dropout", 0.1}};
   if (method == "truth") r["noise_floor"] = metrics;
   return r;
 }

@@ -69,7 +69,6 @@ struct CommandResult {
   std::string err;
 };
 
-// A path in single quotes for a shell command line (test paths hold no single quote).
 // A case.json "simulation" block that passes validation yet diverges: ten times the
 // automatic time step (stiffness ratio 1000) without mass scaling, one iteration, the stiffest
 // tissue and the highest pressure make the contacts blow up after ~1,000-4,000 steps (about
@@ -78,6 +77,7 @@ inline constexpr const char* kDivergingSimulationJson =
     R"({"max_stiffness_ratio": 0, "stiffness_ratio": 1000, "max_step_mm": 100,
         "iterations": 1, "pressure_mmhg": 500, "youngs_modulus_mpa": 1000})";
 
+// A path in single quotes for a shell command line (test paths hold no single quote).
 inline std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
 
 // How often `what` occurs in `text` (overlapping occurrences counted).

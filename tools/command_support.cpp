@@ -11,6 +11,8 @@
 #include <iostream>
 #include <sstream>
 
+#include <nlohmann/json.hpp>
+
 #include "core/case_extent.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
@@ -105,10 +107,11 @@ std::string outputPlaceProblem(const std::string& directory) {
   if (ec) return ec.message();
   if (!fs::is_directory(existing, ec)) return existing.string() + " is not a directory";
   // Creating a file is the only reliable test: access(W_OK) says yes to root everywhere,
-  // /proc and read-only mounts included.
-  const fs::path probe = existing / (".chordfit-probe-" + std::to_string(::getpid()));
-  const int fd = ::open(probe.c_str(), O_WRONLY | O_CREAT | O_EXCL, 0600);
-  if (fd < 0) return existing.string() + " is not writable (" + std::strerror(errno) + ")";
+  // /proc and read-only mounts included. mkstemp picks a name no other file has.
+  std::string probe = (existing / ".chordfit-probe-XXXXXX").string();
+  const int fd = ::mkstemp(probe.data());
+  if (fd < 0)
+    return "no file can be created in " + existing.string() + " (" + std::strerror(errno) + ")";
   ::close(fd);
   ::unlink(probe.c_str());
   return "";
@@ -128,10 +131,30 @@ bool outputDirectoryUsable(const char* command, const std::string& directory) {
 
 bool outputFileUsable(const char* command, const std::string& file) {
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec))
+  if (std::filesystem::is_directory(file, ec) || std::filesystem::path(file).filename().empty())
     return reportOutputProblem(command, file, "is a directory; give the file to write");
   return reportOutputProblem(
       command, file, outputPlaceProblem(std::filesystem::path(file).parent_path().string()));
+}
+
+int fitStepCapToMesh(ValveCase& valve_case) {
+  const SimulationSettings defaults;
+  SimulationModel model;
+  std::string error;
+  if (!closureModel(valve_case, CordSet{}, ClosurePhase::kClose, model, error)) return 0;
+  const double dt = closureTimeStepMs(model, defaults);
+  const double ramp_steps = std::ceil(defaults.ramp_ms / dt);
+  if (!(5.0 * ramp_steps > defaults.max_steps)) return 0;
+  const int cap = static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
+  nlohmann::json simulation = nlohmann::json::parse(valve_case.simulation_json);
+  simulation["max_steps"] = cap;
+  valve_case.simulation_json = simulation.dump();
+  std::printf(
+      "note: simulation.max_steps = %d in case.json: at this mesh's time step (%.3g ms) "
+      "the %g ms pressure ramp takes %.0f steps, too many to settle within the default cap of "
+      "%d\n",
+      cap, dt, defaults.ramp_ms, ramp_steps, defaults.max_steps);
+  return cap;
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {

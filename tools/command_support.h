@@ -48,6 +48,13 @@ bool outputDirectoryUsable(const char* command, const std::string& directory);
 // not be an existing directory (the final rename would fail after the work).
 bool outputFileUsable(const char* command, const std::string& file);
 
+// For a case a command writes (make-valve, import-mesh): a fine mesh's automatic time step
+// can make the default step cap end before, or soon after, the pressure ramp. Then the case
+// gets simulation.max_steps = five times the ramp's steps (the ~2,000-vertex valve settles in
+// 2.3 times; docs/performance.md), rounded up to a thousand, and a note says so. Returns the
+// cap written, or 0.
+int fitStepCapToMesh(ValveCase& valve_case);
+
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 

@@ -80,6 +80,7 @@ int runImportMesh(const ImportMeshOptions& options) {
   }
 
   // Write beside the target, load it back (every check of `validate`), then move it in place.
+  fitStepCapToMesh(imported.valve_case);
   const fs::path staging = out.parent_path() / (out.filename().string() + ".import-tmp");
   fs::remove_all(staging, ec);
   writeCase(staging, imported.valve_case);

@@ -60,6 +60,7 @@ int runMakeValve(const MakeValveOptions& options) {
     return kExitBadInput;
   }
   valve.valve_case.name = options.name;
+  fitStepCapToMesh(valve.valve_case);
   writeCase(options.out_dir, valve.valve_case);
   std::cout << "wrote " << options.out_dir << "/case.json\n" << caseSummary(valve.valve_case);
   return kExitOk;

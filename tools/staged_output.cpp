@@ -30,7 +30,9 @@ void StagedOutput::publish() {
   // directory as it was instead of half old, half new.
   for (const fs::path& name : files) {
     std::error_code ec;
-    if (fs::is_directory(out_ / name, ec) && !fs::is_directory(staging_ / name, ec))
+    // symlink_status: a link to a directory is replaced by the rename, not in the way.
+    if (fs::is_directory(fs::symlink_status(out_ / name, ec)) &&
+        !fs::is_directory(staging_ / name, ec))
       throw std::runtime_error((out_ / name).string() +
                                ": a directory of that name is in the way of the output file "
                                "(nothing was written)");
