@@ -1,11 +1,11 @@
 #include "tools/command_support.h"
 
-#include <fcntl.h>
 #include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <iostream>
@@ -55,6 +55,19 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   return set;
 }
 
+namespace {
+
+// The time step a closure of the case takes with `settings` (the cords do not change it), or
+// 0 when the case gives no simulation model (reported elsewhere).
+double caseTimeStepMs(const ValveCase& valve_case, const SimulationSettings& settings) {
+  SimulationModel model;
+  std::string error;
+  if (!closureModel(valve_case, CordSet{}, ClosurePhase::kClose, model, error)) return 0.0;
+  return closureTimeStepMs(model, settings);
+}
+
+}  // namespace
+
 std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
                                                        const std::string& case_dir) {
   Diagnostics diagnostics;
@@ -63,12 +76,9 @@ std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_ca
                        (std::filesystem::path(case_dir) / "case.json").string());
   settings.phase = ClosurePhase::kClose;
   // The step cap against the pressure ramp at the automatic time step, which only the mesh
-  // gives (settingsFromJson checks a given dt_ms); the cords do not change the step.
-  SimulationModel model;
-  std::string model_error;
-  if (diagnostics.ok() && settings.dt_ms == 0.0 &&
-      closureModel(valve_case, CordSet{}, ClosurePhase::kClose, model, model_error)) {
-    const std::string problem = rampBeyondStepCap(settings, closureTimeStepMs(model, settings));
+  // gives (settingsFromJson checks a given dt_ms).
+  if (diagnostics.ok() && settings.dt_ms == 0.0) {
+    const std::string problem = rampBeyondStepCap(settings, caseTimeStepMs(valve_case, settings));
     if (!problem.empty())
       diagnostics.error((std::filesystem::path(case_dir) / "case.json").string(),
                         "simulation.max_steps", problem);
@@ -139,10 +149,8 @@ bool outputFileUsable(const char* command, const std::string& file) {
 
 int fitStepCapToMesh(ValveCase& valve_case) {
   const SimulationSettings defaults;
-  SimulationModel model;
-  std::string error;
-  if (!closureModel(valve_case, CordSet{}, ClosurePhase::kClose, model, error)) return 0;
-  const double dt = closureTimeStepMs(model, defaults);
+  const double dt = caseTimeStepMs(valve_case, defaults);
+  if (!(dt > 0.0)) return 0;
   const double ramp_steps = std::ceil(defaults.ramp_ms / dt);
   if (!(5.0 * ramp_steps > defaults.max_steps)) return 0;
   const int cap = static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
