@@ -165,6 +165,13 @@ int fitStepCapToMesh(ValveCase& valve_case) {
   return cap;
 }
 
+int reportClosureFailure(const SimulationResult& result, const std::string& what,
+                         const std::string& suffix) {
+  std::cerr << "error: " << what << ": " << (result.diverged ? "simulation failed: " : "")
+            << result.error << suffix << "\n";
+  return result.diverged ? kExitSimulationFailed : kExitBadInput;
+}
+
 std::string joinSegments(const std::vector<std::string>& segments) {
   if (segments.empty()) return "none";
   std::string joined;

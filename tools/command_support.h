@@ -55,6 +55,12 @@ bool outputFileUsable(const char* command, const std::string& file);
 // cap written, or 0.
 int fitStepCapToMesh(ValveCase& valve_case);
 
+// A closure that failed: prints "error: <what>: <error><suffix>" ("simulation failed: " before
+// the error for a divergence) and returns its exit code: kExitSimulationFailed for a
+// divergence, kExitBadInput for any other error, which is the input's.
+int reportClosureFailure(const SimulationResult& result, const std::string& what,
+                         const std::string& suffix = "");
+
 // "P2, A2" or "none".
 std::string joinSegments(const std::vector<std::string>& segments);
 

@@ -197,12 +197,7 @@ int runCompare(const CompareOptions& options) {
                    s.label.c_str(), s.cords.cords.size());
     }
     const SimulationResult closed = simulateClosure(s.valve_case, s.cords, settings);
-    if (!closed.ok()) {
-      // Only a divergence is a failed simulation (exit 3); any other error is the input's.
-      std::cerr << "error: " << s.file << ": " << (closed.diverged ? "simulation failed: " : "")
-                << closed.error << " (nothing written)\n";
-      return closed.diverged ? kExitSimulationFailed : kExitBadInput;
-    }
+    if (!closed.ok()) return reportClosureFailure(closed, s.file, " (nothing written)");
     s.metrics = computeMetrics(*valve_case, closed.V);
     s.converged = closed.converged;
     s.steps = closed.steps;

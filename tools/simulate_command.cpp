@@ -74,13 +74,6 @@ SimulationSettings withProgress(SimulationSettings settings, const std::string& 
   return settings;
 }
 
-bool reportFailure(const SimulationResult& result, const std::string& what) {
-  if (result.ok()) return false;
-  std::cerr << "error: " << what << ": " << (result.diverged ? "simulation failed: " : "")
-            << result.error << "\n";
-  return true;
-}
-
 void writeState(const std::filesystem::path& dir, const std::string& stem, const ValveCase& c,
                 const Eigen::MatrixXd& V) {
   const auto scalars = closedStateScalars(c, V);
@@ -111,16 +104,13 @@ int runSimulate(const SimulateOptions& options) {
 
   const SimulationResult closed =
       simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));
-  // Only a divergence is a failed simulation (exit 3); any other error is the input's.
-  if (reportFailure(closed, options.case_dir))
-    return closed.diverged ? kExitSimulationFailed : kExitBadInput;
+  if (!closed.ok()) return reportClosureFailure(closed, options.case_dir);
   SimulationResult opened;
   if (options.phase == "open") {
     settings.phase = ClosurePhase::kOpen;
     opened = simulateClosure(*valve_case, *cords, withProgress(settings, "open", options.quiet),
                              &closed.V);
-    if (reportFailure(opened, options.case_dir))
-      return opened.diverged ? kExitSimulationFailed : kExitBadInput;
+    if (!opened.ok()) return reportClosureFailure(opened, options.case_dir);
   }
 
   const ValveMetrics metrics = computeMetrics(*valve_case, closed.V);
