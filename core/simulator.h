@@ -102,7 +102,8 @@ struct SimulationSettings {
   // Time step; 0 selects dt from the mesh so that the median vertex has the stiffness ratio
   // k_i dt^2 / m_i = `stiffness_ratio`, k_i summing stretching, area and bending stiffness
   // (measured: the warm-started solve with 2 iterations is stable up to ratios of ~20 and
-  // oscillates beyond, so the default keeps a margin).
+  // oscillates beyond, so the default keeps a margin); for a tissue softer than the default
+  // 3 MPa, the step of the default tissue (simulator.cpp, timeStepMs).
   double dt_ms = 0.0;
   double stiffness_ratio = 10.0;
   // Vertices stiffer than this (ratio k_i dt^2 / m_i) get a larger, fictitious mass (selective

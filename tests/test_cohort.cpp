@@ -223,18 +223,18 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   TempDir dir;
   auto r = runChordfit("make-case --preset prolapse-Q9 --out " + quoted(dir / "c"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: --preset: unknown preset \"prolapse-Q9\""), std::string::npos)
+  EXPECT_NE(r.err.find("error: make-case: --preset: unknown preset \"prolapse-Q9\""), std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("normal-1"), std::string::npos) << "lists the known presets";
   r = runChordfit("make-case --out " + quoted(dir / "c"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: --preset"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: make-case: --preset"), std::string::npos) << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --planes 0");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: --planes"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: make-case: --planes"), std::string::npos) << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --dropout 1.5");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: --dropout"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: make-case: --dropout"), std::string::npos) << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --seed -1");
   EXPECT_EQ(r.exit_code, 2) << "an unsigned seed must not wrap -1 to 2^64 - 1";
   EXPECT_NE(r.err.find("--seed: must be a non-negative integer"), std::string::npos) << r.err;

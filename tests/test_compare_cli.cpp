@@ -115,7 +115,9 @@ TEST_F(CompareCommand, RejectsALabelCountMismatchBeforeSimulating) {
       runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
                   quoted(*dir_ / "loose.json") + " --labels only-one --out " + quoted(out));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--labels: 1 label(s) for 2 cord file(s)"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: compare: --labels: 1 label(s) for 2 cord file(s)"),
+            std::string::npos)
+      << r.err;
   EXPECT_EQ(r.err.find("closing"), std::string::npos) << "no simulation may start";
   EXPECT_FALSE(fs::exists(out));
 }

@@ -34,10 +34,11 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
   const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "sim" / "metrics.json"));
   for (const char* key :
        {"min_mm", "median_mm", "max_mm", "mean_mm", "sd_mm", "area_mm2", "prolapse_segments",
-        "prolapse_max_height_mm", "converged", "steps", "sim_seconds"}) {
+        "prolapse_max_height_mm", "converged", "steps", "dt_ms", "sim_seconds"}) {
     EXPECT_TRUE(metrics.contains(key)) << key;
   }
   EXPECT_GT(metrics["steps"].get<int>(), 0);
+  EXPECT_GT(metrics["dt_ms"].get<double>(), 0.0);
   // A 3 mm mesh is coarse against the 1 mm thickness: edge midpoints join the contact points.
   EXPECT_TRUE(metrics["edge_contact"].get<bool>());
   EXPECT_NE(r.out.find("(edge midpoints as contact points too)"), std::string::npos) << r.out;
@@ -143,7 +144,8 @@ TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --phase sideways --out " +
                              quoted(dir_ / "sim"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--phase"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("error: simulate: --phase: expected close or open"), std::string::npos)
+      << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
 }
 
@@ -219,6 +221,7 @@ TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
   const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
   const std::pair<std::string, std::string> cases[] = {
       {"--cord -2", "--cord"},
+      {"--cord -1", "--cord: must be a cord index >= 0, got -1"},
       {"--cord 9999", "--cord: no such cord"},
       {"--threads 0", "--threads"},
       {"--window 1", "--window"},

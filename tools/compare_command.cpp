@@ -65,19 +65,19 @@ std::vector<std::string> splitLabels(const std::string& text) {
 // that would break a Markdown or CSV row.
 bool checkLabels(const std::vector<std::string>& labels, std::size_t files) {
   if (labels.size() != files) {
-    std::cerr << "error: --labels: " << labels.size() << " label(s) for " << files
+    std::cerr << "error: compare: --labels: " << labels.size() << " label(s) for " << files
               << " cord file(s); give one label per file\n";
     return false;
   }
   std::set<std::string> seen;
   for (const std::string& label : labels) {
     if (label.empty() || label.find_first_of("|\"\n") != std::string::npos) {
-      std::cerr << "error: --labels: \"" << label
+      std::cerr << "error: compare: --labels: \"" << label
                 << "\": labels must be non-empty and contain no '|', '\"' or newline\n";
       return false;
     }
     if (!seen.insert(label).second) {
-      std::cerr << "error: --labels: \"" << label << "\" appears twice\n";
+      std::cerr << "error: compare: --labels: \"" << label << "\" appears twice\n";
       return false;
     }
   }
@@ -168,7 +168,7 @@ int runCompare(const CompareOptions& options) {
   if (!options.tissues.empty()) {
     tissues = splitLabels(options.tissues);
     if (tissues.size() != options.cords_files.size()) {
-      std::cerr << "error: --tissues: " << tissues.size() << " file(s) for "
+      std::cerr << "error: compare: --tissues: " << tissues.size() << " file(s) for "
                 << options.cords_files.size() << " cord file(s); give one per cord file ('-' "
                 << "for the case's own tissue)\n";
       return kExitBadInput;

@@ -99,8 +99,13 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
       "sweep-cord", "Scan one cord's rest-length scale; measure the forward map's smoothness");
   cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
   cmd->add_option("--cords", o.cords_file, "CordSet JSON (default: case cords, else heuristic)");
-  cmd->add_option("--cord", o.cord,
-                  "Cord index (default: the P2 primary cord nearest P2's centre)");
+  cmd->add_option("--cord", o.cord, "Cord index (default: the P2 primary cord nearest P2's centre)")
+      ->check(CLI::Validator(
+          [](const std::string& value) {
+            return value.empty() || value[0] == '-' ? "must be a cord index >= 0, got " + value
+                                                    : std::string();
+          },
+          "INDEX"));
   cmd->add_option("--range", o.range, "Scan scales over [1 - range, 1 + range]")
       ->capture_default_str();
   cmd->add_option("--step", o.step, "Scale step")->capture_default_str();

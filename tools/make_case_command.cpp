@@ -53,17 +53,17 @@ void attachProgress(SyntheticCaseOptions& options) {
 int runMakeCase(const MakeCaseOptions& options) {
   if (options.list) return listPresets();
   if (options.preset.empty()) {
-    std::cerr << "error: --preset: required (one of: " << cohortPresetNames()
+    std::cerr << "error: make-case: --preset: required (one of: " << cohortPresetNames()
               << "; see make-case --list)\n";
     return kExitBadInput;
   }
   if (findCohortPreset(options.preset) == nullptr) {
-    std::cerr << "error: --preset: unknown preset \"" << options.preset
+    std::cerr << "error: make-case: --preset: unknown preset \"" << options.preset
               << "\" (known: " << cohortPresetNames() << ")\n";
     return kExitBadInput;
   }
   if (options.out_dir.empty()) {
-    std::cerr << "error: --out: required\n";
+    std::cerr << "error: make-case: --out: required\n";
     return kExitBadInput;
   }
 
@@ -82,7 +82,7 @@ int runMakeCase(const MakeCaseOptions& options) {
   try {
     synthetic = makeSyntheticCase(o);
   } catch (const std::invalid_argument& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << "error: make-case: " << e.what() << "\n";
     return kExitBadInput;
   } catch (const std::runtime_error& e) {
     std::cerr << "error: " << options.preset << ": " << e.what() << "\n";

@@ -85,7 +85,7 @@ void writeState(const std::filesystem::path& dir, const std::string& stem, const
 
 int runSimulate(const SimulateOptions& options) {
   if (options.phase != "close" && options.phase != "open") {
-    std::cerr << "error: --phase: expected close or open, got \"" << options.phase << "\"\n";
+    std::cerr << "error: simulate: --phase: expected close or open, got \"" << options.phase << "\"\n";
     return kExitBadInput;
   }
   auto valve_case = loadCaseOrReport(options.case_dir);
@@ -118,6 +118,7 @@ int runSimulate(const SimulateOptions& options) {
   j["converged"] = closed.converged;
   j["steps"] = closed.steps;
   j["averaged_steps"] = closed.averaged_steps;
+  j["dt_ms"] = closed.dt_ms;
   j["edge_contact"] = closed.edge_contact;
   j["sim_seconds"] = closed.seconds;
   j["threads"] = options.threads;
