@@ -103,7 +103,8 @@ struct SimulationSettings {
   // k_i dt^2 / m_i = `stiffness_ratio`, k_i summing stretching, area and bending stiffness
   // (measured: the warm-started solve with 2 iterations is stable up to ratios of ~20 and
   // oscillates beyond, so the default keeps a margin); for a tissue softer than the default
-  // 3 MPa, the step of the default tissue (simulator.cpp, timeStepMs).
+  // 3 MPa, the step of the default tissue, and on meshes so fine that bending carries more
+  // than 0.8 of the median vertex's stiffness, a smaller ratio (simulator.cpp, timeStepMs).
   double dt_ms = 0.0;
   double stiffness_ratio = 10.0;
   // Vertices stiffer than this (ratio k_i dt^2 / m_i) get a larger, fictitious mass (selective
