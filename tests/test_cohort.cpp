@@ -223,7 +223,8 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   TempDir dir;
   auto r = runChordfit("make-case --preset prolapse-Q9 --out " + quoted(dir / "c"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: make-case: --preset: unknown preset \"prolapse-Q9\""), std::string::npos)
+  EXPECT_NE(r.err.find("error: make-case: --preset: unknown preset \"prolapse-Q9\""),
+            std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("normal-1"), std::string::npos) << "lists the known presets";
   r = runChordfit("make-case --out " + quoted(dir / "c"));
@@ -232,6 +233,11 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --planes 0");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: make-case: --planes"), std::string::npos) << r.err;
+  r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --edge 0.5");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: make-case: --edge: 0.5 mm gives a truth mesh finer than 0.5 mm"),
+            std::string::npos)
+      << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --dropout 1.5");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: make-case: --dropout"), std::string::npos) << r.err;

@@ -1,5 +1,6 @@
 // chordfit make-case: a synthetic case with known truth (core/synthetic_case.h).
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -64,6 +65,16 @@ int runMakeCase(const MakeCaseOptions& options) {
   }
   if (options.out_dir.empty()) {
     std::cerr << "error: make-case: --out: required\n";
+    return kExitBadInput;
+  }
+  // The library takes edges down to 0.5 mm (mesh_convergence's references), but a truth
+  // finer than 0.5 mm with the cohort's point insertions does not close: --edge 0.5 (truth
+  // 0.25 mm, 18,504 vertices) diverged three times, the last with the step quartered, after
+  // ~10 minutes (2026-11-27; docs/performance.md, "Fine meshes").
+  if (std::isfinite(options.edge_mm) && options.edge_mm >= 0.5 && options.edge_mm < 1.0) {
+    std::cerr << "error: make-case: --edge: " << options.edge_mm
+              << " mm gives a truth mesh finer than 0.5 mm, which does not close with the "
+                 "cohort's cord insertions; use 1 mm or more\n";
     return kExitBadInput;
   }
 
