@@ -592,7 +592,7 @@ namespace {
 // sqrt(E_default / E); but the cords and contacts it moves against are as rigid as before, and
 // the pressure moves a vertex dt^2 p / (rho h) per step whatever the tissue. Measured on the 21
 // cohort cases (edge 2.5 mm, their heuristic cords) at E = 0.5 MPa: 19 settled, median 2,319
-// steps with the longer step; 21 settled, median 805 steps with the default tissue's; the
+// steps with the longer step; 21 settled, median 802 steps with the default tissue's; the
 // default valve at 1 MPa ran to the step cap with it and settles in 675 steps without
 // (docs/performance.md, "Soft tissue"). The valve's tissue is E times its median regional
 // factor: a lesion softer than the rest does not change the step, a uniform factor acts as E.
@@ -605,7 +605,7 @@ namespace {
 // make-case --edge 0.5's truth) it diverged. Why the curved, pressurised sheet loses
 // stability there was not traced: a flat clamped disc with a bending share of ~0.97 is stable
 // at 4 times the default ratio. So where the median share exceeds 0.8 the ratio is scaled by
-// 5 (1 - share): the 0.4 mm valve settles in 7,568 steps, the 0.25 mm one in 15,101, both
+// 5 (1 - share): the 0.4 mm valve settles in 6,434 steps, the 0.25 mm one in ~15,000, both
 // without the jitter; meshes with a share up to 0.8 (edges down to ~0.5 mm with 1 mm tissue)
 // keep their step (docs/performance.md, "Fine meshes").
 double timeStepMs(const System& sys, const SimulationSettings& settings) {

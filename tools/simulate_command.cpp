@@ -85,7 +85,8 @@ void writeState(const std::filesystem::path& dir, const std::string& stem, const
 
 int runSimulate(const SimulateOptions& options) {
   if (options.phase != "close" && options.phase != "open") {
-    std::cerr << "error: simulate: --phase: expected close or open, got \"" << options.phase << "\"\n";
+    std::cerr << "error: simulate: --phase: expected close or open, got \"" << options.phase
+              << "\"\n";
     return kExitBadInput;
   }
   auto valve_case = loadCaseOrReport(options.case_dir);
