@@ -75,10 +75,16 @@ std::string caseName(const SyntheticCaseOptions& o) {
 }
 
 json settingsJson(const SimulationSettings& s) {
-  return {{"tolerance_mm", s.tolerance_mm},
-          {"window", s.window},
-          {"max_steps", s.max_steps},
-          {"ramp_ms", s.ramp_ms}};
+  json j = {{"tolerance_mm", s.tolerance_mm},
+            {"window", s.window},
+            {"max_steps", s.max_steps},
+            {"ramp_ms", s.ramp_ms}};
+  // A truth closed again after a divergence ran with a shorter step (halvedTimeStep); without
+  // it the truth case re-simulated with the default step, not as its truth was closed.
+  if (s.stiffness_ratio != SimulationSettings{}.stiffness_ratio)
+    j["stiffness_ratio"] = s.stiffness_ratio;
+  if (s.dt_ms != 0.0) j["dt_ms"] = s.dt_ms;
+  return j;
 }
 
 // ---------------------------------------------------------------------------------------

@@ -482,6 +482,18 @@ TEST(TruthCase, CarriesTheTruthSolverSettings) {
   EXPECT_EQ(parsed.tolerance_mm, settings.tolerance_mm);
   EXPECT_EQ(parsed.window, settings.window);
   EXPECT_EQ(parsed.max_steps, settings.max_steps);
+  EXPECT_EQ(parsed.stiffness_ratio, SimulationSettings{}.stiffness_ratio);
+
+  // A truth closed again after a divergence ran with a shorter step (halvedTimeStep), which
+  // its case must carry too (it did not before 2026-11-27: truth/case then re-simulated with
+  // the default step).
+  options.truth_settings = halvedTimeStep(settings);
+  const SyntheticCase retried = makeSyntheticCase(options);
+  const SimulationSettings halved =
+      settingsFromJson(retried.truth_case.simulation_json, diagnostics);
+  EXPECT_TRUE(diagnostics.ok());
+  EXPECT_EQ(halved.stiffness_ratio, 0.25 * SimulationSettings{}.stiffness_ratio);
+  EXPECT_EQ(halved.max_steps, 2 * settings.max_steps);
 }
 
 // The truth's valve at another resolution (mesh-convergence studies): at the truth's own
