@@ -79,8 +79,10 @@ struct SyntheticCase {
 };
 
 // The tight solver settings of the truth: the simulator defaults with a 4x smaller
-// equilibrium tolerance and a 2x longer window, capped at 6000 steps.
-SimulationSettings truthSimulationSettings();
+// equilibrium tolerance and a 2x longer window, capped at 6000 steps; a truth mesh finer than
+// 0.75 mm (make-case --edge below 1.5) also spreads each cord's pull over 2 mm of leaflet
+// (cord_insertion_radius_mm; its point insertions do not close there).
+SimulationSettings truthSimulationSettings(double truth_edge_mm = 1.25);
 
 // The same settings with half the time step and twice the step cap (the same simulated time):
 // dt_ms halved when set, else stiffness_ratio / 4 (the automatic dt goes with its square root).

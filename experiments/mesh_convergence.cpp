@@ -115,6 +115,9 @@ int main(int argc, char** argv) {
     options.seed = seed;
     options.edge_mm = reference_edge;
     options.truth_edge_ratio = 1.0;  // the reference is the truth mesh itself
+    // Point insertions as in the cohort and in the study of docs/performance.md ("Mesh
+    // convergence"), also for references finer than 0.75 mm, where make-case spreads them.
+    options.truth_settings = truthSimulationSettings();
     options.tracing.noise_mm = 0.0;
     options.tracing.dropout_fraction = 0.0;
     try {

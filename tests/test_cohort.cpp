@@ -494,6 +494,27 @@ TEST(TruthCase, CarriesTheTruthSolverSettings) {
   EXPECT_TRUE(diagnostics.ok());
   EXPECT_EQ(halved.stiffness_ratio, 0.25 * SimulationSettings{}.stiffness_ratio);
   EXPECT_EQ(halved.max_steps, 2 * settings.max_steps);
+  EXPECT_EQ(halved.cord_insertion_radius_mm, 0.0);
+}
+
+// A truth finer than the committed cohort's (1.25 and 0.75 mm) spreads its cords' pull over
+// 2 mm of leaflet (its point insertions diverged at 0.5 mm), and its case carries that.
+TEST(TruthCase, AFineTruthSpreadsItsCordInsertions) {
+  EXPECT_EQ(truthSimulationSettings(1.25).cord_insertion_radius_mm, 0.0);
+  EXPECT_EQ(truthSimulationSettings(0.75).cord_insertion_radius_mm, 0.0);
+  EXPECT_EQ(truthSimulationSettings(0.5).cord_insertion_radius_mm, 2.0);
+  SyntheticCaseOptions options;
+  options.preset = "normal-1";
+  options.edge_mm = 3.0;
+  options.tracing.planes = 2;
+  SimulationSettings settings = truthSimulationSettings(0.5);
+  settings.max_steps = 400;  // only the settings matter here
+  options.truth_settings = settings;
+  const SyntheticCase s = makeSyntheticCase(options);
+  Diagnostics diagnostics;
+  EXPECT_EQ(settingsFromJson(s.truth_case.simulation_json, diagnostics).cord_insertion_radius_mm,
+            2.0);
+  EXPECT_TRUE(diagnostics.ok());
 }
 
 // The truth's valve at another resolution (mesh-convergence studies): at the truth's own
