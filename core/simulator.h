@@ -187,7 +187,8 @@ struct SimulationSettings {
   // with the largest step at 0.02-0.08 mm; so did the 0.6 mm references of mesh_convergence),
   // and with 2 mm they settle in 1,200-2,400 steps and the normal valves on coarser meshes
   // converge to them. Not the default, because the cohort is calibrated and benchmarked with
-  // point insertions (docs/performance.md, "Cord insertion patch").
+  // point insertions (docs/performance.md, "Cord insertion patch"); make-case's truths finer
+  // than 0.75 mm use 2 mm (synthetic_case.h, truthSimulationSettings).
   double cord_insertion_radius_mm = 0.0;
   ClosurePhase phase = ClosurePhase::kClose;
   // Called every `progress_every` steps (0: never) and once at the end.
