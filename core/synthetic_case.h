@@ -81,7 +81,8 @@ struct SyntheticCase {
 // The tight solver settings of the truth: the simulator defaults with a 4x smaller
 // equilibrium tolerance and a 2x longer window, capped at 6000 steps; a truth mesh finer than
 // 0.75 mm (make-case --edge below 1.5) also spreads each cord's pull over 2 mm of leaflet
-// (cord_insertion_radius_mm; its point insertions do not close there).
+// (cord_insertion_radius_mm; its point insertions do not close there). The default edge is
+// the benchmark truths' (point insertions).
 SimulationSettings truthSimulationSettings(double truth_edge_mm = 1.25);
 
 // The same settings with half the time step and twice the step cap (the same simulated time):

@@ -70,8 +70,8 @@ int runMakeCase(const MakeCaseOptions& options) {
   // The library takes edges down to 0.5 mm (mesh_convergence's references), but no truth
   // finer than 0.5 mm has been seen to close: --edge 0.5 (truth 0.25 mm, 18,504 vertices,
   // point insertions) diverged three times, the last with the step quartered, after ~10
-  // minutes (2026-11-27); with the insertion patch such truths now get, not tried. --edge 1
-  // settles (truth 0.5 mm, 2,648 steps). docs/performance.md, "Fine meshes".
+  // minutes (2026-11-27), and the insertion patch such fine truths now get was not tried
+  // there. --edge 1 settles (truth 0.5 mm, 2,648 steps). docs/performance.md, "Fine meshes".
   if (std::isfinite(options.edge_mm) && options.edge_mm >= 0.5 && options.edge_mm < 1.0) {
     std::cerr << "error: make-case: --edge: " << options.edge_mm
               << " mm gives a truth mesh finer than 0.5 mm, which has not been seen to close "
