@@ -72,6 +72,14 @@ std::string validate(const SimulationModel& m, const SimulationSettings& s) {
   return "";
 }
 
+// The upper median (the element at index size / 2 once sorted); 0 for none.
+double upperMedian(std::vector<double> values) {
+  if (values.empty()) return 0.0;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
 // Constraint arrays and per-vertex data, precomputed from the rest state.
 struct System {
   int n = 0;
@@ -207,21 +215,13 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
       ratio.push_back(vertex_stiffness[i] * sys.w[i]);
       bending_share.push_back(bending_stiffness[i] / vertex_stiffness[i]);
     }
-  if (!ratio.empty()) {
-    const auto middle = static_cast<std::ptrdiff_t>(ratio.size() / 2);
-    std::nth_element(ratio.begin(), ratio.begin() + middle, ratio.end());
-    sys.median_stiffness_over_mass = ratio[middle];
-    std::nth_element(bending_share.begin(), bending_share.begin() + middle, bending_share.end());
-    sys.median_bending_share = bending_share[middle];
-  }
+  sys.median_stiffness_over_mass = upperMedian(std::move(ratio));
+  sys.median_bending_share = upperMedian(std::move(bending_share));
   if (regional) {
     std::vector<double> factors;
     for (int i = 0; i < n; ++i)
       if (sys.w[i] > 0.0) factors.push_back(m.tissue_stiffness(i));
-    if (!factors.empty()) {
-      std::nth_element(factors.begin(), factors.begin() + factors.size() / 2, factors.end());
-      sys.median_tissue_factor = factors[factors.size() / 2];
-    }
+    if (!factors.empty()) sys.median_tissue_factor = upperMedian(std::move(factors));
   }
   sys.stiffness = std::move(vertex_stiffness);
   return sys;
@@ -250,9 +250,7 @@ bool usesEdgeContactOnEdges(const SimulationSettings& settings, const Eigen::Mat
   std::vector<double> lengths(static_cast<size_t>(edges.rows()));
   for (Eigen::Index e = 0; e < edges.rows(); ++e)
     lengths[static_cast<size_t>(e)] = (V_rest.row(edges(e, 0)) - V_rest.row(edges(e, 1))).norm();
-  const auto middle = lengths.begin() + static_cast<std::ptrdiff_t>(lengths.size() / 2);
-  std::nth_element(lengths.begin(), middle, lengths.end());
-  return *middle >= settings.edge_contact_edge_ratio * contact_thickness_mm;
+  return upperMedian(std::move(lengths)) >= settings.edge_contact_edge_ratio * contact_thickness_mm;
 }
 
 // The state of one run and the three phases of a time step (Ten Minute Physics style: the
@@ -581,10 +579,6 @@ class Stepper {
   // 1.26-1.40x (docs/performance.md, "Two threads").
   static constexpr int kMinParallelClass = 128;
 };
-
-}  // namespace
-
-namespace {
 
 // The time step: settings.dt_ms, or 0 = the one that gives the median vertex the stiffness
 // ratio k_i dt^2 / m_i = stiffness_ratio, no longer than the step of the same mesh with the
