@@ -37,17 +37,10 @@ std::vector<std::string> intendedSegments(const std::string& preset) {
 }
 
 std::vector<std::string> segmentList(const json& metrics, const char* key) {
-  std::vector<std::string> segments;
-  if (!metrics.contains(key) || !metrics.at(key).is_array()) return segments;
-  for (const json& s : metrics.at(key)) segments.push_back(s.get<std::string>());
+  if (!metrics.contains(key) || !metrics.at(key).is_array()) return {};
+  auto segments = metrics.at(key).get<std::vector<std::string>>();
   std::sort(segments.begin(), segments.end());
   return segments;
-}
-
-std::string joined(const std::vector<std::string>& segments, const char* separator) {
-  std::string text;
-  for (const std::string& s : segments) text += (text.empty() ? "" : separator) + s;
-  return text;
 }
 
 // Cords of a fit result: all, and the ruptured ones (no true rest length: the flail presets'

@@ -24,11 +24,15 @@ double number(const json& j, const char* key) {
   return j.contains(key) && j.at(key).is_number() ? j.at(key).get<double>() : kNaN;
 }
 
+std::string joined(const std::vector<std::string>& strings, const char* separator) {
+  std::string text;
+  for (const std::string& s : strings) text += (text.empty() ? "" : separator) + s;
+  return text;
+}
+
 std::string segments(const json& j, const char* key, const char* separator) {
   if (!j.contains(key) || !j.at(key).is_array()) return "";
-  std::string text;
-  for (const json& s : j.at(key)) text += (text.empty() ? "" : separator) + s.get<std::string>();
-  return text;
+  return joined(j.at(key).get<std::vector<std::string>>(), separator);
 }
 
 std::string segmentsOrNone(const json& j, const char* key) {
