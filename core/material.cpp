@@ -31,7 +31,8 @@ double edgeCompliance(const LeafletMaterial& m, double adjacent_area, double res
 }
 
 double bendingCompliance(const LeafletMaterial& m, double adjacent_area, double rest_length) {
-  const double k = 2.0 * bendingRigidity(m) * rest_length * rest_length / adjacent_area;
+  const double k =
+      m.flexural_modulus_factor * bendingRigidity(m) * rest_length * rest_length / adjacent_area;
   return 1.0 / k;
 }
 

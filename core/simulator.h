@@ -198,15 +198,12 @@ struct SimulationSettings {
 
 // Overrides from a JSON object (a case's "simulation" block). Known keys, all optional:
 //   pressure_mmhg, youngs_modulus_mpa, thickness_mm, poisson_ratio, density_g_per_cm3,
-//   area_bulk_fraction, flow_speed_mm_per_ms, drag_time_ms, ramp_ms, late_drag_time_ms,
-//   dt_ms,
-//   stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda, contact_impulse_carry,
-//   max_step_mm, tolerance_mm,
-//   window, max_steps, max_warm_steps, late_drag_after_steps, late_drag_after_warm_steps,
-//   average_unsettled_steps, contact, edge_contact, edge_contact_edge_ratio,
-//   contact_thickness_mm,
-//   contact_margin_mm, contact_exclusion_mm, area_floor_fraction, cord_insertion_radius_mm,
-//   kinetic_damping, phase
+//   area_bulk_fraction, flexural_modulus_factor, flow_speed_mm_per_ms, drag_time_ms, ramp_ms,
+//   late_drag_time_ms, dt_ms, stiffness_ratio, max_stiffness_ratio, iterations, warm_start_lambda,
+//   contact_impulse_carry, max_step_mm, tolerance_mm, window, max_steps, max_warm_steps,
+//   late_drag_after_steps, late_drag_after_warm_steps, average_unsettled_steps, contact,
+//   edge_contact, edge_contact_edge_ratio, contact_thickness_mm, contact_margin_mm,
+//   contact_exclusion_mm, area_floor_fraction, cord_insertion_radius_mm, kinetic_damping, phase
 //   ("close" | "open").
 // Unknown keys and wrong types are reported to `diagnostics` (file "case.json", where
 // "simulation.<key>"); the remaining keys still apply.
