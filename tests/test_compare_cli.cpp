@@ -122,6 +122,20 @@ TEST_F(CompareCommand, RejectsALabelCountMismatchBeforeSimulating) {
   EXPECT_FALSE(fs::exists(out));
 }
 
+TEST_F(CompareCommand, ADirectoryInTheWayOfTheSecondEnfaceFigureExitsWith2BeforeSimulating) {
+  const fs::path out = *dir_ / "in-the-way";
+  fs::create_directories(out / "enface_2.svg");
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: compare: --out: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("enface_2.svg: a directory of that name is in the way"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("closing"), std::string::npos) << "no simulation may start";
+  EXPECT_FALSE(fs::exists(out / "compare.csv"));
+}
+
 TEST_F(CompareCommand, RejectsDuplicateLabels) {
   const auto r =
       runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +

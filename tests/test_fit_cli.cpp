@@ -30,6 +30,18 @@ TEST(FitCommand, RejectsAnUnknownOptimizerWithExitCode2) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+TEST(FitCommand, ADirectoryInTheWayOfAnOutputFileExitsWith2BeforeFitting) {
+  TempDir dir;
+  std::filesystem::create_directories(dir / "fit" / "report.md");
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: fit: --out: "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("report.md: a directory of that name is in the way"), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.out.find("fitting"), std::string::npos) << "fitted first: " << r.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 TEST(FitCommand, RejectsAnUnknownParameterModeWithExitCode2) {
   TempDir dir;
   const auto r =

@@ -135,8 +135,18 @@ bool reportOutputProblem(const char* command, const std::string& out, const std:
 
 }  // namespace
 
-bool outputDirectoryUsable(const char* command, const std::string& directory) {
-  return reportOutputProblem(command, directory, outputPlaceProblem(directory));
+bool outputDirectoryUsable(const char* command, const std::string& directory,
+                           const std::vector<std::string>& files) {
+  if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
+  for (const std::string& name : files) {
+    const std::filesystem::path file = std::filesystem::path(directory) / name;
+    std::error_code ec;
+    // symlink_status: a link to a directory is replaced by the rename, not in the way.
+    if (std::filesystem::is_directory(std::filesystem::symlink_status(file, ec)))
+      return reportOutputProblem(command, file.string(),
+                                 "a directory of that name is in the way of an output file");
+  }
+  return true;
 }
 
 bool outputFileUsable(const char* command, const std::string& file) {

@@ -3,6 +3,8 @@
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -310,26 +312,39 @@ int main(int argc, char** argv) {
   // Before any work: an output place that cannot be written is a usage error (exit 2). A
   // directory the command writes into, or a file it writes; metrics and compare write only
   // when given --out.
+  // A directory's `files`: what the command writes there, none of which may be a directory.
   struct OutputPlace {
     const char* command;
     std::string path;
     bool is_file;
     bool optional;
+    std::vector<std::string> files;
   };
-  const OutputPlace places[] = {{"make-valve", make_valve.out_dir, false, false},
-                                {"import-mesh", import_mesh.out_dir, false, false},
-                                {"heuristic", heuristic.out_file, true, false},
-                                {"edit-cords", edit_cords.out_file, true, false},
-                                {"metrics", metrics.out_file, true, true},
-                                {"simulate", simulate.out_dir, false, false},
-                                {"sweep-cord", sweep_cord.out_dir, false, false},
-                                {"make-case", make_case.out_dir, false, false},
-                                {"fit", fit.out_dir, false, false},
-                                {"compare", compare.out_dir, false, true}};
+  const std::vector<std::string> closure_files = {"closed.ply", "closed.vtk", "metrics.json",
+                                                  "enface.svg", "sections.svg"};
+  std::vector<std::string> fit_files = closure_files;
+  for (const char* name : {"cords.json", "tissue.json", "convergence.csv", "convergence.svg",
+                           "uncertainty.csv", "report.md"})
+    fit_files.push_back(name);
+  std::vector<std::string> compare_files = {"compare.md", "compare.csv", "sections.svg"};
+  for (size_t i = 1; i <= compare.cords_files.size(); ++i)
+    compare_files.push_back("enface_" + std::to_string(i) + ".svg");
+  const OutputPlace places[] = {
+      {"make-valve", make_valve.out_dir, false, false, {}},
+      {"import-mesh", import_mesh.out_dir, false, false, {}},
+      {"heuristic", heuristic.out_file, true, false, {}},
+      {"edit-cords", edit_cords.out_file, true, false, {}},
+      {"metrics", metrics.out_file, true, true, {}},
+      {"simulate", simulate.out_dir, false, false, closure_files},
+      {"sweep-cord", sweep_cord.out_dir, false, false, {"sweep.csv", "sweep.svg", "sweep.json"}},
+      {"make-case", make_case.out_dir, false, false, {}},
+      {"fit", fit.out_dir, false, false, fit_files},
+      {"compare", compare.out_dir, false, true, compare_files}};
   for (const OutputPlace& place : places) {
     if (!app.got_subcommand(place.command) || (place.optional && place.path.empty())) continue;
-    const bool usable = place.is_file ? outputFileUsable(place.command, place.path)
-                                      : outputDirectoryUsable(place.command, place.path);
+    const bool usable = place.is_file
+                            ? outputFileUsable(place.command, place.path)
+                            : outputDirectoryUsable(place.command, place.path, place.files);
     if (!usable) return kExitBadInput;
   }
   try {
