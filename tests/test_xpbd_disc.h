@@ -1,4 +1,5 @@
-// A flat clamped disc for the membrane, cord and determinism tests of the simulator.
+// Flat test sheets for the simulator's known-answer tests: a disc (membrane, plate, cord and
+// determinism tests) and an equilateral triangle lattice (plate strip, uniaxial stretch).
 #pragma once
 
 #include <cmath>
@@ -53,6 +54,45 @@ inline void makeDisc(double a, int rings, Eigen::MatrixXd& V, Eigen::MatrixXi& F
   for (size_t f = 0; f < faces.size(); ++f) F.row(f) = faces[f].transpose();
   boundary = Eigen::Map<const Eigen::VectorXi>(ring_ids.back().data(),
                                                static_cast<Eigen::Index>(ring_ids.back().size()));
+}
+
+// An equilateral triangle lattice in z = 0 with edge `edge`: `rows` + 1 rows along x at
+// y = 0, h, 2h, ... (h = sqrt(3)/2 edge), `columns` vertices each, odd rows shifted by half an
+// edge. Vertex (r, c) has index r * columns + c; triangles wound counter-clockwise seen from +z.
+inline void makeTriangleLattice(int columns, int rows, double edge, Eigen::MatrixXd& V,
+                                Eigen::MatrixXi& F) {
+  const double h = 0.5 * std::sqrt(3.0) * edge;
+  V.resize(static_cast<Eigen::Index>(rows + 1) * columns, 3);
+  auto id = [columns](int r, int c) { return r * columns + c; };
+  for (int r = 0; r <= rows; ++r)
+    for (int c = 0; c < columns; ++c) V.row(id(r, c)) << (c + 0.5 * (r % 2)) * edge, r * h, 0.0;
+  std::vector<Eigen::Vector3i> faces;
+  for (int r = 0; r < rows; ++r)
+    for (int c = 0; c + 1 < columns; ++c) {
+      if (r % 2 == 0) {
+        faces.emplace_back(id(r, c), id(r, c + 1), id(r + 1, c));
+        faces.emplace_back(id(r, c + 1), id(r + 1, c + 1), id(r + 1, c));
+      } else {
+        faces.emplace_back(id(r, c), id(r + 1, c + 1), id(r + 1, c));
+        faces.emplace_back(id(r, c), id(r, c + 1), id(r + 1, c + 1));
+      }
+    }
+  F.resize(static_cast<Eigen::Index>(faces.size()), 3);
+  for (size_t f = 0; f < faces.size(); ++f) F.row(f) = faces[f].transpose();
+}
+
+// Holds `fixed` at their rest positions (moving to `end` over the ramp when given), one PM
+// tip that never moves, no cords.
+inline void holdVertices(SimulationModel& model, const std::vector<int>& fixed,
+                         const Eigen::MatrixXd* end = nullptr) {
+  model.fixed =
+      Eigen::Map<const Eigen::VectorXi>(fixed.data(), static_cast<Eigen::Index>(fixed.size()));
+  model.fixed_start.resize(model.fixed.size(), 3);
+  for (Eigen::Index k = 0; k < model.fixed.size(); ++k)
+    model.fixed_start.row(k) = model.V_rest.row(model.fixed(k));
+  model.fixed_end = end ? *end : model.fixed_start;
+  model.tip_start = Eigen::RowVector3d(0, 0, -10);
+  model.tip_end = model.tip_start;
 }
 
 // Index of the vertex of ring k at angle 0.

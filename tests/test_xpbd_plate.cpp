@@ -21,47 +21,17 @@ namespace {
 
 constexpr double kDeflectionOverThickness = 0.02;
 
-// Fixes `model.fixed` at their rest positions, no tips moving, no cords.
-void holdFixedAtRest(SimulationModel& model, const std::vector<int>& fixed) {
-  model.fixed =
-      Eigen::Map<const Eigen::VectorXi>(fixed.data(), static_cast<Eigen::Index>(fixed.size()));
-  model.fixed_start.resize(model.fixed.size(), 3);
-  for (Eigen::Index k = 0; k < model.fixed.size(); ++k)
-    model.fixed_start.row(k) = model.V_rest.row(model.fixed(k));
-  model.fixed_end = model.fixed_start;
-  model.tip_start = Eigen::RowVector3d(0, 0, -10);
-  model.tip_end = model.tip_start;
-}
-
-// An equilateral triangle lattice in z = 0, rows along x (odd rows shifted by half an edge),
-// `intervals` row spacings across the span y in [-L/2, L/2] and about 5 L long; the rows at
-// y = -L/2 and y = L/2 are held (a simply supported strip). Returns the vertex nearest the
-// middle of the span line y = 0.
+// A lattice (test_xpbd_disc.h) with `intervals` row spacings across the span y in
+// [0, L] and about 5 L long; the rows at y = 0 and y = L are held (a simply supported strip).
+// Returns the vertex nearest the middle of the span line y = L / 2.
 int simplySupportedStrip(double span, int intervals, SimulationModel& model) {
-  const double dy = span / intervals, l = 2.0 * dy / std::sqrt(3.0);
-  const int columns = static_cast<int>(5.0 * span / l) + 1;
-  model.V_rest.resize((intervals + 1) * columns, 3);
-  auto id = [columns](int r, int c) { return r * columns + c; };
-  for (int r = 0; r <= intervals; ++r)
-    for (int c = 0; c < columns; ++c)
-      model.V_rest.row(id(r, c)) << (c + 0.5 * (r % 2)) * l, r * dy - 0.5 * span, 0.0;
-  std::vector<Eigen::Vector3i> faces;
-  for (int r = 0; r < intervals; ++r)
-    for (int c = 0; c + 1 < columns; ++c) {
-      if (r % 2 == 0) {
-        faces.emplace_back(id(r, c), id(r, c + 1), id(r + 1, c));
-        faces.emplace_back(id(r, c + 1), id(r + 1, c + 1), id(r + 1, c));
-      } else {
-        faces.emplace_back(id(r, c), id(r + 1, c + 1), id(r + 1, c));
-        faces.emplace_back(id(r, c), id(r, c + 1), id(r + 1, c + 1));
-      }
-    }
-  model.F.resize(static_cast<Eigen::Index>(faces.size()), 3);
-  for (size_t f = 0; f < faces.size(); ++f) model.F.row(f) = faces[f].transpose();
+  const double edge = 2.0 * span / intervals / std::sqrt(3.0);
+  const int columns = static_cast<int>(5.0 * span / edge) + 1;
+  testing::makeTriangleLattice(columns, intervals, edge, model.V_rest, model.F);
   std::vector<int> fixed;
-  for (int c = 0; c < columns; ++c) fixed.push_back(id(0, c)), fixed.push_back(id(intervals, c));
-  holdFixedAtRest(model, fixed);
-  return id(intervals / 2, columns / 2);
+  for (int c = 0; c < columns; ++c) fixed.push_back(c), fixed.push_back(intervals * columns + c);
+  testing::holdVertices(model, fixed);
+  return (intervals / 2) * columns + columns / 2;
 }
 
 // A disc of radius a (`rings` rings inside it) with one more ring outside; the rings at and
@@ -72,7 +42,7 @@ void clampedPlateDisc(double a, int rings, SimulationModel& model) {
   std::vector<int> fixed;
   for (int v = 0; v < model.V_rest.rows(); ++v)
     if (model.V_rest.row(v).norm() > a * (1.0 - 1e-9)) fixed.push_back(v);
-  holdFixedAtRest(model, fixed);
+  testing::holdVertices(model, fixed);
 }
 
 // Loads the plate with the pressure under which the theory's deflection is
