@@ -136,6 +136,21 @@ TEST_F(CompareCommand, ADirectoryInTheWayOfTheSecondEnfaceFigureExitsWith2Before
   EXPECT_FALSE(fs::exists(out / "compare.csv"));
 }
 
+TEST_F(CompareCommand, SetAppliesToEveryClosureAndIsNamedInTheMarkdown) {
+  const fs::path out = *dir_ / "set";
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") +
+                  " --set pressure_mmhg=90 --quiet --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(testing::readText(out / "compare.md").find("and `--set` `pressure_mmhg=90`"),
+            std::string::npos);
+  const auto bad = runChordfit("compare " + quoted(caseDir()) + " " +
+                               quoted(caseDir() / "cords.json") + " --set pressure_mmhg=1e9");
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("compare: --set: simulation.pressure_mmhg"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.err.find("closing"), std::string::npos) << "no simulation may start";
+}
+
 TEST_F(CompareCommand, RejectsDuplicateLabels) {
   const auto r =
       runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +

@@ -147,6 +147,33 @@ TEST(FitCommand, ReportsTheSeedAsGivenWhenItLiesOutsideTheBounds) {
   EXPECT_DOUBLE_EQ(fitted["initial_mean_mm"].get<double>(), simulated["mean_mm"].get<double>());
 }
 
+// --set applies to every closure of the fit, the written one included: the seed row is the
+// closure `simulate --set` makes; the override is in metrics.json and report.md. A bad --set
+// is refused before the fit.
+TEST(FitCommand, SetOverridesTheSimulatorSettingsOfEveryClosure) {
+  TempDir dir;
+  const std::string set = " --set youngs_modulus_mpa=4";
+  ASSERT_EQ(
+      runChordfit("simulate " + quoted(smallCase()) + set + " --quiet --out " + quoted(dir / "sim"))
+          .exit_code,
+      0);
+  const auto r = runChordfit("fit " + quoted(smallCase()) + set +
+                             " --no-prefit --no-uncertainty --max-sims 3 --quiet --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto simulated = nlohmann::json::parse(testing::readText(dir / "sim" / "metrics.json"));
+  const auto fitted = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_DOUBLE_EQ(fitted["initial_mean_mm"].get<double>(), simulated["mean_mm"].get<double>());
+  EXPECT_EQ(fitted["settings_overrides"], nlohmann::json({"youngs_modulus_mpa=4"}));
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("(--set): `youngs_modulus_mpa=4`"),
+            std::string::npos);
+  const auto bad = runChordfit("fit " + quoted(smallCase()) + " --set thickness_mm=0 --out " +
+                               quoted(dir / "bad"));
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("fit: --set: simulation.thickness_mm"), std::string::npos) << bad.err;
+  EXPECT_EQ(bad.out.find("fitting"), std::string::npos) << "fitted first: " << bad.out;
+}
+
 // The same seed with a budget of one closure: the seed's own closure takes it, and nothing is
 // left to close the clamped start; that is a usage error, not a failed simulation.
 TEST(FitCommand, ABudgetTooSmallForTheClampedStartExitsWith2NamingMaxSims) {

@@ -57,6 +57,49 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
     EXPECT_NE(entry.path().filename().string().rfind(".staging-", 0), 0u) << entry.path();
 }
 
+TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {
+  // --set E=4 gives the bytes of a case whose case.json says so, and another closure than the
+  // default 3 MPa; the override is recorded in metrics.json.
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --set youngs_modulus_mpa=4 " +
+                             "--set contact=true --quiet --out " + quoted(dir_ / "set"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::filesystem::path edited = dir_ / "edited";
+  std::filesystem::copy(case_dir_, edited, std::filesystem::copy_options::recursive);
+  auto case_json = nlohmann::json::parse(testing::readText(edited / "case.json"));
+  case_json["simulation"]["youngs_modulus_mpa"] = 4;
+  testing::writeText(edited / "case.json", case_json.dump(2));
+  ASSERT_EQ(runChordfit("simulate " + quoted(edited) + " --quiet --out " + quoted(dir_ / "json"))
+                .exit_code,
+            0);
+  ASSERT_EQ(runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "3"))
+                .exit_code,
+            0);
+  const std::string closed = testing::readText(dir_ / "set" / "closed.ply");
+  EXPECT_EQ(closed, testing::readText(dir_ / "json" / "closed.ply"));
+  EXPECT_NE(closed, testing::readText(dir_ / "3" / "closed.ply"));
+  const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "set" / "metrics.json"));
+  EXPECT_EQ(metrics["settings_overrides"],
+            nlohmann::json({"youngs_modulus_mpa=4", "contact=true"}));
+}
+
+TEST_F(SimulateCommand, RejectsABadSetBeforeSimulatingNamingTheSetting) {
+  const std::pair<const char*, const char*> cases[] = {
+      {"--set youngs_modulus_mpa=-1", "simulate: --set: simulation.youngs_modulus_mpa: -1 is out"},
+      {"--set unknown_thing=1", "simulate: --set: simulation.unknown_thing: unknown"},
+      {"--set contact=maybe", "simulate: --set: simulation.contact: expected true or false"},
+      {"--set youngs_modulus_mpa", "simulate: --set: expected KEY=VALUE"},
+      {"--set pressure_mmhg=90 --set pressure_mmhg=80", "pressure_mmhg given twice"},
+      {"--set phase=open", "simulate --phase"}};
+  for (const auto& [option, message] : cases) {
+    const auto r = runChordfit("simulate " + quoted(case_dir_) + " " + option + " --out " +
+                               quoted(dir_ / "bad"));
+    EXPECT_EQ(r.exit_code, 2) << option;
+    EXPECT_NE(r.err.find(message), std::string::npos) << option << ": " << r.err;
+    EXPECT_EQ(r.out.find("closure"), std::string::npos) << option << ": simulated first";
+    EXPECT_FALSE(std::filesystem::exists(dir_ / "bad" / "closed.ply")) << option;
+  }
+}
+
 TEST(SimulateCommandWithTracings, DrawsTheClosedValveAgainstTheTracingsOfEveryPlane) {
   TempDir dir;
   const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";

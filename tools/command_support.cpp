@@ -68,12 +68,52 @@ double caseTimeStepMs(const ValveCase& valve_case, const SimulationSettings& set
 
 }  // namespace
 
+namespace {
+
+// The `--set` items as one JSON object; on a malformed item prints it and returns nullopt.
+std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
+                                                       const std::vector<std::string>& overrides) {
+  nlohmann::json object = nlohmann::json::object();
+  for (const std::string& item : overrides) {
+    const size_t equals = item.find('=');
+    std::string problem;
+    const std::string key = item.substr(0, equals);
+    if (equals == std::string::npos || equals == 0 || equals + 1 == item.size())
+      problem = "expected KEY=VALUE, e.g. youngs_modulus_mpa=2, got \"" + item + "\"";
+    else if (object.contains(key))
+      problem = key + " given twice";
+    else if (key == "phase")
+      problem = "phase is not a setting to override here (simulate --phase)";
+    if (!problem.empty()) {
+      std::cerr << "error: " << command << ": --set: " << problem << "\n";
+      return std::nullopt;
+    }
+    // A JSON value (number, true/false, "text"); anything else is taken as text.
+    const std::string value = item.substr(equals + 1);
+    object[key] =
+        nlohmann::json::accept(value) ? nlohmann::json::parse(value) : nlohmann::json(value);
+  }
+  return object;
+}
+
+}  // namespace
+
 std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
-                                                       const std::string& case_dir) {
+                                                       const std::string& case_dir,
+                                                       const char* command,
+                                                       const std::vector<std::string>& overrides) {
   Diagnostics diagnostics;
   SimulationSettings settings =
       settingsFromJson(valve_case.simulation_json, diagnostics, {},
                        (std::filesystem::path(case_dir) / "case.json").string());
+  if (!overrides.empty()) {
+    const std::optional<nlohmann::json> object = settingOverridesOrReport(command, overrides);
+    if (!object) return std::nullopt;
+    // Over the case's settings, each problem named as "<command> --set: simulation.<key>".
+    if (diagnostics.ok())
+      settings =
+          settingsFromJson(object->dump(), diagnostics, settings, std::string(command) + ": --set");
+  }
   settings.phase = ClosurePhase::kClose;
   // The step cap against the pressure ramp at the automatic time step, which only the mesh
   // gives (settingsFromJson checks a given dt_ms).

@@ -26,11 +26,13 @@ int reportProblems(const Diagnostics& diagnostics);
 // nullopt on bad input.
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
 
-// The case's simulator settings (its "simulation" block over the defaults), phase kClose.
-// On unknown keys, wrong types or out-of-range values prints the problems, naming
-// CASE_DIR/case.json, and returns nullopt.
-std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
-                                                       const std::string& case_dir);
+// The case's simulator settings (its "simulation" block over the defaults), then the
+// command line's `overrides` ("KEY=VALUE", a key of that block and a JSON value, text
+// otherwise; `--set`), phase kClose. On unknown keys, wrong types or out-of-range values prints
+// the problems, naming CASE_DIR/case.json or "<command> --set", and returns nullopt.
+std::optional<SimulationSettings> caseSettingsOrReport(
+    const ValveCase& valve_case, const std::string& case_dir, const char* command = "",
+    const std::vector<std::string>& overrides = {});
 
 // Each (option, value) must be a finite number > 0; the first that is not gets
 // "error: <command>: <option>: must be <what>, got <value>" on stderr. Returns whether all are.

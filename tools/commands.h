@@ -50,6 +50,8 @@ int runMetrics(const MetricsOptions& options);
 namespace chordfit::cli {
 
 struct SimulateOptions {
+  // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set).
+  std::vector<std::string> settings_overrides;
   std::string case_dir;
   std::string cords_file;       // optional; else the case's cords, else the heuristic
   std::string tissue_file;      // optional; else the case's tissue (uniform when it has none)
@@ -92,6 +94,8 @@ int runMakeCase(const MakeCaseOptions& options);
 namespace chordfit::cli {
 
 struct SweepCordOptions {
+  // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set).
+  std::vector<std::string> settings_overrides;
   std::string case_dir;
   std::string cords_file;  // optional; as for simulate
   int cord = -1;           // cord index; -1: the P2 primary cord nearest the P2 centre
@@ -111,6 +115,8 @@ namespace chordfit::cli {
 
 // compare: close the case once per cord set, Table 1 side by side (issue 5 item 6).
 struct CompareOptions {
+  // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set).
+  std::vector<std::string> settings_overrides;
   std::string case_dir;
   std::vector<std::string> cords_files;  // one or more CordSet JSON files
   std::string labels;                    // "a,b,...": one per file; default the file names
@@ -129,6 +135,8 @@ namespace chordfit::cli {
 // fit: inverse fit of the cord rest lengths (and optionally the PM tips) to the tracings
 // (issue 5; inverse/fit_cords.h).
 struct FitCommandOptions {
+  // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set).
+  std::vector<std::string> settings_overrides;
   std::string case_dir;
   std::string seed_cords_file;      // optional; else the case's cords, else the heuristic
   std::string params = "scales";    // scales | groups | scales+tips

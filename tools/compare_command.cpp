@@ -124,11 +124,15 @@ std::string compareCsv(const std::vector<ComparedSet>& sets) {
   return csv;
 }
 
-std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& sets) {
+std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& sets,
+                            const std::vector<std::string>& settings_overrides) {
   std::string md = "# Cord sets compared on case " + c.name + "\n\n";
-  md +=
-      "Each cord set closed with the case's solver settings (`chordfit compare`); deviations "
-      "from the tracings in mm.\n\n";
+  md += "Each cord set closed with the case's solver settings (`chordfit compare`)";
+  if (!settings_overrides.empty()) {
+    md += " and `--set`";
+    for (const std::string& item : settings_overrides) md += " `" + item + "`";
+  }
+  md += "; deviations from the tracings in mm.\n\n";
   md += table1Header();
   for (const ComparedSet& s : sets) md += table1Row(s.label, s.metrics);
   md +=
@@ -159,7 +163,8 @@ int runCompare(const CompareOptions& options) {
 
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
-  const auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  const auto case_settings =
+      caseSettingsOrReport(*valve_case, options.case_dir, "compare", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
@@ -225,7 +230,8 @@ int runCompare(const CompareOptions& options) {
   if (!options.out_dir.empty()) {
     StagedOutput staged(options.out_dir);
     const std::filesystem::path& out = staged.dir();
-    writeFileAtomically(out / "compare.md", compareMarkdown(*valve_case, sets));
+    writeFileAtomically(out / "compare.md",
+                        compareMarkdown(*valve_case, sets, options.settings_overrides));
     writeFileAtomically(out / "compare.csv", compareCsv(sets));
     const std::string sections = sectionsSvg(*valve_case, sets);
     if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);

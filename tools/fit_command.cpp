@@ -91,7 +91,8 @@ int runFit(const FitCommandOptions& o) {
   }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
-  const auto case_settings = caseSettingsOrReport(*valve_case, o.case_dir);
+  const auto case_settings =
+      caseSettingsOrReport(*valve_case, o.case_dir, "fit", o.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
@@ -144,6 +145,7 @@ int runFit(const FitCommandOptions& o) {
   if (fit.tissue.size() > 0) simulate.tissue_file = (out / "tissue.json").string();
   simulate.out_dir = out.string();
   simulate.threads = o.threads;
+  simulate.settings_overrides = o.settings_overrides;
   simulate.quiet = true;
   simulate.sections = false;      // written below, with the seed closure beside the fitted one
   simulate.report_files = false;  // listed below, where they are published

@@ -198,6 +198,11 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
        << "\n";
   }
   md << "- slack release: " << slackReleaseLine(fit, o.slack_release) << "\n";
+  if (!o.settings_overrides.empty()) {
+    md << "- simulator settings over the case's (--set):";
+    for (const std::string& item : o.settings_overrides) md << " `" << item << "`";
+    md << "\n";
+  }
   md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
      << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";

@@ -77,6 +77,15 @@ void addMetrics(CLI::App& app, MetricsOptions& o) {
   cmd->add_option("--out", o.out_file, "Write metrics JSON here");
 }
 
+// --set KEY=VALUE, repeatable; one value per --set so that positionals may follow it.
+void addSettingOverrides(CLI::App* cmd, std::vector<std::string>& overrides) {
+  cmd->add_option("--set", overrides,
+                  "Override a simulator setting of the case's \"simulation\" block for this run: "
+                  "KEY=VALUE, e.g. youngs_modulus_mpa=2 (repeatable; docs/case-format.md, "
+                  "\"Simulator overrides\")")
+      ->allow_extra_args(false);
+}
+
 void addSimulate(CLI::App& app, SimulateOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "simulate", "Close the valve with XPBD to equilibrium; write closed.ply/.vtk + metrics");
@@ -94,6 +103,7 @@ void addSimulate(CLI::App& app, SimulateOptions& o) {
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
+  addSettingOverrides(cmd, o.settings_overrides);
 }
 
 void addSweepCord(CLI::App& app, SweepCordOptions& o) {
@@ -117,6 +127,7 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
+  addSettingOverrides(cmd, o.settings_overrides);
 }
 
 void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
@@ -162,6 +173,7 @@ void addCompare(CLI::App& app, CompareOptions& o) {
                   "e.g. a tissue-prefit fit's tissue.json");
   cmd->add_option("--out", o.out_dir, "Write compare.md and compare.csv here");
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
+  addSettingOverrides(cmd, o.settings_overrides);
 }
 
 void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
@@ -258,6 +270,7 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
                 "closures per parameter)");
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
+  addSettingOverrides(cmd, o.settings_overrides);
 }
 
 }  // namespace
@@ -322,6 +335,8 @@ int main(int argc, char** argv) {
   };
   const std::vector<std::string> closure_files = {"closed.ply", "closed.vtk", "metrics.json",
                                                   "enface.svg", "sections.svg"};
+  std::vector<std::string> simulate_files = closure_files;
+  for (const char* name : {"opened.ply", "opened.vtk"}) simulate_files.push_back(name);
   std::vector<std::string> fit_files = closure_files;
   for (const char* name : {"cords.json", "tissue.json", "convergence.csv", "convergence.svg",
                            "uncertainty.csv", "report.md"})
@@ -335,7 +350,7 @@ int main(int argc, char** argv) {
       {"heuristic", heuristic.out_file, true, false, {}},
       {"edit-cords", edit_cords.out_file, true, false, {}},
       {"metrics", metrics.out_file, true, true, {}},
-      {"simulate", simulate.out_dir, false, false, closure_files},
+      {"simulate", simulate.out_dir, false, false, simulate_files},
       {"sweep-cord", sweep_cord.out_dir, false, false, {"sweep.csv", "sweep.svg", "sweep.json"}},
       {"make-case", make_case.out_dir, false, false, {}},
       {"fit", fit.out_dir, false, false, fit_files},

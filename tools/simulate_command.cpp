@@ -98,7 +98,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
-  auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  auto case_settings =
+      caseSettingsOrReport(*valve_case, options.case_dir, "simulate", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   SimulationSettings& settings = *case_settings;
   settings.threads = options.threads;
@@ -125,6 +126,7 @@ int runSimulate(const SimulateOptions& options) {
   j["threads"] = options.threads;
   j["threads_gave_up"] = closed.threads_gave_up;
   j["cords"] = cords->cords.size();
+  if (!options.settings_overrides.empty()) j["settings_overrides"] = options.settings_overrides;
   if (options.phase == "open") {
     j["open_phase"] = {{"converged", opened.converged},
                        {"steps", opened.steps},

@@ -123,7 +123,8 @@ int runSweepCord(const SweepCordOptions& options) {
               << " cords" << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
     return kExitBadInput;
   }
-  const auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir);
+  const auto case_settings =
+      caseSettingsOrReport(*valve_case, options.case_dir, "sweep-cord", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
@@ -194,6 +195,8 @@ int runSweepCord(const SweepCordOptions& options) {
       {"vertex_x", noiseJson(mapNoise(s, x, options.window))},
       {"vertex_y", noiseJson(mapNoise(s, y, options.window))},
       {"vertex_z", noiseJson(mapNoise(s, z, options.window))}};
+  if (!options.settings_overrides.empty())
+    summary["settings_overrides"] = options.settings_overrides;
   std::vector<PlotPanel> panels;
   if (tracing_points.rows() > 0) {
     summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window));
