@@ -37,7 +37,8 @@
 //     a Kirchhoff plate of rigidity f D whose Gauss-curvature term is that of nu = -1/3
 //     whatever poisson_ratio says (poisson_ratio enters D only). Cylindrical bending and
 //     clamped plates do not see the Gauss term (it integrates to a boundary term that a clamped
-//     edge fixes); free and simply supported edges do. Measured: a simply supported strip
+//     edge fixes); free edges and curved simply supported edges (the valve's annulus) do.
+//     Measured: a simply supported strip
 //     bends as Kirchhoff's 5 p L^4 / (384 f D) to 0.2 %, a clamped disc as p a^4 / (64 f D) to
 //     ~10 % (tests/test_xpbd_plate.cpp; docs/performance.md, "Bending against Kirchhoff
 //     plates"). Grinspun et al. 2003 ("Discrete shells") weight the hinges by |e|^2 / A too.

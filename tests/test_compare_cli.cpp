@@ -1,7 +1,9 @@
 // `chordfit compare` end to end: two cord sets on the bundled small case (each closure takes
 // about a second), and the input errors that must stop it before any simulation.
+#include <cmath>
 #include <filesystem>
 #include <sstream>
+#include <string>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -137,13 +139,30 @@ TEST_F(CompareCommand, ADirectoryInTheWayOfTheSecondEnfaceFigureExitsWith2Before
 }
 
 TEST_F(CompareCommand, SetAppliesToEveryClosureAndIsNamedInTheMarkdown) {
+  // The row's AvgD is that of `simulate --set` with the same cords, not the case's settings'.
   const fs::path out = *dir_ / "set";
+  const std::string set = " --set pressure_mmhg=90";
   const auto r =
-      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") +
-                  " --set pressure_mmhg=90 --quiet --out " + quoted(out));
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + set +
+                  " --quiet --out " + quoted(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(testing::readText(out / "compare.md").find("and `--set` `pressure_mmhg=90`"),
-            std::string::npos);
+  EXPECT_NE(readText(out / "compare.md").find("and `--set` `pressure_mmhg=90`"), std::string::npos);
+  const auto csv = csvRows(readText(out / "compare.csv"));
+  ASSERT_EQ(csv.size(), 2u);
+  const double compared_mean = std::stod(csv[1][6]);  // mean_mm
+  for (const std::string& with : {set, std::string()}) {
+    const fs::path sim = *dir_ / (with.empty() ? "plain" : "sim");
+    ASSERT_EQ(runChordfit("simulate " + quoted(caseDir()) + " --cords " +
+                          quoted(caseDir() / "cords.json") + with + " --quiet --out " + quoted(sim))
+                  .exit_code,
+              0);
+    const double mean =
+        nlohmann::json::parse(readText(sim / "metrics.json"))["mean_mm"].get<double>();
+    if (with.empty())
+      EXPECT_GT(std::abs(mean - compared_mean), 1e-3) << "the case's own pressure";
+    else
+      EXPECT_NEAR(mean, compared_mean, 1e-4);  // the CSV's precision
+  }
   const auto bad = runChordfit("compare " + quoted(caseDir()) + " " +
                                quoted(caseDir() / "cords.json") + " --set pressure_mmhg=1e9");
   EXPECT_EQ(bad.exit_code, 2);

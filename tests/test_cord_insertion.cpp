@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 
 #include "core/cord_insertion.h"
-#include "tests/test_xpbd_disc.h"
+#include "tests/test_sheets.h"
 
 namespace chordfit {
 namespace {

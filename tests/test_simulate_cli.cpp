@@ -58,15 +58,18 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
 }
 
 TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {
-  // --set E=4 gives the bytes of a case whose case.json says so, and another closure than the
-  // default 3 MPa; the override is recorded in metrics.json.
-  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --set youngs_modulus_mpa=4 " +
-                             "--set contact=true --quiet --out " + quoted(dir_ / "set"));
+  // --set gives the closure and the metrics of a case whose case.json says so (the contact
+  // thickness also enters the metrics' orifice coverage), and another closure than the
+  // defaults; the overrides are recorded in metrics.json.
+  const std::string set = " --set youngs_modulus_mpa=4 --set contact_thickness_mm=1.2";
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + set + " --quiet --out " + quoted(dir_ / "set"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::filesystem::path edited = dir_ / "edited";
   std::filesystem::copy(case_dir_, edited, std::filesystem::copy_options::recursive);
   auto case_json = nlohmann::json::parse(testing::readText(edited / "case.json"));
   case_json["simulation"]["youngs_modulus_mpa"] = 4;
+  case_json["simulation"]["contact_thickness_mm"] = 1.2;
   testing::writeText(edited / "case.json", case_json.dump(2));
   ASSERT_EQ(runChordfit("simulate " + quoted(edited) + " --quiet --out " + quoted(dir_ / "json"))
                 .exit_code,
@@ -77,19 +80,28 @@ TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {
   const std::string closed = testing::readText(dir_ / "set" / "closed.ply");
   EXPECT_EQ(closed, testing::readText(dir_ / "json" / "closed.ply"));
   EXPECT_NE(closed, testing::readText(dir_ / "3" / "closed.ply"));
-  const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "set" / "metrics.json"));
+  auto metrics = nlohmann::json::parse(testing::readText(dir_ / "set" / "metrics.json"));
+  auto edited_metrics = nlohmann::json::parse(testing::readText(dir_ / "json" / "metrics.json"));
   EXPECT_EQ(metrics["settings_overrides"],
-            nlohmann::json({"youngs_modulus_mpa=4", "contact=true"}));
+            nlohmann::json({"youngs_modulus_mpa=4", "contact_thickness_mm=1.2"}));
+  for (nlohmann::json* m : {&metrics, &edited_metrics}) {
+    m->erase("settings_overrides");
+    m->erase("sim_seconds");
+  }
+  EXPECT_EQ(metrics, edited_metrics);
 }
 
 TEST_F(SimulateCommand, RejectsABadSetBeforeSimulatingNamingTheSetting) {
   const std::pair<const char*, const char*> cases[] = {
       {"--set youngs_modulus_mpa=-1", "simulate: --set: simulation.youngs_modulus_mpa: -1 is out"},
       {"--set unknown_thing=1", "simulate: --set: simulation.unknown_thing: unknown"},
-      {"--set contact=maybe", "simulate: --set: simulation.contact: expected true or false"},
+      {"--set contact=1", "simulate: --set: simulation.contact: expected true or false"},
+      {"--set youngs_modulus_mpa=3,5", "youngs_modulus_mpa=3,5: \"3,5\" is not a number"},
       {"--set youngs_modulus_mpa", "simulate: --set: expected KEY=VALUE"},
       {"--set pressure_mmhg=90 --set pressure_mmhg=80", "pressure_mmhg given twice"},
-      {"--set phase=open", "simulate --phase"}};
+      {"--set phase=open", "phase cannot be set (--phase chooses it)"},
+      // The case's ramp fits under its cap; the override's cap does not: the override is named.
+      {"--set max_steps=10", "simulate: --set: simulation.max_steps: "}};
   for (const auto& [option, message] : cases) {
     const auto r = runChordfit("simulate " + quoted(case_dir_) + " " + option + " --out " +
                                quoted(dir_ / "bad"));
@@ -261,6 +273,21 @@ TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   EXPECT_TRUE(std::filesystem::exists(dir / "one" / "sweep.svg"));
 }
 
+// --set changes the closures of the sweep (another CSV than the case's settings give) and is
+// recorded in sweep.json.
+TEST(SweepCordCommand, SetChangesEveryClosureAndIsRecorded) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const std::string args = "sweep-cord " + quoted(small) + " --range 0.01 --step 0.004 --window 2";
+  ASSERT_EQ(runChordfit(args + " --out " + quoted(dir / "plain")).exit_code, 0);
+  const auto r = runChordfit(args + " --set pressure_mmhg=80 --out " + quoted(dir / "set"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(testing::readText(dir / "set" / "sweep.csv"),
+            testing::readText(dir / "plain" / "sweep.csv"));
+  const auto summary = nlohmann::json::parse(testing::readText(dir / "set" / "sweep.json"));
+  EXPECT_EQ(summary["settings_overrides"], nlohmann::json({"pressure_mmhg=80"}));
+}
+
 TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
   TempDir dir;
   const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
@@ -271,7 +298,8 @@ TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
       {"--threads 0", "--threads"},
       {"--window 1", "--window"},
       {"--range 0.02 --step 0.005", "--window 5 needs at least 11 scales"},
-      {"--step 0", "--range/--step"}};
+      {"--step 0", "--range/--step"},
+      {"--set iterations=0", "sweep-cord: --set: simulation.iterations"}};
   for (const auto& [options, message] : cases) {
     const auto r = runChordfit("sweep-cord " + quoted(small) + " " + options + " --out " +
                                quoted(dir / "sweep"));

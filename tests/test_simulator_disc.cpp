@@ -8,7 +8,7 @@
 
 #include "core/cord_insertion.h"
 #include "core/simulator.h"
-#include "tests/test_xpbd_disc.h"
+#include "tests/test_sheets.h"
 
 namespace chordfit {
 namespace {

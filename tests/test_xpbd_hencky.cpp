@@ -11,7 +11,7 @@
 
 #include "core/material.h"
 #include "core/simulator.h"
-#include "tests/test_xpbd_disc.h"
+#include "tests/test_sheets.h"
 
 namespace chordfit {
 namespace {

@@ -14,14 +14,14 @@
 
 #include "core/material.h"
 #include "core/simulator.h"
-#include "tests/test_xpbd_disc.h"
+#include "tests/test_sheets.h"
 
 namespace chordfit {
 namespace {
 
 constexpr double kDeflectionOverThickness = 0.02;
 
-// A lattice (test_xpbd_disc.h) with `intervals` row spacings across the span y in
+// A lattice (test_sheets.h) with `intervals` row spacings across the span y in
 // [0, L] and about 5 L long; the rows at y = 0 and y = L are held (a simply supported strip).
 // Returns the vertex nearest the middle of the span line y = L / 2.
 int simplySupportedStrip(double span, int intervals, SimulationModel& model) {
@@ -73,13 +73,14 @@ TEST(XpbdPlate, SimplySupportedStripBendsAsKirchhoffPredicts) {
     const double w0 = result.V(middle, 2) / (kDeflectionOverThickness * material.thickness_mm);
     std::printf("[ plate    ] strip, flexural factor %.0f: w0 / Kirchhoff %.4f (%d steps)\n",
                 factor, w0, result.steps);
-    EXPECT_NEAR(w0, 1.0, 0.02) << "flexural_modulus_factor " << factor;
+    EXPECT_NEAR(w0, 1.0, 0.005) << "flexural_modulus_factor " << factor;
   }
 }
 
 TEST(XpbdPlate, ClampedDiscDeflectsAsKirchhoffPredictsAtTwoResolutions) {
   constexpr double kRadius = 10.0;  // mm
   const LeafletMaterial material;   // the default sheet, flexural factor 2
+  double coarse_error = 0.0;
   for (int rings : {12, 24}) {
     SimulationModel model;
     clampedPlateDisc(kRadius, rings, model);
@@ -89,8 +90,13 @@ TEST(XpbdPlate, ClampedDiscDeflectsAsKirchhoffPredictsAtTwoResolutions) {
     const double w0 = result.V(0, 2) / (kDeflectionOverThickness * material.thickness_mm);
     std::printf("[ plate    ] clamped disc, %d rings: w0 / Kirchhoff %.4f (%d steps)\n", rings, w0,
                 result.steps);
-    // The discrete clamp sits a fraction of a ring outside a (w0 ~ a^4); 15 % as for Hencky.
-    EXPECT_NEAR(w0, 1.0, 0.15) << rings << " rings";
+    // The discrete clamp holds the slope about half a ring outside a (w0 ~ a^4), so the disc
+    // is too soft by a few percent per ring spacing: 1.117 at 12 rings, 1.085 at 24.
+    EXPECT_NEAR(w0, 1.0, 0.13) << rings << " rings";
+    if (rings == 12)
+      coarse_error = std::abs(w0 - 1.0);
+    else
+      EXPECT_LT(std::abs(w0 - 1.0), coarse_error) << "the finer disc is closer";
   }
 }
 

@@ -66,9 +66,12 @@ double caseTimeStepMs(const ValveCase& valve_case, const SimulationSettings& set
   return closureTimeStepMs(model, settings);
 }
 
-}  // namespace
-
-namespace {
+// Why the pressure ramp does not fit under the step cap at the automatic time step, which
+// only the mesh gives (settingsFromJson checks a given dt_ms), or "".
+std::string stepCapProblem(const ValveCase& valve_case, const SimulationSettings& settings) {
+  if (settings.dt_ms != 0.0) return "";
+  return rampBeyondStepCap(settings, caseTimeStepMs(valve_case, settings));
+}
 
 // The `--set` items as one JSON object; on a malformed item prints it and returns nullopt.
 std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
@@ -76,52 +79,59 @@ std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
   nlohmann::json object = nlohmann::json::object();
   for (const std::string& item : overrides) {
     const size_t equals = item.find('=');
-    std::string problem;
     const std::string key = item.substr(0, equals);
-    if (equals == std::string::npos || equals == 0 || equals + 1 == item.size())
+    const std::string value = equals == std::string::npos ? "" : item.substr(equals + 1);
+    std::string problem;
+    if (equals == std::string::npos || equals == 0 || value.empty())
       problem = "expected KEY=VALUE, e.g. youngs_modulus_mpa=2, got \"" + item + "\"";
     else if (object.contains(key))
       problem = key + " given twice";
     else if (key == "phase")
-      problem = "phase is not a setting to override here (simulate --phase)";
+      problem = std::string("phase cannot be set") +
+                (std::string(command) == "simulate" ? " (--phase chooses it)" : "");
+    else if (!nlohmann::json::accept(value))  // every setting but phase is a number or a bool
+      problem = item + ": \"" + value + "\" is not a number, true or false";
     if (!problem.empty()) {
       std::cerr << "error: " << command << ": --set: " << problem << "\n";
       return std::nullopt;
     }
-    // A JSON value (number, true/false, "text"); anything else is taken as text.
-    const std::string value = item.substr(equals + 1);
-    object[key] =
-        nlohmann::json::accept(value) ? nlohmann::json::parse(value) : nlohmann::json(value);
+    object[key] = nlohmann::json::parse(value);
   }
   return object;
 }
 
 }  // namespace
 
-std::optional<SimulationSettings> caseSettingsOrReport(const ValveCase& valve_case,
+std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                                                        const std::string& case_dir,
                                                        const char* command,
                                                        const std::vector<std::string>& overrides) {
+  const std::string case_file = (std::filesystem::path(case_dir) / "case.json").string();
   Diagnostics diagnostics;
   SimulationSettings settings =
-      settingsFromJson(valve_case.simulation_json, diagnostics, {},
-                       (std::filesystem::path(case_dir) / "case.json").string());
-  if (!overrides.empty()) {
+      settingsFromJson(valve_case.simulation_json, diagnostics, {}, case_file);
+  // Who is named when the ramp does not fit under the step cap: the case, unless it fits
+  // there and the overrides broke it.
+  std::string step_cap_source = case_file;
+  if (!overrides.empty() && diagnostics.ok()) {
     const std::optional<nlohmann::json> object = settingOverridesOrReport(command, overrides);
     if (!object) return std::nullopt;
-    // Over the case's settings, each problem named as "<command> --set: simulation.<key>".
-    if (diagnostics.ok())
-      settings =
-          settingsFromJson(object->dump(), diagnostics, settings, std::string(command) + ": --set");
+    const std::string source = std::string(command) + ": --set";
+    const SimulationSettings own = settings;
+    settings = settingsFromJson(object->dump(), diagnostics, own, source);
+    if (stepCapProblem(valve_case, own).empty()) step_cap_source = source;
+    // Into the case as well, so that whatever reads its settings later (the metrics' contact
+    // thickness, the figures) sees the run's.
+    nlohmann::json simulation = valve_case.simulation_json.empty()
+                                    ? nlohmann::json::object()
+                                    : nlohmann::json::parse(valve_case.simulation_json);
+    simulation.update(*object);
+    valve_case.simulation_json = simulation.dump();
   }
   settings.phase = ClosurePhase::kClose;
-  // The step cap against the pressure ramp at the automatic time step, which only the mesh
-  // gives (settingsFromJson checks a given dt_ms).
-  if (diagnostics.ok() && settings.dt_ms == 0.0) {
-    const std::string problem = rampBeyondStepCap(settings, caseTimeStepMs(valve_case, settings));
-    if (!problem.empty())
-      diagnostics.error((std::filesystem::path(case_dir) / "case.json").string(),
-                        "simulation.max_steps", problem);
+  if (diagnostics.ok()) {
+    const std::string problem = stepCapProblem(valve_case, settings);
+    if (!problem.empty()) diagnostics.error(step_cap_source, "simulation.max_steps", problem);
   }
   if (!diagnostics.ok()) {
     reportProblems(diagnostics);

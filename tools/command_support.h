@@ -27,11 +27,13 @@ int reportProblems(const Diagnostics& diagnostics);
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
 
 // The case's simulator settings (its "simulation" block over the defaults), then the
-// command line's `overrides` ("KEY=VALUE", a key of that block and a JSON value, text
-// otherwise; `--set`), phase kClose. On unknown keys, wrong types or out-of-range values prints
-// the problems, naming CASE_DIR/case.json or "<command> --set", and returns nullopt.
+// command line's `overrides` ("KEY=VALUE": a key of that block and a number, true or false;
+// `--set`), which are also written into valve_case.simulation_json so that everything reading
+// the case's settings later sees them; phase kClose. On unknown keys, wrong types,
+// out-of-range values or a pressure ramp longer than the step cap prints the problems, naming
+// CASE_DIR/case.json or "<command>: --set", and returns nullopt.
 std::optional<SimulationSettings> caseSettingsOrReport(
-    const ValveCase& valve_case, const std::string& case_dir, const char* command = "",
+    ValveCase& valve_case, const std::string& case_dir, const char* command = "",
     const std::vector<std::string>& overrides = {});
 
 // Each (option, value) must be a finite number > 0; the first that is not gets

@@ -161,7 +161,7 @@ int runCompare(const CompareOptions& options) {
       options.labels.empty() ? options.cords_files : splitLabels(options.labels);
   if (!checkLabels(labels, options.cords_files.size())) return kExitBadInput;
 
-  const auto valve_case = loadCaseOrReport(options.case_dir);
+  auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   const auto case_settings =
       caseSettingsOrReport(*valve_case, options.case_dir, "compare", options.settings_overrides);
@@ -215,6 +215,11 @@ int runCompare(const CompareOptions& options) {
     }
   }
 
+  if (!options.settings_overrides.empty()) {
+    std::cout << "simulator settings over the case's (--set):";
+    for (const std::string& item : options.settings_overrides) std::cout << " " << item;
+    std::cout << "\n";
+  }
   std::cout << table1Header();
   for (const ComparedSet& s : sets) std::cout << table1Row(s.label, s.metrics);
   if (valve_case->tracings.empty()) {

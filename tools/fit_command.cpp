@@ -83,7 +83,7 @@ int runFit(const FitCommandOptions& o) {
     std::cerr << "error: fit: --threads: at most 64, got " << o.threads << "\n";
     return kExitBadInput;
   }
-  const auto valve_case = loadCaseOrReport(o.case_dir);
+  auto valve_case = loadCaseOrReport(o.case_dir);
   if (!valve_case) return kExitBadInput;
   if (valve_case->tracings.empty()) {
     std::cerr << "error: " << o.case_dir << ": case.json: tracings: the fit needs tracings\n";

@@ -336,7 +336,8 @@ int main(int argc, char** argv) {
   const std::vector<std::string> closure_files = {"closed.ply", "closed.vtk", "metrics.json",
                                                   "enface.svg", "sections.svg"};
   std::vector<std::string> simulate_files = closure_files;
-  for (const char* name : {"opened.ply", "opened.vtk"}) simulate_files.push_back(name);
+  if (simulate.phase == "open")
+    for (const char* name : {"opened.ply", "opened.vtk"}) simulate_files.push_back(name);
   std::vector<std::string> fit_files = closure_files;
   for (const char* name : {"cords.json", "tissue.json", "convergence.csv", "convergence.svg",
                            "uncertainty.csv", "report.md"})

@@ -113,7 +113,7 @@ int runSweepCord(const SweepCordOptions& options) {
               << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
     return kExitBadInput;
   }
-  const auto valve_case = loadCaseOrReport(options.case_dir);
+  auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;

@@ -6,7 +6,7 @@
 namespace chordfit::cli {
 
 int runValidate(const ValidateOptions& options) {
-  const auto valve_case = loadCaseOrReport(options.case_dir);
+  auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   // The simulator overrides too: simulate and fit would reject them.
   if (!caseSettingsOrReport(*valve_case, options.case_dir)) return kExitBadInput;

@@ -82,16 +82,17 @@ inline void makeTriangleLattice(int columns, int rows, double edge, Eigen::Matri
 }
 
 // Holds `fixed` at their rest positions (moving to `end` over the ramp when given), one PM
-// tip that never moves, no cords.
+// tip at `tip` that never moves, no cords.
 inline void holdVertices(SimulationModel& model, const std::vector<int>& fixed,
-                         const Eigen::MatrixXd* end = nullptr) {
+                         const Eigen::MatrixXd* end = nullptr,
+                         const Eigen::Vector3d& tip = Eigen::Vector3d(0, 0, -10)) {
   model.fixed =
       Eigen::Map<const Eigen::VectorXi>(fixed.data(), static_cast<Eigen::Index>(fixed.size()));
   model.fixed_start.resize(model.fixed.size(), 3);
   for (Eigen::Index k = 0; k < model.fixed.size(); ++k)
     model.fixed_start.row(k) = model.V_rest.row(model.fixed(k));
   model.fixed_end = end ? *end : model.fixed_start;
-  model.tip_start = Eigen::RowVector3d(0, 0, -10);
+  model.tip_start = tip.transpose();
   model.tip_end = model.tip_start;
 }
 
@@ -104,13 +105,8 @@ inline SimulationModel clampedDiscModel(double radius, int rings,
   SimulationModel model;
   Eigen::VectorXi boundary;
   makeDisc(radius, rings, model.V_rest, model.F, boundary);
-  model.fixed = boundary;
-  model.fixed_start.resize(boundary.size(), 3);
-  for (Eigen::Index k = 0; k < boundary.size(); ++k)
-    model.fixed_start.row(k) = model.V_rest.row(boundary(k));
-  model.fixed_end = model.fixed_start;
-  model.tip_start = tip.transpose();
-  model.tip_end = model.tip_start;
+  holdVertices(model, std::vector<int>(boundary.data(), boundary.data() + boundary.size()), nullptr,
+               tip);
   return model;
 }
 
