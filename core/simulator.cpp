@@ -184,8 +184,9 @@ System buildSystem(const SimulationModel& m, const SimulationSettings& s) {
     c.compliance = bendingCompliance(mat, a1 + a2, len) / tissue({c.i, c.j, c.k, c.l});
     const int ids[4] = {c.i, c.j, c.k, c.l};
     for (int q = 0; q < 4; ++q) {
-      vertex_stiffness[ids[q]] += g[q].squaredNorm() / c.compliance;
-      bending_stiffness[ids[q]] += g[q].squaredNorm() / c.compliance;
+      const double k = g[q].squaredNorm() / c.compliance;
+      vertex_stiffness[ids[q]] += k;
+      bending_stiffness[ids[q]] += k;
     }
     sys.bends.push_back(c);
   }

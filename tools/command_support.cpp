@@ -108,18 +108,14 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                                                        const std::vector<std::string>& overrides) {
   const std::string case_file = (std::filesystem::path(case_dir) / "case.json").string();
   Diagnostics diagnostics;
-  SimulationSettings settings =
+  const SimulationSettings own =
       settingsFromJson(valve_case.simulation_json, diagnostics, {}, case_file);
-  // Who is named when the ramp does not fit under the step cap: the case, unless it fits
-  // there and the overrides broke it.
-  std::string step_cap_source = case_file;
+  SimulationSettings settings = own;
+  const std::string overrides_source = std::string(command) + ": --set";
   if (!overrides.empty() && diagnostics.ok()) {
     const std::optional<nlohmann::json> object = settingOverridesOrReport(command, overrides);
     if (!object) return std::nullopt;
-    const std::string source = std::string(command) + ": --set";
-    const SimulationSettings own = settings;
-    settings = settingsFromJson(object->dump(), diagnostics, own, source);
-    if (stepCapProblem(valve_case, own).empty()) step_cap_source = source;
+    settings = settingsFromJson(object->dump(), diagnostics, own, overrides_source);
     // Into the case as well, so that whatever reads its settings later (the metrics' contact
     // thickness, the figures) sees the run's.
     nlohmann::json simulation = valve_case.simulation_json.empty()
@@ -131,7 +127,13 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   settings.phase = ClosurePhase::kClose;
   if (diagnostics.ok()) {
     const std::string problem = stepCapProblem(valve_case, settings);
-    if (!problem.empty()) diagnostics.error(step_cap_source, "simulation.max_steps", problem);
+    // Named after the case, unless the case's own settings pass and the overrides broke them
+    // (checked only then: each check builds the closure's model).
+    if (!problem.empty())
+      diagnostics.error(overrides.empty() || !stepCapProblem(valve_case, own).empty()
+                            ? case_file
+                            : overrides_source,
+                        "simulation.max_steps", problem);
   }
   if (!diagnostics.ok()) {
     reportProblems(diagnostics);
