@@ -5,6 +5,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include "core/parametric_valve.h"
 
@@ -66,6 +67,11 @@ struct SimulateOptions {
   bool report_files = true;
 };
 int runSimulate(const SimulateOptions& options);
+// The files a closure writes into its output directory (closed.*, opened.* with --phase open,
+// metrics.json, enface.svg); simulate adds sections.svg. The pre-flight checks these names
+// and StagedOutput refuses any other (tools/staged_output.h); likewise for each *OutputFiles.
+std::vector<std::string> closureOutputFiles(bool open_phase);
+std::vector<std::string> simulateOutputFiles(const SimulateOptions& options);
 
 }  // namespace chordfit::cli
 
@@ -106,6 +112,7 @@ struct SweepCordOptions {
   std::string out_dir;
 };
 int runSweepCord(const SweepCordOptions& options);
+std::vector<std::string> sweepCordOutputFiles();
 
 }  // namespace chordfit::cli
 
@@ -125,6 +132,7 @@ struct CompareOptions {
   bool quiet = false;
 };
 int runCompare(const CompareOptions& options);
+std::vector<std::string> compareOutputFiles(const CompareOptions& options);
 
 }  // namespace chordfit::cli
 
@@ -159,6 +167,7 @@ struct FitCommandOptions {
   bool quiet = false;
 };
 int runFit(const FitCommandOptions& options);
+std::vector<std::string> fitOutputFiles(const FitCommandOptions& options);
 
 }  // namespace chordfit::cli
 

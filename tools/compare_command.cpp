@@ -233,7 +233,7 @@ int runCompare(const CompareOptions& options) {
               << closedValveSummary(s.metrics, "  ");
   }
   if (!options.out_dir.empty()) {
-    StagedOutput staged(options.out_dir);
+    StagedOutput staged(options.out_dir, compareOutputFiles(options));
     const std::filesystem::path& out = staged.dir();
     writeFileAtomically(out / "compare.md",
                         compareMarkdown(*valve_case, sets, options.settings_overrides));
@@ -247,13 +247,17 @@ int runCompare(const CompareOptions& options) {
           enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
                           sets[i].metrics.orifice));
     }
-    staged.publish();
-    std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "compare.md").string()
-              << ", compare.csv" << (sections.empty() ? "" : ", sections.svg") << ", enface_1.svg";
-    if (sets.size() > 1) std::cout << " .. enface_" << sets.size() << ".svg";
-    std::cout << " (one per cord set, in the order given)\n";
+    std::cout << wroteLine(options.out_dir, staged.publish())
+              << " (enface_K.svg: the K-th cord set given)\n";
   }
   return kExitOk;
+}
+
+std::vector<std::string> compareOutputFiles(const CompareOptions& options) {
+  std::vector<std::string> files = {"compare.md", "compare.csv", "sections.svg"};
+  for (std::size_t k = 1; k <= options.cords_files.size(); ++k)
+    files.push_back("enface_" + std::to_string(k) + ".svg");
+  return files;
 }
 
 }  // namespace chordfit::cli

@@ -132,7 +132,7 @@ int runFit(const FitCommandOptions& o) {
     return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
   }
 
-  StagedOutput staged(o.out_dir);
+  StagedOutput staged(o.out_dir, fitOutputFiles(o));
   const std::filesystem::path& out = staged.dir();
   writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
   // The tissue the cords were fitted on, when the tissue pre-fit changed it; the closure
@@ -207,7 +207,7 @@ int runFit(const FitCommandOptions& o) {
                             {"fitted closure", fit.final_evaluation.closed_V, "", false, 2.0}},
                            {valve_case->name + ": seed and fitted closures against the tracings (" +
                             o.optimizer + ", " + o.params + ")"}));
-  staged.publish();
+  const std::vector<std::string> published = staged.publish();
 
   std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
               fit.seconds, fit.termination.c_str());
@@ -227,12 +227,18 @@ int runFit(const FitCommandOptions& o) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
   std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
-  std::cout << "wrote " << (std::filesystem::path(o.out_dir) / "cords.json").string()
-            << ", closed.ply, closed.vtk, metrics.json, convergence.csv, convergence.svg, "
-               "sections.svg, enface.svg, "
-            << (fit.uncertainty.ok() ? "uncertainty.csv, " : "")
-            << (fit.tissue.size() > 0 ? "tissue.json, " : "") << "report.md\n";
+  std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;
+}
+
+std::vector<std::string> fitOutputFiles(const FitCommandOptions&) {
+  // tissue.json only when the tissue pre-fit changed the tissue, uncertainty.csv only when
+  // the uncertainty could be computed.
+  std::vector<std::string> files = {"cords.json", "tissue.json"};
+  for (const std::string& name : closureOutputFiles(false)) files.push_back(name);
+  files.insert(files.end(), {"convergence.csv", "convergence.svg", "uncertainty.csv",
+                             "sections.svg", "report.md"});
+  return files;
 }
 
 }  // namespace chordfit::cli

@@ -333,29 +333,17 @@ int main(int argc, char** argv) {
     bool optional;
     std::vector<std::string> files;
   };
-  const std::vector<std::string> closure_files = {"closed.ply", "closed.vtk", "metrics.json",
-                                                  "enface.svg", "sections.svg"};
-  std::vector<std::string> simulate_files = closure_files;
-  if (simulate.phase == "open")
-    for (const char* name : {"opened.ply", "opened.vtk"}) simulate_files.push_back(name);
-  std::vector<std::string> fit_files = closure_files;
-  for (const char* name : {"cords.json", "tissue.json", "convergence.csv", "convergence.svg",
-                           "uncertainty.csv", "report.md"})
-    fit_files.push_back(name);
-  std::vector<std::string> compare_files = {"compare.md", "compare.csv", "sections.svg"};
-  for (size_t i = 1; i <= compare.cords_files.size(); ++i)
-    compare_files.push_back("enface_" + std::to_string(i) + ".svg");
   const OutputPlace places[] = {
       {"make-valve", make_valve.out_dir, false, false, {}},
       {"import-mesh", import_mesh.out_dir, false, false, {}},
       {"heuristic", heuristic.out_file, true, false, {}},
       {"edit-cords", edit_cords.out_file, true, false, {}},
       {"metrics", metrics.out_file, true, true, {}},
-      {"simulate", simulate.out_dir, false, false, simulate_files},
-      {"sweep-cord", sweep_cord.out_dir, false, false, {"sweep.csv", "sweep.svg", "sweep.json"}},
+      {"simulate", simulate.out_dir, false, false, simulateOutputFiles(simulate)},
+      {"sweep-cord", sweep_cord.out_dir, false, false, sweepCordOutputFiles()},
       {"make-case", make_case.out_dir, false, false, {}},
-      {"fit", fit.out_dir, false, false, fit_files},
-      {"compare", compare.out_dir, false, true, compare_files}};
+      {"fit", fit.out_dir, false, false, fitOutputFiles(fit)},
+      {"compare", compare.out_dir, false, true, compareOutputFiles(compare)}};
   for (const OutputPlace& place : places) {
     if (!app.got_subcommand(place.command) || (place.optional && place.path.empty())) continue;
     const bool usable = place.is_file

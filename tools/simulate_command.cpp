@@ -134,7 +134,7 @@ int runSimulate(const SimulateOptions& options) {
                        {"mean_distance_to_open_state_mm",
                         (opened.V - valve_case->mesh.V).rowwise().norm().mean()}};
   }
-  StagedOutput staged(options.out_dir);
+  StagedOutput staged(options.out_dir, simulateOutputFiles(options));
   const std::filesystem::path& out = staged.dir();
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
@@ -148,7 +148,7 @@ int runSimulate(const SimulateOptions& options) {
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
   writeFileAtomically(out / "enface.svg",
                       enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics.orifice));
-  staged.publish();
+  const std::vector<std::string> published = staged.publish();
 
   std::printf("closure: %s after %d steps, %.2f s%s%s\n",
               closed.converged ? "converged" : "NOT converged (step cap reached)", closed.steps,
@@ -163,12 +163,21 @@ int runSimulate(const SimulateOptions& options) {
   }
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   std::cout << closedValveSummary(metrics);
-  if (options.report_files) {
-    std::cout << "wrote " << (std::filesystem::path(options.out_dir) / "closed.ply").string()
-              << ", closed.vtk" << (options.phase == "open" ? ", opened.ply, opened.vtk" : "")
-              << ", metrics.json, enface.svg" << (sections.empty() ? "" : ", sections.svg") << "\n";
-  }
+  if (options.report_files) std::cout << wroteLine(options.out_dir, published) << "\n";
   return kExitOk;
+}
+
+std::vector<std::string> closureOutputFiles(bool open_phase) {
+  std::vector<std::string> files = {"closed.ply", "closed.vtk"};
+  if (open_phase) files.insert(files.end(), {"opened.ply", "opened.vtk"});
+  files.insert(files.end(), {"metrics.json", "enface.svg"});
+  return files;
+}
+
+std::vector<std::string> simulateOutputFiles(const SimulateOptions& options) {
+  std::vector<std::string> files = closureOutputFiles(options.phase == "open");
+  if (options.sections) files.push_back("sections.svg");
+  return files;
 }
 
 }  // namespace chordfit::cli

@@ -3,17 +3,23 @@
 // full disk, an exception) leaves the output directory as it was, never half of a result.
 // Each file is already written atomically (atomic_file.h); this makes the set atomic up to the
 // final renames, which need no space and do not fail for lack of it.
+//
+// The staging directory knows the names the command declares (its *OutputFiles function in
+// commands.h, which main.cpp's pre-flight checks before any work): a file written but not
+// declared is refused at publish(), so the pre-flight's list cannot drift from the writer.
 #pragma once
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 namespace chordfit::cli {
 
 class StagedOutput {
  public:
-  // Creates out_dir if missing and a fresh staging directory inside it.
-  explicit StagedOutput(const std::filesystem::path& out_dir);
+  // Creates out_dir if missing and a fresh staging directory inside it. `declared`: every
+  // file name the command may write there.
+  StagedOutput(const std::filesystem::path& out_dir, std::vector<std::string> declared);
   // Removes the staging directory and whatever is still in it.
   ~StagedOutput();
   StagedOutput(const StagedOutput&) = delete;
@@ -22,11 +28,16 @@ class StagedOutput {
   // Where the command writes its files.
   const std::filesystem::path& dir() const { return staging_; }
   // Moves every file written into the staging directory to the output directory, replacing
-  // files of the same name.
-  void publish();
+  // files of the same name; returns their names in the declared order. Throws, moving
+  // nothing, when a written file was not declared or a directory is in the way of one.
+  std::vector<std::string> publish();
 
  private:
   std::filesystem::path out_, staging_;
+  std::vector<std::string> declared_;
 };
+
+// "wrote DIR/first, second, ...": the line a command prints after publishing `names`.
+std::string wroteLine(const std::filesystem::path& out_dir, const std::vector<std::string>& names);
 
 }  // namespace chordfit::cli

@@ -20,6 +20,7 @@
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -212,10 +213,12 @@ int runSweepCord(const SweepCordOptions& options) {
                     {{"vertex " + std::to_string(vertex), s, height, true, true}},
                     false});
 
-  const std::filesystem::path out(options.out_dir);
+  StagedOutput staged(options.out_dir, sweepCordOutputFiles());
+  const std::filesystem::path& out = staged.dir();
   writeFileAtomically(out / "sweep.csv", sweepCsv(points));
   writeFileAtomically(out / "sweep.svg", svgLinePlots(panels, 1, 720, 360));
   writeFileAtomically(out / "sweep.json", summary.dump(2) + "\n");
+  const std::vector<std::string> published = staged.publish();
   for (const char* key : {"mean_deviation", "vertex_height"}) {
     if (!summary.contains(key)) continue;
     const auto& n = summary[key];
@@ -225,8 +228,10 @@ int runSweepCord(const SweepCordOptions& options) {
         key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
         n["change_over_0.5_percent"].get<double>(), n["signal_to_noise"].get<double>());
   }
-  std::cout << "wrote " << (out / "sweep.csv").string() << ", sweep.svg, sweep.json\n";
+  std::cout << wroteLine(options.out_dir, published) << "\n";
   return kExitOk;
 }
+
+std::vector<std::string> sweepCordOutputFiles() { return {"sweep.csv", "sweep.svg", "sweep.json"}; }
 
 }  // namespace chordfit::cli
