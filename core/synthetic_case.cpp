@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/carpentier.h"
+#include "core/closure_model.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/enface_figure.h"

@@ -17,7 +17,7 @@
 #include "core/heuristic.h"
 #include "core/mesh_topology.h"
 #include "core/parametric_valve.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/xpbd_constraints.h"
 
 namespace chordfit {

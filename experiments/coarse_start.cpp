@@ -23,7 +23,7 @@
 
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "core/xpbd_constraints.h"
 #include "experiments/tool_support.h"

@@ -14,7 +14,7 @@
 
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "experiments/tool_support.h"
 

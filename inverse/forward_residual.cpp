@@ -6,6 +6,7 @@
 
 #include "core/annulus_plane.h"
 #include "core/carpentier.h"
+#include "core/closure_model.h"
 #include "core/metrics.h"
 #include "core/tracing_sampler.h"
 #include "inverse/robust_loss.h"

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "core/closure_model.h"
 #include "inverse/finite_difference.h"
 
 namespace chordfit::inverse {

@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "core/xpbd_constraints.h"
 

@@ -17,6 +17,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/cord_attachments.h"
 #include "core/mesh_io.h"

@@ -15,7 +15,7 @@
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/cord_insertion.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

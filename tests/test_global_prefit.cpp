@@ -8,7 +8,7 @@
 #include <filesystem>
 
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "inverse/global_prefit.h"
 #include "tests/test_support.h"
 

@@ -4,7 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "core/cohort_presets.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "tests/test_support.h"
 

@@ -10,7 +10,7 @@
 
 #include "core/cordset_io.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "tests/test_support.h"
 

@@ -9,7 +9,7 @@
 
 #include "core/case_io.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

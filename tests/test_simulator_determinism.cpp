@@ -11,7 +11,7 @@
 #include "core/heuristic.h"
 #include "core/mesh_io.h"
 #include "core/parametric_valve.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

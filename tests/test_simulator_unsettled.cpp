@@ -6,7 +6,7 @@
 
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 
 namespace chordfit {
 namespace {

@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/metrics.h"
 #include "core/tracing_sampler.h"
 

@@ -15,6 +15,7 @@
 
 #include "core/case_extent.h"
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
 #include "core/metrics.h"

@@ -16,7 +16,7 @@
 #include "core/enface_figure.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/staged_output.h"

@@ -12,7 +12,7 @@
 #include "core/metrics.h"
 #include "core/metrics_json.h"
 #include "core/section_figure.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/staged_output.h"

@@ -16,7 +16,7 @@
 #include "core/carpentier.h"
 #include "core/forward_map_noise.h"
 #include "core/metrics.h"
-#include "core/simulator.h"
+#include "core/closure_model.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
