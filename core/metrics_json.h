@@ -11,7 +11,8 @@ namespace chordfit {
 // tracings), area_mm2, prolapse_segments, prolapse_max_height_mm (simulated mesh),
 // orifice_coverage, open_orifice_area_mm2, orifice_area_mm2 (orifice_coverage.h),
 // tracing_prolapse_segments, section_prolapse_segments, prolapse_reconstructed (sections vs
-// tracings, Table 1), tissue_prolapse_reconstructed (null without tracings).
+// tracings, Table 1), tissue_prolapse_reconstructed (null without tracings),
+// orifice_tissue_radius_mm, self_intersections.
 nlohmann::json metricsJson(const ValveMetrics& metrics);
 
 }  // namespace chordfit

@@ -10,8 +10,8 @@
 
 #include "core/atomic_file.h"
 #include "core/carpentier.h"
-#include "core/closure_model.h"
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/cordset_io.h"
 #include "core/enface_figure.h"
 #include "core/heuristic.h"
@@ -357,7 +357,8 @@ std::string syntheticTruthJson(const SyntheticCase& s) {
          // Tension at the true closed state (N; 0 = slack). A cord slack there exerts no force
          // on the closed valve, so no closed-state data can say more than "at least this
          // long" about its rest length (docs/fitting.md, "Uncertainty").
-         {"true_closed_tension_n", s.truth_result.cord_force(static_cast<Eigen::Index>(i))}});
+         // (+ 0.0: a slack cord's -0.0 is written as 0.)
+         {"true_closed_tension_n", s.truth_result.cord_force(static_cast<Eigen::Index>(i)) + 0.0}});
   }
   json tips = json::array();
   for (std::size_t t = 0; t < truth.tips.size(); ++t) {

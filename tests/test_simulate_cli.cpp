@@ -57,6 +57,25 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
     EXPECT_NE(entry.path().filename().string().rfind(".staging-", 0), 0u) << entry.path();
 }
 
+TEST_F(SimulateCommand, RemovesTheOpenedStateAnEarlierOpeningRunLeftAndKeepsOtherFiles) {
+  // An earlier `simulate --phase open` into the same directory; its opened state beside this
+  // run's closure would read as this run's.
+  const std::filesystem::path out = dir_ / "sim";
+  std::filesystem::create_directories(out);
+  for (const char* name : {"opened.ply", "opened.vtk", "notes.txt"})
+    testing::writeText(out / name, "earlier");
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out / "opened.ply"));
+  EXPECT_FALSE(std::filesystem::exists(out / "opened.vtk"));
+  EXPECT_EQ(testing::readText(out / "notes.txt"), "earlier") << "not a file simulate writes";
+  EXPECT_TRUE(std::filesystem::exists(out / "closed.ply"));
+  EXPECT_NE(r.out.find("wrote " + (out / "closed.ply").string() +
+                       ", closed.vtk, metrics.json, enface.svg\n"),
+            std::string::npos)
+      << r.out;
+}
+
 TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {
   // --set gives the closure and the metrics of a case whose case.json says so (the contact
   // thickness also enters the metrics' orifice coverage), and another closure than the

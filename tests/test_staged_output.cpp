@@ -40,6 +40,24 @@ TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndLeavesNoStaging) {
   EXPECT_EQ(wroteLine(out, published), "wrote " + (out / "a.txt").string() + ", c.txt");
 }
 
+TEST(StagedOutput, RemovesTheCommandsFilesThisRunDidNotWriteButNoDirectoryNorOtherFile) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  fs::create_directories(out / "d.txt");
+  for (const char* name : {"a.txt", "b.txt", "old.txt", "mine.txt"})
+    writeText(out / name, "earlier");
+  {
+    StagedOutput staged(out, {"a.txt", "b.txt", "d.txt"}, {"old.txt"});
+    writeText(staged.dir() / "a.txt", "a");
+    EXPECT_EQ(staged.publish(), std::vector<std::string>{"a.txt"});
+  }
+  EXPECT_EQ(readText(out / "a.txt"), "a");
+  EXPECT_FALSE(fs::exists(out / "b.txt")) << "declared, not written: an earlier run's";
+  EXPECT_FALSE(fs::exists(out / "old.txt")) << "superseded";
+  EXPECT_TRUE(fs::is_directory(out / "d.txt")) << "a directory is never removed";
+  EXPECT_EQ(readText(out / "mine.txt"), "earlier") << "not the command's";
+}
+
 TEST(StagedOutput, AnUndeclaredFileIsRefusedAndNothingIsPublished) {
   TempDir tmp;
   const fs::path out = tmp.path() / "out";

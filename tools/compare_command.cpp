@@ -2,9 +2,11 @@
 // and lays the results side by side in the paper's Table 1 format (Markdown) plus a CSV with
 // the prolapse segments and the solver outcome. Every input is checked before the first
 // simulation, and nothing is written unless every simulation succeeded.
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <set>
 #include <sstream>
@@ -13,10 +15,10 @@
 
 #include "core/atomic_file.h"
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/enface_figure.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
-#include "core/closure_model.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/staged_output.h"
@@ -150,6 +152,28 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
   return md;
 }
 
+// enface_K.svg files in out_dir with K > count: an earlier compare of more cord sets wrote
+// them, and beside this run's figures they would read as its own.
+std::vector<std::string> enfaceFiguresBeyond(const std::string& out_dir, std::size_t count) {
+  std::vector<std::string> names;
+  std::error_code ec;
+  for (const auto& entry : std::filesystem::directory_iterator(out_dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    const std::string prefix = "enface_", suffix = ".svg";
+    if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
+        name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
+      continue;
+    const std::string digits =
+        name.substr(prefix.size(), name.size() - prefix.size() - suffix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos || digits.size() > 9 ||
+        digits[0] == '0')
+      continue;
+    if (static_cast<std::size_t>(std::stoul(digits)) > count) names.push_back(name);
+  }
+  std::sort(names.begin(), names.end());
+  return names;
+}
+
 }  // namespace
 
 int runCompare(const CompareOptions& options) {
@@ -233,7 +257,8 @@ int runCompare(const CompareOptions& options) {
               << closedValveSummary(s.metrics, "  ");
   }
   if (!options.out_dir.empty()) {
-    StagedOutput staged(options.out_dir, compareOutputFiles(options));
+    StagedOutput staged(options.out_dir, compareOutputFiles(options),
+                        enfaceFiguresBeyond(options.out_dir, sets.size()));
     const std::filesystem::path& out = staged.dir();
     writeFileAtomically(out / "compare.md",
                         compareMarkdown(*valve_case, sets, options.settings_overrides));

@@ -7,12 +7,12 @@
 
 #include "core/atomic_file.h"
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/enface_figure.h"
 #include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "core/metrics_json.h"
 #include "core/section_figure.h"
-#include "core/closure_model.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/staged_output.h"
@@ -134,7 +134,11 @@ int runSimulate(const SimulateOptions& options) {
                        {"mean_distance_to_open_state_mm",
                         (opened.V - valve_case->mesh.V).rowwise().norm().mean()}};
   }
-  StagedOutput staged(options.out_dir, simulateOutputFiles(options));
+  // A closure alone supersedes the opened state of an earlier --phase open.
+  StagedOutput staged(options.out_dir, simulateOutputFiles(options),
+                      options.phase == "open"
+                          ? std::vector<std::string>{}
+                          : std::vector<std::string>{"opened.ply", "opened.vtk"});
   const std::filesystem::path& out = staged.dir();
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);

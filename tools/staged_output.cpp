@@ -10,10 +10,12 @@ namespace chordfit::cli {
 
 namespace fs = std::filesystem;
 
-StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> declared)
+StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> declared,
+                           std::vector<std::string> superseded)
     : out_(out_dir),
       staging_(out_dir / (".staging-" + std::to_string(::getpid()))),
-      declared_(std::move(declared)) {
+      declared_(std::move(declared)),
+      superseded_(std::move(superseded)) {
   fs::create_directories(out_);
   fs::remove_all(staging_);
   fs::create_directories(staging_);
@@ -47,8 +49,14 @@ std::vector<std::string> StagedOutput::publish() {
   }
   for (const std::string& name : files) fs::rename(staging_ / name, out_ / name);
   std::vector<std::string> published;
+  std::vector<std::string> stale = superseded_;
   for (const std::string& name : declared_)
-    if (std::find(files.begin(), files.end(), name) != files.end()) published.push_back(name);
+    (std::find(files.begin(), files.end(), name) != files.end() ? published : stale)
+        .push_back(name);
+  for (const std::string& name : stale) {
+    std::error_code ec;
+    if (!fs::is_directory(fs::symlink_status(out_ / name, ec))) fs::remove(out_ / name, ec);
+  }
   return published;
 }
 

@@ -14,9 +14,9 @@
 #include "core/annulus_plane.h"
 #include "core/atomic_file.h"
 #include "core/carpentier.h"
+#include "core/closure_model.h"
 #include "core/forward_map_noise.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -62,6 +62,7 @@ struct SweepPoint {
   bool converged = false;
   int steps = 0;
   std::string error;
+  bool diverged = false;  // the error is a divergence, not invalid input
 };
 
 std::string sweepCsv(const std::vector<SweepPoint>& points) {
@@ -149,6 +150,7 @@ int runSweepCord(const SweepCordOptions& options) {
       scaled.cords[cord].rest_length = base * p.scale;
       const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
       p.error = r.error;
+      p.diverged = r.diverged;
       p.converged = r.converged;
       p.steps = r.steps;
       if (r.ok()) {
@@ -171,9 +173,10 @@ int runSweepCord(const SweepCordOptions& options) {
   for (std::thread& t : pool) t.join();
   for (const SweepPoint& p : points) {
     if (!p.error.empty()) {
-      std::cerr << "error: " << options.case_dir << ": simulation failed at scale " << p.scale
+      std::cerr << "error: " << options.case_dir << ": "
+                << (p.diverged ? "simulation failed" : "closure refused") << " at scale " << p.scale
                 << ": " << p.error << "\n";
-      return kExitSimulationFailed;
+      return p.diverged ? kExitSimulationFailed : kExitBadInput;
     }
   }
 
@@ -207,10 +210,12 @@ int runSweepCord(const SweepCordOptions& options) {
                       {{"mean deviation", s, deviation, true, true}},
                       false});
   }
-  panels.push_back({"Height of the cord's leaflet vertex above the closed annulus plane",
+  // The insertion: the cord's point between vertices when it has one, else its vertex (the
+  // CSV's vertex_* columns keep their names for scripts written against them).
+  panels.push_back({"Height of the cord's insertion above the closed annulus plane",
                     "scale of cord " + std::to_string(cord),
                     "height (mm)",
-                    {{"vertex " + std::to_string(vertex), s, height, true, true}},
+                    {{"insertion (vertex " + std::to_string(vertex) + ")", s, height, true, true}},
                     false});
 
   StagedOutput staged(options.out_dir, sweepCordOutputFiles());
@@ -224,7 +229,7 @@ int runSweepCord(const SweepCordOptions& options) {
     const auto& n = summary[key];
     std::printf(
         "%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
-        "signal/noise %.0f\n",
+        "signal/noise %.3g\n",
         key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
         n["change_over_0.5_percent"].get<double>(), n["signal_to_noise"].get<double>());
   }
