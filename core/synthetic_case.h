@@ -115,9 +115,11 @@ ValveCase truthCaseAtEdge(const SyntheticCase& synthetic, double edge_mm);
 
 // The true cords on the case mesh: `case_cords` (the case's cords.json: the same anatomical
 // cords as the truth's, in the same order, attached on the case mesh) with the rest lengths
-// and PM tips of `truth_cords` (truth/cords.json). Closed on the case mesh they are the best
-// the case mesh and the per-cord parameterisation can do (experiments/, "true cords on the
-// case mesh"). Throws std::invalid_argument when the cord or tip counts differ.
+// and PM tips of `truth_cords` (truth/cords.json). Closed on the case mesh they measure the
+// case mesh's discretisation error (experiments/, "true cords on the case mesh"). Not a bound
+// on a per-cord fit, which keeps the heuristic's tips and lets the lengths make up for them
+// (docs/fitting.md, "Without the mesh error"). Throws std::invalid_argument when the cord or
+// tip counts differ.
 CordSet trueCordsOnCaseMesh(const CordSet& case_cords, const CordSet& truth_cords);
 
 // Writes the case to `directory` and the truth to `directory`/truth:
