@@ -33,8 +33,25 @@ void writeFileAtomically(const std::filesystem::path& path, const std::string& b
   }
 }
 
+std::string inputFileProblem(const std::filesystem::path& path, const std::string& what) {
+  namespace fs = std::filesystem;
+  if (path.empty()) return "no file given";
+  std::error_code ec;
+  const fs::file_status status = fs::status(path, ec);
+  if (status.type() == fs::file_type::not_found) return "file not found";
+  if (fs::is_directory(status)) return "is a directory, not " + what;
+  if (!fs::is_regular_file(status)) return "is not a regular file (a device, a pipe or a socket)";
+  const std::uintmax_t size = fs::file_size(path, ec);
+  if (ec) return "cannot be read (" + ec.message() + ")";
+  if (size > kMaxInputFileBytes)
+    return "is " + std::to_string(size >> 20) + " MiB; an input file may have at most " +
+           std::to_string(kMaxInputFileBytes >> 20) + " MiB";
+  return "";
+}
+
 bool readWholeFile(const std::filesystem::path& path, std::string& bytes) {
   bytes.clear();
+  if (!inputFileProblem(path).empty()) return false;
   std::ifstream in(path, std::ios::binary);
   if (!in) return false;
   std::ostringstream ss;

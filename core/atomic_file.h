@@ -1,7 +1,9 @@
 // Atomic output: write to a temporary file beside the target, then rename over it, so a
-// crash or an error never leaves a half-written result.
+// crash or an error never leaves a half-written result. And the input side: which paths a
+// reader may read at all, and reading them whole.
 #pragma once
 
+#include <cstdint>
 #include <filesystem>
 #include <string>
 
@@ -11,7 +13,19 @@ namespace chordfit {
 // Creates missing parent directories. Throws std::runtime_error naming the path on failure.
 void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
-// Reads a whole file. Returns false (and leaves `bytes` empty) when it cannot be opened.
+// The largest input file any reader takes. A fine valve mesh (a million triangles, ten times
+// the finest the project makes) is ~60 MB of ASCII PLY and the JSON side files are smaller;
+// parsing holds several times the text in memory, so a file beyond this is a wrong file (a
+// disk image, a log), not a valve, and reading it could exhaust the machine.
+constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{512} << 20;
+
+// Why `path` cannot be read as an input file, or "" when it can: "no file given" (an empty
+// path), "file not found", "is a directory, not <what>", "is not a regular file" (a device or
+// a pipe: /dev/zero would be read forever) or a size above kMaxInputFileBytes.
+std::string inputFileProblem(const std::filesystem::path& path, const std::string& what = "a file");
+
+// Reads a whole file. Returns false (and leaves `bytes` empty) when it cannot be opened or
+// inputFileProblem refuses it; callers that report why check inputFileProblem first.
 bool readWholeFile(const std::filesystem::path& path, std::string& bytes);
 
 }  // namespace chordfit

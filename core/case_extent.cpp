@@ -16,6 +16,27 @@ std::string millimetres(double value) {
   return text;
 }
 
+// "; farthest from the median of the vertices: vertex K at (x, y, z), D away": the vertex to
+// look at when one outlier (a stray point at 1e10 mm) rather than the units makes the span.
+std::string farthestVertexNote(const Eigen::MatrixXd& V) {
+  Eigen::RowVector3d median;
+  for (int k = 0; k < 3; ++k) {
+    std::vector<double> column(V.col(k).data(), V.col(k).data() + V.rows());
+    std::nth_element(column.begin(), column.begin() + column.size() / 2, column.end());
+    median(k) = column[column.size() / 2];
+  }
+  Eigen::Index farthest = 0;
+  (V.rowwise() - median).rowwise().norm().maxCoeff(&farthest);
+  const Eigen::RowVector3d p = V.row(farthest);
+  char text[160];
+  std::snprintf(text, sizeof text,
+                "; farthest from the median of the vertices: vertex %ld at (%.3g, %.3g, %.3g), "
+                "%s away",
+                static_cast<long>(farthest), p.x(), p.y(), p.z(),
+                millimetres((p - median).norm()).c_str());
+  return text;
+}
+
 }  // namespace
 
 double boundingDiagonal(const Eigen::MatrixXd& V) {
@@ -29,7 +50,8 @@ bool checkValveSpan(const Eigen::MatrixXd& V, const std::string& file, Diagnosti
   diagnostics.error(file, "vertices",
                     "the mesh spans " + millimetres(span) + " (bounding-box diagonal); a mitral " +
                         "valve spans 30-60 mm and coordinates must be in millimetres (accepted: " +
-                        millimetres(kMinValveSpanMm) + " to " + millimetres(kMaxValveSpanMm) + ")");
+                        millimetres(kMinValveSpanMm) + " to " + millimetres(kMaxValveSpanMm) + ")" +
+                        (span > kMaxValveSpanMm ? farthestVertexNote(V) : ""));
   return false;
 }
 

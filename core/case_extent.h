@@ -24,7 +24,8 @@ constexpr double kMaxValveSpanMm = 500.0;
 // The bounding-box diagonal of V (0 for fewer than one vertex).
 double boundingDiagonal(const Eigen::MatrixXd& V);
 
-// Error (file, "vertices") unless the mesh's span lies within the limits above.
+// Error (file, "vertices") unless the mesh's span lies within the limits above; a span too
+// large also names the vertex farthest from the vertices' median (an outlier, if one).
 bool checkValveSpan(const Eigen::MatrixXd& V, const std::string& file, Diagnostics& diagnostics);
 
 // Farthest a point of the case may lie from the mesh's bounding box: the larger of 50 mm and

@@ -3,6 +3,8 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "core/graph_distance.h"
@@ -15,7 +17,8 @@ constexpr int kAnterior = 0, kPosterior = 1;
 
 std::string mm(double value) {
   char text[32];
-  std::snprintf(text, sizeof text, "%.2f mm", value);
+  // %.2f of an absurd distance (a landmark at 1e308) would print hundreds of digits.
+  std::snprintf(text, sizeof text, std::abs(value) < 1e6 ? "%.2f mm" : "%.3g mm", value);
   return text;
 }
 
@@ -126,6 +129,17 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     out.error = "the mesh has no boundary loop (a valve surface has its annulus as a boundary)";
     return out;
   }
+  // NaN passes every distance bound below (comparisons with it are false).
+  const std::pair<const char*, const Eigen::Vector3d*> named[] = {
+      {"anterolateral commissure", &landmarks.anterolateral},
+      {"posteromedial commissure", &landmarks.posteromedial},
+      {"anterior", &landmarks.anterior}};
+  for (const auto& [what, point] : named) {
+    if (!point->allFinite()) {
+      out.error = std::string("the ") + what + " landmark is not a finite point";
+      return out;
+    }
+  }
   // 1. The loop nearest to both commissures.
   std::size_t best_loop = 0;
   double best_sum = std::numeric_limits<double>::infinity();
@@ -160,6 +174,15 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   const int pm_step = (pm - al + n) % n;
   double d_anterior = 0.0;
   const int anterior_step = (nearestInLoop(V, ring, landmarks.anterior, d_anterior) - al + n) % n;
+  if (!(d_anterior <= kMaxAnteriorLandmarkDistanceMm)) {
+    // norm() overflows for a landmark near 1e308; at that distance any ring vertex will do.
+    const double shown = std::isfinite(d_anterior)
+                             ? d_anterior
+                             : (V.row(ring[0]).transpose() - landmarks.anterior).stableNorm();
+    out.error = "the anterior landmark is " + mm(shown) + " from the annulus ring (at most " +
+                mm(kMaxAnteriorLandmarkDistanceMm) + "): is it on the anterior annulus?";
+    return out;
+  }
   if (anterior_step == 0 || anterior_step == pm_step) {
     out.error =
         "the anterior landmark is nearest to a commissure; place it on the anterior "

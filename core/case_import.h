@@ -4,8 +4,9 @@
 //   1. annulus ring: the mesh boundary loop nearest to the two commissure landmarks (each
 //      within kMaxLandmarkDistanceMm of it), in the loop's own order;
 //   2. commissures: the ring vertices nearest to the landmarks; they split the ring into two
-//      arcs, and the arc holding the ring vertex nearest to the anterior landmark is the
-//      anterior leaflet's (commissure vertices go with it);
+//      arcs, and the arc holding the ring vertex nearest to the anterior landmark (within
+//      kMaxAnteriorLandmarkDistanceMm of it) is the anterior leaflet's (commissure vertices go
+//      with it); every landmark must be a finite point;
 //   3. leaflet labels: each vertex takes the leaflet whose annulus arc is nearer along the mesh
 //      edges (graph_distance.h);
 //   4. closed annulus: a closed-state annulus curve, if given, resampled onto the ring with both
@@ -23,6 +24,11 @@
 namespace chordfit {
 
 constexpr double kMaxLandmarkDistanceMm = 5.0;
+// The anterior landmark only picks which arc is the anterior leaflet's, so it may sit looser
+// than a commissure (a point of the anterior annulus placed by eye); farther than this from
+// every ring vertex it is not on this annulus (another file, unit or a typo: 1e308 used to
+// pick an arbitrary arc).
+constexpr double kMaxAnteriorLandmarkDistanceMm = 10.0;
 
 struct ImportLandmarks {
   Eigen::Vector3d anterolateral;  // anterolateral commissure, on the annulus

@@ -29,13 +29,30 @@ struct SideFile {
   std::string name;  // as written in case.json, used in messages
 };
 
+// Whether the file `name` (at `path`) that the field `where` gives can be read. An empty name
+// or a path that is no readable file (a directory, a device) is the field's mistake, reported
+// there with the name; an empty name used to parse the case directory itself as JSON, and a
+// device to be read forever. A missing file is left to its reader ("<name>: file not found").
+bool fileFieldUsable(const std::string& name, const fs::path& path, const std::string& where,
+                     JsonFields& fields) {
+  std::error_code ec;
+  const std::string problem = name.empty()            ? "no file given (an empty file name)"
+                              : !fs::exists(path, ec) ? ""
+                                                      : inputFileProblem(path);
+  if (problem.empty()) return true;
+  fields.error(where, name.empty() ? problem : "\"" + name + "\" " + problem);
+  return false;
+}
+
 std::optional<SideFile> sideFile(const json& object, const std::string& where,
                                  const std::string& key, bool required, const fs::path& dir,
                                  JsonFields& fields) {
   const json* value = fields.member(object, where, key, required);
   if (value == nullptr) return std::nullopt;
   std::string name;
-  if (!fields.text(*value, fieldPath(where, key), name)) return std::nullopt;
+  if (!fields.text(*value, fieldPath(where, key), name) ||
+      !fileFieldUsable(name, dir / name, fieldPath(where, key), fields))
+    return std::nullopt;
   return SideFile{dir / name, name};
 }
 
@@ -175,8 +192,14 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     }
     if (const json* normal = fields.member(*plane, at, "normal", true)) {
       if (fields.vec3(*normal, fieldPath(at, "normal"), tracing.plane_normal)) {
-        if (tracing.plane_normal.norm() < 1e-12) {
-          fields.error(fieldPath(at, "normal"), "plane normal has zero length");
+        // Finite components can still have an infinite norm ([1e308, 1, 0]); normalising that
+        // gives a zero normal, on whose "plane" every point lies.
+        const double length = tracing.plane_normal.norm();
+        if (!(length > 1e-12) || !std::isfinite(length)) {
+          fields.error(fieldPath(at, "normal"),
+                       length > 1e-12 ? "plane normal is too long to normalise (its length "
+                                        "overflows); give a unit vector"
+                                      : "plane normal has zero length");
           ok = false;
         } else {
           tracing.plane_normal.normalize();
@@ -202,6 +225,7 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     std::string name;
     Curve curve;
     if (fields.text(*file, fieldPath(where, "file"), name) &&
+        fileFieldUsable(name, dir / name, fieldPath(where, "file"), fields) &&
         readCurve(dir / name, curve, fields.diagnostics(), name)) {
       tracing.points = curve.points;
     } else {
@@ -310,11 +334,18 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   const auto mesh_file = sideFile(document, "", "mesh", true, dir, fields);
   bool mesh_ok =
       mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics, mesh_file->name);
-  mesh_ok = mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics) &&
-            checkValveSpan(c.mesh.V, mesh_file->name, diagnostics);
+  // The span before the per-face checks, whose zero-area tolerance is relative to the bounding
+  // box: one vertex at 1e10 mm made every triangle "degenerate" and the outlier went unnamed.
+  // With the span wrong the areas are not judged; non-finite coordinates are checkMesh's to
+  // name, vertex by vertex.
+  const bool span_ok =
+      !mesh_ok || !c.mesh.V.allFinite() || checkValveSpan(c.mesh.V, mesh_file->name, diagnostics);
+  mesh_ok =
+      mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics, span_ok) && span_ok;
   ok &= mesh_ok;
 
   const json* leaflets = fields.member(document, "", "leaflets", true);
+  if (leaflets != nullptr) fields.knownKeys(*leaflets, "leaflets", {"names", "labels"});
   if (leaflets != nullptr && readLeafletNames(*leaflets, fields, c)) {
     const auto labels = sideFile(*leaflets, "leaflets", "labels", true, dir, fields);
     ok &= labels && (!mesh_ok || readLabels(*labels, c, diagnostics));
@@ -324,6 +355,7 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
 
   const json* annulus = fields.member(document, "", "annulus", true);
   if (annulus == nullptr) return false;
+  fields.knownKeys(*annulus, "annulus", {"ring", "closed"});
   const auto ring = sideFile(*annulus, "annulus", "ring", true, dir, fields);
   bool ring_ok = ring && readRing(*ring, c, diagnostics);
   if (ring_ok && mesh_ok) {
@@ -416,6 +448,11 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
     return std::nullopt;
   }
   if (!readVersion(*document, fields)) return std::nullopt;
+  // The keys writeCase writes (docs/case-format.md); a misspelt optional one ("tracing") used
+  // to read as absent and the case validated without it.
+  fields.knownKeys(*document, "",
+                   {"format", "version", "name", "mesh", "leaflets", "annulus", "tracings",
+                    "pm_tips", "cords", "tissue_stiffness", "simulation"});
 
   ValveCase c;
   c.name = directory.filename().string();

@@ -454,7 +454,7 @@ int toIndex(std::size_t index) {
   return -1;
 }
 
-// Fan-triangulates; polygons with fewer than 3 corners (points, lines) are dropped.
+// Fan-triangulates (the caller has refused polygons with fewer than 3 corners).
 // Indices are copied unchecked: the mesh validator reports out-of-range ones by face.
 void soupToEigen(const std::vector<DoublePoint>& points, const std::vector<Polygon>& polygons,
                  Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
@@ -478,6 +478,25 @@ void soupToEigen(const std::vector<DoublePoint>& points, const std::vector<Polyg
       ++row;
     }
   }
+}
+
+// "face N: has K corners; ..." for the first polygon with fewer than 3 corners, else "".
+// Dropping it, as the fan triangulation would, leaves a hole the validator cannot see: the
+// mesh would validate with a face missing. An OBJ face also comes out short when CGAL stops
+// at an index it cannot read as an int (2147483648), which the message says.
+std::string shortPolygonProblem(const std::vector<Polygon>& polygons,
+                                const std::string& extension) {
+  for (std::size_t f = 0; f < polygons.size(); ++f) {
+    const std::size_t corners = polygons[f].size();
+    if (corners >= 3) continue;
+    return "face " + std::to_string(f) + ": has " + std::to_string(corners) +
+           (corners == 1 ? " corner" : " corners") +
+           "; a face needs at least 3 (larger polygons are fan-triangulated)" +
+           (extension == ".obj" ? "; an index that is not a number in int range ends the "
+                                  "face's list early"
+                                : "");
+  }
+  return "";
 }
 
 bool allIndicesBelow(const std::vector<Polygon>& polygons, std::size_t n) {
@@ -510,6 +529,25 @@ bool readSoup(const std::string& extension, const std::string& bytes,
   return false;
 }
 
+// Where to look when CGAL refuses a file that passed the pre-checks: CGAL says no more than
+// that it failed, and a bad token (a coordinate 1e400, a face index 1.5) is the usual cause.
+std::string parseHint(const std::string& extension, bool text) {
+  if (extension == ".ply" && text)
+    return " (ASCII PLY: check that the header's element counts match the lines and that every "
+           "value is a number of its property's type: coordinates within double range, face "
+           "indices whole numbers)";
+  if (extension == ".ply")
+    return " (binary PLY: check the header's element counts and property types against the "
+           "data)";
+  if (extension == ".obj")
+    return " (OBJ: check that every 'v' line has 3 numbers within double range and every 'f' "
+           "line whole vertex numbers)";
+  if (extension == ".off")
+    return " (OFF: check the header's counts and that every value is a number: coordinates "
+           "within double range, face indices whole numbers)";
+  return " (STL: check that every 'vertex' line has 3 numbers within double range)";
+}
+
 bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
                           std::string& error) {
   const std::string extension = asciiLowercase(path.extension().string());
@@ -536,8 +574,12 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
     // CGAL's ASCII number parser accepts only digits, signs, '.' and exponents.
     if (text && containsNonFiniteWord(bytes))
       error += " (non-finite values such as 'nan' or 'inf' are not readable in this format)";
+    else
+      error += parseHint(extension, text);
     return false;
   }
+  error = shortPolygonProblem(polygons, extension);
+  if (!error.empty()) return false;
   soupToEigen(points, polygons, V, F);
   if (F.rows() == 0) {
     error = "no polygons with 3 or more corners";

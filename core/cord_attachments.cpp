@@ -8,6 +8,7 @@
 
 #include "core/annulus_plane.h"
 #include "core/carpentier.h"
+#include "core/heuristic.h"
 #include "core/xpbd_constraints.h"
 
 namespace chordfit {
@@ -175,7 +176,7 @@ std::vector<AnatomicalAttachment> layoutAttachments(const ParametricValve& valve
     if (columns[leaflet].columns.empty()) continue;
     const double length = lineLength(mesh.V, columns[leaflet], 0.0);
     const int count =
-        std::max(1, static_cast<int>(std::lround(length / options.primary_spacing_mm)));
+        std::max(1, spacedCordCount(length, options.primary_spacing_mm, "primary cord spacing"));
     for (int i = 0; i < count; ++i) {
       const double fraction = (i + 0.5) / count;
       if (heightOn(columns[leaflet], fraction) < options.min_annulus_distance_mm) continue;
@@ -186,7 +187,8 @@ std::vector<AnatomicalAttachment> layoutAttachments(const ParametricValve& valve
     if (columns[leaflet].columns.empty()) continue;
     const double depth = options.secondary_depth_mm;
     const double length = lineLength(mesh.V, columns[leaflet], depth);
-    const int count = static_cast<int>(std::lround(length / options.secondary_spacing_mm));
+    const int count =
+        spacedCordCount(length, options.secondary_spacing_mm, "secondary cord spacing");
     for (int i = 0; i < count; ++i) {
       const double fraction = (i + 0.5) / count;
       if (heightOn(columns[leaflet], fraction) < depth + options.min_annulus_distance_mm) continue;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -46,8 +47,36 @@ bool readCordPoint(const json& value, const std::string& where, JsonFields& fiel
   return true;
 }
 
+// Upper bounds of a cord's values: beyond them (1e308 was accepted) the closure diverges,
+// exit 3, without naming the cord. Chordae are 10-40 mm long on valves spanning 30-60 mm, and
+// make-case models a ruptured cord as ten times its length (truth/cords.json of the flail
+// cases: up to ~300 mm), so a rest length above 1000 mm is a typo or a unit slip. A real
+// chord (E ~50 MPa, 0.5 mm², 20 mm) has a compliance near 1 mm/N and the bundled cases use 0
+// or 0.05; at 10 mm/N a systolic load of ~1 N would stretch a cord by a centimetre.
+constexpr double kMaxRestLengthMm = 1000.0;
+constexpr double kMaxComplianceMmPerN = 10.0;
+constexpr const char* kRestLengthWhy =
+    "chordae are 10-40 mm long, a ruptured one in make-case ten times that";
+
+// Whether `value`, read from the field `where`, is at most `maximum`; else reports
+// "must be at most <maximum> <unit> (<why>), got <value>" there.
+bool atMost(double value, double maximum, const char* unit, const char* why,
+            const std::string& where, JsonFields& fields) {
+  if (value <= maximum) return true;
+  std::ostringstream text;
+  text << "must be at most " << maximum << " " << unit << " (" << why << "), got " << value;
+  fields.error(where, text.str());
+  return false;
+}
+
 bool readCord(const json& value, const std::string& where, int tip_count, JsonFields& fields,
               Cord& cord) {
+  // The keys writeCordSet writes (group and scale only for readers; docs/case-format.md): a
+  // misspelt optional one ("compliance") would otherwise be dropped without a word.
+  const bool keys_known =
+      fields.knownKeys(value, where,
+                       {"tip", "vertex", "point", "kind", "group", "seed_rest_length_mm",
+                        "rest_length_mm", "scale", "compliance_mm_per_N", "provenance", "locked"});
   bool ok = true;
   if (const json* tip = fields.member(value, where, "tip", true)) {
     ok &= fields.integer(*tip, fieldPath(where, "tip"), cord.tip);
@@ -97,6 +126,8 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "rest_length_mm"), "rest length must be positive");
       ok = false;
     }
+    ok = ok && atMost(cord.rest_length, kMaxRestLengthMm, "mm", kRestLengthWhy,
+                      fieldPath(where, "rest_length_mm"), fields);
   } else {
     ok = false;
   }
@@ -107,6 +138,8 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "seed_rest_length_mm"), "seed rest length must be positive");
       ok = false;
     }
+    ok = ok && atMost(cord.seed_rest_length, kMaxRestLengthMm, "mm", kRestLengthWhy,
+                      fieldPath(where, "seed_rest_length_mm"), fields);
   }
   if (const json* compliance = fields.member(value, where, "compliance_mm_per_N", false)) {
     ok &= fields.number(*compliance, fieldPath(where, "compliance_mm_per_N"), cord.compliance);
@@ -114,6 +147,9 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "compliance_mm_per_N"), "compliance must be >= 0");
       ok = false;
     }
+    ok = ok && atMost(cord.compliance, kMaxComplianceMmPerN, "mm/N",
+                      "a real chord is near 1 mm/N; 0 is inextensible",
+                      fieldPath(where, "compliance_mm_per_N"), fields);
   }
   // A hand-written cord set without provenance is the user's: manual.
   cord.provenance = Provenance::kManual;
@@ -134,7 +170,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
   if (const json* locked = fields.member(value, where, "locked", false)) {
     ok &= fields.boolean(*locked, fieldPath(where, "locked"), cord.locked);
   }
-  return ok;
+  return ok && keys_known;
 }
 
 }  // namespace

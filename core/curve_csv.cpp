@@ -9,6 +9,8 @@
 #include <sstream>
 #include <vector>
 
+#include "core/atomic_file.h"
+
 namespace chordfit {
 namespace {
 
@@ -195,10 +197,13 @@ bool isDelimitedCurveFile(const std::filesystem::path& path) {
 bool readDelimitedCurve(const std::filesystem::path& path, const std::string& file, Curve& curve,
                         Diagnostics& diagnostics) {
   try {
+    if (const std::string problem = inputFileProblem(path, "a curve file"); !problem.empty()) {
+      diagnostics.error(file, "", problem);
+      return false;
+    }
     std::ifstream in(path);
     if (!in) {
-      diagnostics.error(file, "",
-                        std::filesystem::exists(path) ? "cannot be read" : "file not found");
+      diagnostics.error(file, "", "cannot be read");
       return false;
     }
     CurveTextReader reader(file, diagnostics, lowerCase(path.extension().string()) == ".fcsv");

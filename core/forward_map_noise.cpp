@@ -32,7 +32,9 @@ MapNoise mapNoise(const std::vector<double>& s, const std::vector<double>& q, in
   half_window = std::max(2, half_window);
   double sum_squares = 0.0;
   int count = 0;
-  for (int i = half_window; i + half_window < n; ++i) {
+  // i < n - half_window, not i + half_window < n: a huge window must leave no interior
+  // sample, not overflow into a negative bound and index far outside the samples.
+  for (int i = half_window; i < n - half_window; ++i) {
     std::vector<int> neighbours;
     for (int k = i - half_window; k <= i + half_window; ++k) {
       if (k != i) neighbours.push_back(k);

@@ -9,15 +9,16 @@
 namespace chordfit {
 
 struct MapNoise {
-  double rms = 0.0;  // RMS of (sample - local quadratic fit), over interior samples
-  double max = 0.0;  // largest |sample - local quadratic fit|
+  double rms = 0.0;    // RMS of (sample - local quadratic fit), over interior samples
+  double max = 0.0;    // largest |sample - local quadratic fit|
   double slope = 0.0;  // dq/ds at the grid's centre, from a quadratic fit of all samples
 };
 
 // s, q  same size, s uniform and increasing; half_window >= 2 points each side.
 // Each interior sample i is compared with the least-squares quadratic through samples
 // i - half_window .. i + half_window excluding i itself (leave-one-out, so the fit cannot
-// absorb the sample's own noise).
+// absorb the sample's own noise). A window wider than the samples leaves no interior sample:
+// rms and max 0.
 MapNoise mapNoise(const std::vector<double>& s, const std::vector<double>& q, int half_window);
 
 }  // namespace chordfit

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <set>
+#include <sstream>
+#include <stdexcept>
 
 #include "core/carpentier.h"
 #include "core/graph_distance.h"
@@ -48,7 +50,8 @@ void placePrimaries(const ValveMesh& mesh, const AnnulusFrame& frame, const std:
         arc[i] + (mesh.V.row(loop[(start + i) % n]) - mesh.V.row(loop[(start + i + 1) % n])).norm();
   }
   const double length = arc[n];
-  const int count = std::max(1, static_cast<int>(std::lround(length / options.primary_spacing_mm)));
+  const int count =
+      std::max(1, spacedCordCount(length, options.primary_spacing_mm, "primary cord spacing"));
   for (int k = 0; k < count; ++k) {
     const double target = length * k / count;
     const auto it = std::lower_bound(arc.begin(), arc.end(), target);
@@ -80,8 +83,8 @@ void placeSecondaries(const ValveMesh& mesh, const AnnulusFrame& frame,
   }
   if (candidates.empty()) return;
   const double belly_radius = radius_sum / static_cast<double>(candidates.size());
-  const int bins = std::max(
-      1, static_cast<int>(std::lround(kTwoPi * belly_radius / options.secondary_spacing_mm)));
+  const int bins = std::max(1, spacedCordCount(kTwoPi * belly_radius, options.secondary_spacing_mm,
+                                               "secondary cord spacing"));
   std::vector<int> best(bins, -1);
   std::vector<double> best_score(bins, 0.0);
   for (int v : candidates) {
@@ -119,6 +122,21 @@ std::vector<int> nearestTipInPlane(const ValveMesh& mesh, const Plane& plane,
 }
 
 }  // namespace
+
+int spacedCordCount(double length, double spacing, const char* what) {
+  // No valve mesh has a million vertices on a line; the bound keeps the cast exact.
+  constexpr double kMaxCount = 1e6;
+  std::ostringstream problem;
+  problem << "cord placement: " << what << ": ";
+  const double count = std::round(length / spacing);
+  if (!(spacing >= kMinCordSpacingMm) || !std::isfinite(spacing))
+    problem << "must be at least " << kMinCordSpacingMm << " mm, got " << spacing;
+  else if (!(count >= 0.0 && count <= kMaxCount))
+    problem << length << " mm at " << spacing << " mm gives no sensible cord count";
+  else
+    return static_cast<int>(count);
+  throw std::invalid_argument(problem.str());
+}
 
 std::vector<std::vector<int>> freeEdgeLoops(const ValveMesh& mesh) {
   const std::set<int> ring(mesh.annulus.data(), mesh.annulus.data() + mesh.annulus.size());

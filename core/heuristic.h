@@ -26,6 +26,18 @@ struct HeuristicOptions {
   double min_annulus_distance_mm = 4.0;
 };
 
+// The finest cord spacing the automatic placement takes, mm (the defaults are 4 and 6). Below
+// the edges of any mesh the project makes (make-case refuses edges under 1 mm) a finer spacing
+// places no more cords, only more targets on the same vertices; and far below it the count of
+// targets overflows an int (1e-9 mm once asked for 21 GB of angular bins).
+constexpr double kMinCordSpacingMm = 0.1;
+
+// round(length / spacing), the count of cords `spacing` apart along a line of `length`, in
+// double before the cast. Throws std::invalid_argument naming `what` for a spacing below
+// kMinCordSpacingMm or not finite, or a count beyond any mesh's vertices (a length that is
+// not finite or absurd), rather than return a wrapped count.
+int spacedCordCount(double length, double spacing, const char* what);
+
 struct CordAttachment {
   int vertex = 0;
   CordKind kind = CordKind::kPrimary;
@@ -36,7 +48,7 @@ struct CordAttachment {
 std::vector<std::vector<int>> freeEdgeLoops(const ValveMesh& mesh);
 
 // Automatic placement of cord leaflet vertices (primaries first, then secondaries), in a
-// deterministic order.
+// deterministic order. Throws std::invalid_argument for spacings spacedCordCount refuses.
 std::vector<CordAttachment> placeCordAttachments(const ValveMesh& mesh,
                                                  const HeuristicOptions& options);
 

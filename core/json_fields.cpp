@@ -1,7 +1,9 @@
 #include "core/json_fields.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/atomic_file.h"
 
@@ -35,6 +37,22 @@ std::string parseReason(const std::string& message) {
   return colon == std::string::npos ? message : message.substr(colon + 2);
 }
 
+// Edits (insertions, deletions, substitutions) that turn a into b.
+std::size_t editDistance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t above = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0 : 1)});
+      diagonal = above;
+    }
+  }
+  return row[b.size()];
+}
+
 }  // namespace
 
 std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
@@ -58,9 +76,12 @@ std::optional<nlohmann::json> parseJson(const std::string& text, const std::stri
 std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
                                            const std::string& file, Diagnostics& diagnostics) {
   std::string text;
+  if (const std::string problem = inputFileProblem(path, "a JSON file"); !problem.empty()) {
+    diagnostics.error(file, "", problem);
+    return std::nullopt;
+  }
   if (!readWholeFile(path, text)) {
-    diagnostics.error(file, "",
-                      std::filesystem::exists(path) ? "cannot be read" : "file not found");
+    diagnostics.error(file, "", "cannot be read");
     return std::nullopt;
   }
   return parseJson(text, file, diagnostics);
@@ -81,6 +102,34 @@ std::string fieldPath(const std::string& parent, const std::string& key) {
 
 std::string indexPath(const std::string& parent, std::size_t index) {
   return parent + "[" + std::to_string(index) + "]";
+}
+
+bool JsonFields::knownKeys(const nlohmann::json& object, const std::string& where,
+                           std::initializer_list<const char*> known) {
+  if (!object.is_object()) return true;  // the type is reported where the object is read
+  // Two edits catch a dropped or doubled letter and a swap, without pairing unrelated words.
+  constexpr std::size_t kMaxTypoEdits = 2;
+  bool ok = true;
+  for (const auto& item : object.items()) {
+    const std::string& key = item.key();
+    std::string nearest;
+    std::size_t nearest_edits = kMaxTypoEdits + 1;
+    bool is_known = false;
+    for (const char* name : known) {
+      is_known |= key == name;
+      const std::size_t edits = editDistance(key, name);
+      if (edits < nearest_edits) {
+        nearest_edits = edits;
+        nearest = name;
+      }
+    }
+    if (is_known) continue;
+    std::string what = "unknown key";
+    if (!nearest.empty()) what += "; did you mean \"" + nearest + "\"?";
+    error(fieldPath(where, key), what);
+    ok = false;
+  }
+  return ok;
 }
 
 void JsonFields::error(const std::string& where, const std::string& what) {

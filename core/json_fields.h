@@ -5,6 +5,7 @@
 #pragma once
 
 #include <filesystem>
+#include <initializer_list>
 #include <optional>
 #include <string>
 
@@ -19,7 +20,8 @@ namespace chordfit {
 std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
                                         Diagnostics& diagnostics);
 
-// Reads and parses a file; a missing file is reported as "file not found".
+// Reads and parses a file; a missing file is reported as "file not found", and whatever else
+// inputFileProblem refuses (a directory, a device, an empty path) as it says.
 std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
                                            const std::string& file, Diagnostics& diagnostics);
 
@@ -49,6 +51,12 @@ class JsonFields {
   bool points(const nlohmann::json& value, const std::string& where, Eigen::MatrixXd& out);
   // [i, j, ...] of integers.
   bool integers(const nlohmann::json& value, const std::string& where, Eigen::VectorXi& out);
+
+  // Reports every key of `object` (whose own path is `where`) that is not in `known`, as
+  // "<where>.<key>: unknown key", suggesting the nearest known key when a typo explains it
+  // (a misspelt optional key would otherwise just go missing). Returns whether all are known.
+  bool knownKeys(const nlohmann::json& object, const std::string& where,
+                 std::initializer_list<const char*> known);
 
   void error(const std::string& where, const std::string& what);
   void typeError(const std::string& where, const std::string& expected, const nlohmann::json& got);

@@ -109,7 +109,7 @@ bool checkManifoldEdges(const Eigen::MatrixXi& F, const std::string& file,
 }  // namespace
 
 bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
-               Diagnostics& diagnostics) {
+               Diagnostics& diagnostics, bool check_areas) {
   if (V.rows() < 3 || F.rows() < 1) {
     diagnostics.error(file, "",
                       "mesh has " + std::to_string(V.rows()) + " vertices and " +
@@ -120,7 +120,7 @@ bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::st
   // Geometry checks read V at face indices: only safe once the indices are known good.
   if (!checkIndices(V, F, file, diagnostics)) return false;
   const bool manifold = checkManifoldEdges(F, file, diagnostics);
-  const bool nondegenerate = finite && checkDegenerate(V, F, file, diagnostics);
+  const bool nondegenerate = finite && (!check_areas || checkDegenerate(V, F, file, diagnostics));
   return finite && manifold && nondegenerate;
 }
 

@@ -13,11 +13,13 @@ namespace chordfit {
 // Checks a triangle mesh read from `file`:
 //   - every face index in [0, #V)
 //   - every coordinate finite (no NaN / infinity)
-//   - no zero-area (degenerate) triangle, relative to the mesh size
+//   - no zero-area (degenerate) triangle, relative to the mesh size (unless `check_areas` is
+//     false: a caller that found the mesh's size absurd, where that tolerance would call
+//     every real triangle degenerate)
 //   - no non-manifold edge (an edge shared by more than two triangles)
 // Returns true when the mesh passed every check.
 bool checkMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
-               Diagnostics& diagnostics);
+               Diagnostics& diagnostics, bool check_areas = true);
 
 // Checks that `ring` is a closed loop of boundary vertices of F: at least 3 distinct
 // in-range vertices, and every consecutive pair (last -> first included) joined by a

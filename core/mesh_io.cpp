@@ -475,12 +475,13 @@ bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V, 
 }
 
 // cgalReadTriangleSoup's message may start with a location ("line 7: ...",
-// "element face 3: ...", "facet 12: ...", "header: ..."); it belongs in Problem::where.
+// "element face 3: ...", "facet 12: ...", "face 5: ...", "header: ..."); it belongs in
+// Problem::where.
 void reportSoupError(const std::string& file, const std::string& error, Diagnostics& diagnostics) {
   const std::size_t colon = error.find(": ");
   if (colon != std::string::npos) {
     const std::string prefix = error.substr(0, colon);
-    for (const char* start : {"line ", "element ", "facet ", "header"}) {
+    for (const char* start : {"line ", "element ", "facet ", "face ", "header"}) {
       if (prefix.rfind(start, 0) == 0) {
         diagnostics.error(file, prefix, error.substr(colon + 2));
         return;
@@ -558,13 +559,8 @@ bool readMesh(const fs::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
   const std::string file = display_name.empty() ? path.string() : display_name;
   V.resize(0, 3);
   F.resize(0, 3);
-  std::error_code ec;
-  if (!fs::exists(path, ec)) {
-    diagnostics.error(file, "", "file not found");
-    return false;
-  }
-  if (fs::is_directory(path, ec)) {
-    diagnostics.error(file, "", "is a directory, not a mesh file");
+  if (const std::string problem = inputFileProblem(path, "a mesh file"); !problem.empty()) {
+    diagnostics.error(file, "", problem);
     return false;
   }
   const std::string extension = asciiLowercase(path.extension().string());

@@ -118,14 +118,15 @@ std::string formatNumber(double value) {
   return out.str();
 }
 
+// `why`: where a bound comes from when other parameters set it, e.g. " (half ...)".
 void requireInRange(const char* name, double value, double lo, double hi, bool lo_open,
-                    bool hi_open) {
+                    bool hi_open, const std::string& why = "") {
   const bool ok = std::isfinite(value) && (lo_open ? value > lo : value >= lo) &&
                   (hi_open ? value < hi : value <= hi);
   if (!ok) {
     throw std::invalid_argument(std::string(name) + " must be in " + (lo_open ? "(" : "[") +
                                 formatNumber(lo) + ", " + formatNumber(hi) + (hi_open ? ")" : "]") +
-                                ", got " + formatNumber(value));
+                                why + ", got " + formatNumber(value));
   }
 }
 
@@ -154,11 +155,17 @@ void validateParameters(const ValveParameters& p) {
   // Diameters: a mitral annulus is a few centimetres; 100 mm is far beyond any dilatation.
   requireInRange("ap_diameter_mm", p.ap_diameter_mm, 0.0, 100.0, true, false);
   requireInRange("cc_diameter_mm", p.cc_diameter_mm, 0.0, 100.0, true, false);
-  // Saddle heights: 0 (flat) up to half the smaller diameter.
+  // Saddle heights: 0 (flat) up to half the smaller diameter. The message names the
+  // diameters: a small --cc makes the default heights too tall, and naming only the height
+  // blamed a value the user never gave.
   const double max_saddle = 0.5 * std::min(p.ap_diameter_mm, p.cc_diameter_mm);
-  requireInRange("saddle_height_mm", p.saddle_height_mm, 0.0, max_saddle, false, false);
+  const std::string saddle_bound = " (half the smaller of ap_diameter_mm " +
+                                   formatNumber(p.ap_diameter_mm) + " and cc_diameter_mm " +
+                                   formatNumber(p.cc_diameter_mm) + ")";
+  requireInRange("saddle_height_mm", p.saddle_height_mm, 0.0, max_saddle, false, false,
+                 saddle_bound);
   requireInRange("closed_saddle_height_mm", p.closed_saddle_height_mm, 0.0, max_saddle, false,
-                 false);
+                 false, saddle_bound);
   requireInRange("closed_contraction", p.closed_contraction, 0.5, 1.5, false, false);
   requireInRange("anterior_fraction", p.anterior_fraction, 0.15, 0.6, true, true);
   requirePositive("anterior_height_mm", p.anterior_height_mm);

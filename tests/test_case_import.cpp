@@ -1,6 +1,7 @@
 // Importing a bare valve mesh (core/case_import.h, chordfit import-mesh): on the parametric
 // valve, whose ring, labels and closed annulus are known, the derived ones must match; bad
 // landmarks and meshes are reported in words; the command writes a loadable case or nothing.
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <string>
@@ -140,6 +141,29 @@ TEST(CaseImport, BadLandmarksAndMeshesAreReportedInWords) {
   const Eigen::MatrixXi F{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
   EXPECT_NE(importValveCase(V, F, good, {}, "closed").error.find("no boundary loop"),
             std::string::npos);
+}
+
+// An anterior landmark at [1e308, 0, 0] used to import (exit 0) with an arbitrary anterior
+// arc: its distance to the ring was computed and never checked.
+TEST(CaseImport, AnAnteriorLandmarkOffTheAnnulusOrANonFiniteLandmarkIsRefused) {
+  const ValveCase& truth = valve().valve_case;
+  const ImportLandmarks good = landmarksOf(truth.mesh);
+  const auto error = [&](const ImportLandmarks& l) {
+    return importValveCase(truth.mesh.V, truth.mesh.F, l, {}, "bad").error;
+  };
+  ImportLandmarks near = good;
+  near.anterior.z() += 8.0;  // looser than a commissure may be, but still on this annulus
+  EXPECT_EQ(error(near), "");
+  for (const double x : {1e308, 40.0}) {
+    ImportLandmarks far = good;
+    far.anterior = Eigen::Vector3d(x, 0.0, 0.0);
+    EXPECT_NE(error(far).find("the anterior landmark is "), std::string::npos) << error(far);
+    EXPECT_NE(error(far).find(" mm from the annulus ring (at most 10.00 mm)"), std::string::npos)
+        << error(far);
+  }
+  ImportLandmarks not_finite = good;
+  not_finite.posteromedial.y() = NAN;
+  EXPECT_EQ(error(not_finite), "the posteromedial commissure landmark is not a finite point");
 }
 
 TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <functional>
 #include <regex>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -192,6 +193,85 @@ TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
               "point 1; farthest 5 mm");
 }
 
+// [1e308, 1, 0] has finite components but an infinite length: it used to normalise to a zero
+// vector, on whose "plane" every point lies, and validate.
+TEST_F(ValidateCommand, ReportsATracingNormalWhoseLengthOverflows) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [1e308, 1, 0]},
+                              "points": [[1, 0, -2], [2, 5, -2], [3, 5, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.plane\\.normal: plane normal is too long to normalise");
+}
+
+// "tracings": "" used to read the case directory itself as JSON ("error: : line 1, column
+// 1: malformed JSON"); a directory or a device named by a file field is refused at the field.
+TEST_F(ValidateCommand, ReportsASideFileFieldThatIsEmptyOrNamesADirectory) {
+  std::filesystem::create_directory(dir_ / "sub");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = ""; });
+  expectError("case\\.json", "tracings: no file given \\(an empty file name\\)");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "sub"; });
+  expectError("case\\.json", "tracings: \"sub\" is a directory");
+  editCaseJson([](nlohmann::json& j) {
+    j.erase("tracings");
+    j["pm_tips"] = "/dev/null";
+  });
+  expectError("case\\.json", "pm_tips: \"/dev/null\" is not a regular file");
+}
+
+TEST_F(ValidateCommand, ReportsATracingFileFieldThatIsEmptyOrNamesADirectory) {
+  std::filesystem::create_directory(dir_ / "sub");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  for (const auto& [file, message] :
+       {std::pair<std::string, std::string>{"", "no file given"},
+        std::pair<std::string, std::string>{"sub", "\"sub\" is a directory"}}) {
+    writeText(dir_ / "tracings.json",
+              R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                                "file": ")" +
+                  file + R"("}]})");
+    expectError("tracings\\.json", "tracings\\[0\\]\\.file: " + message);
+  }
+}
+
+// "tracing" (for "tracings") used to validate as a case without tracings, while the
+// simulation block already refused unknown keys.
+TEST_F(ValidateCommand, ReportsAnUnknownCaseKeySuggestingTheNearestKnownOne) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "points": [[1, 0, -2], [2, 0, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracing"] = "tracings.json"; });
+  expectError("case\\.json", "tracing: unknown key; did you mean \"tracings\"\\?");
+  editCaseJson([](nlohmann::json& j) {
+    j.erase("tracing");
+    j["annulus"]["closd"] = j["annulus"]["closed"];
+  });
+  expectError("case\\.json", "annulus\\.closd: unknown key; did you mean \"closed\"\\?");
+  editCaseJson([](nlohmann::json& j) {
+    j["annulus"].erase("closd");
+    j["comment"] = "by hand";
+  });
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: case.json: comment: unknown key\n"), std::string::npos) << r.err;
+}
+
+TEST_F(ValidateCommand, ReportsAnUnknownCordKeySuggestingTheNearestKnownOne) {
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords = {cord};
+  writeCordSet(dir_ / "cords.json", set);
+  nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
+  cords["cords"][0]["compliance_mm_per_n"] = 0.05;
+  writeText(dir_ / "cords.json", cords.dump());
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json",
+              "cords\\[0\\]\\.compliance_mm_per_n: unknown key; did you mean "
+              "\"compliance_mm_per_N\"\\?");
+}
+
 TEST_F(ValidateCommand, ReportsATimeStepTooSmallToUse) {
   editCaseJson([](nlohmann::json& j) { j["simulation"] = {{"dt_ms", 1e-300}}; });
   expectError("[^\\n]*case\\.json", "simulation\\.dt_ms: 1e-300 is below");
@@ -206,6 +286,19 @@ TEST_F(ValidateCommand, ReportsAMeshThatIsNotInMillimetres) {
   valve_.annulus_closed *= 1e-9;
   writeCase(dir_.path(), valve_);
   expectError("open\\.ply", "vertices: the mesh spans .* must be in millimetres");
+}
+
+// One vertex at y = -1e10 used to give a "degenerate triangle" line for every face (their
+// zero-area tolerance scales with the bounding box) and never name the vertex.
+TEST_F(ValidateCommand, ReportsAnOutlierVertexByTheSpanNotByEveryTriangle) {
+  valve_.mesh.V(3, 1) = -1e10;
+  writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);
+  expectError("open\\.ply",
+              "vertices: the mesh spans 1e\\+10 mm .*farthest from the median of the vertices: "
+              "vertex 3 at \\([^)]*-1e\\+10[^)]*\\)");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.err.find("degenerate"), std::string::npos) << r.err;
+  EXPECT_EQ(testing::occurrences(r.err, "error: "), 1u) << r.err;
 }
 
 TEST_F(ValidateCommand, ReportsAPmTipFarFromTheValve) {
@@ -232,6 +325,45 @@ TEST_F(ValidateCommand, ReportsACordOnAMissingVertex) {
   writeCordSet(dir_ / "cords.json", set);
   editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
   expectError("cords\\.json", "cords\\[0\\]\\.vertex: vertex 9999 does not exist");
+}
+
+// 1e308 used to validate and then make the closure diverge (exit 3) without naming the cord.
+TEST_F(ValidateCommand, ReportsAnAbsurdCordRestLengthOrComplianceNamingTheCord) {
+  const std::pair<const char*, std::string> cases[] = {
+      {"rest_length_mm", "cords\\[1\\]\\.rest_length_mm: must be at most 1000 mm .*got 1e\\+308"},
+      {"seed_rest_length_mm", "cords\\[1\\]\\.seed_rest_length_mm: must be at most 1000 mm"},
+      {"compliance_mm_per_N",
+       "cords\\[1\\]\\.compliance_mm_per_N: must be at most 10 mm/N .*got 1e\\+308"}};
+  for (const auto& [field, message] : cases) {
+    CordSet set;
+    set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+    Cord cord;
+    cord.vertex = 9;
+    cord.rest_length = cord.seed_rest_length = 20.0;
+    set.cords = {cord, cord};
+    writeCordSet(dir_ / "cords.json", set);
+    nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
+    cords["cords"][1][field] = 1e308;
+    writeText(dir_ / "cords.json", cords.dump());
+    editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+    expectError("cords\\.json", message);
+  }
+}
+
+// make-case's flail truths model a ruptured cord as ten times its length (~250-300 mm): the
+// bound must let the project's own truth/cords.json through.
+TEST_F(ValidateCommand, AcceptsARupturedCordTenTimesItsLength) {
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9;
+  cord.seed_rest_length = 30.0;
+  cord.rest_length = 10.0 * cord.seed_rest_length;
+  set.cords = {cord};
+  writeCordSet(dir_ / "cords.json", set);
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
 }
 
 TEST_F(ValidateCommand, ReportsACordOnAMissingTip) {

@@ -2,6 +2,7 @@
 // heuristic -> metrics), the documented example case, and usage errors.
 #include <cmath>
 #include <optional>
+#include <utility>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -208,6 +209,19 @@ TEST(ChordfitCli, MakeValveTakesTheAnatomyAndNamesABadValue) {
   EXPECT_FALSE(std::filesystem::exists(dir / "bad" / "case.json"));
 }
 
+// --cc 10 lowers the saddle heights' bound to 5 mm; the message used to blame only
+// --closed-saddle's default 7, an option the user never gave.
+TEST(ChordfitCli, MakeValveNamesTheDiametersThatBoundTheSaddleHeights) {
+  TempDir dir;
+  const auto r = runChordfit("make-valve --cc 10 --ap 40 --out " + quoted(dir / "case"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: make-valve: --closed-saddle: must be in [0, 5] (half the smaller "
+                       "of --ap 40 and --cc 10), got 7"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "case" / "case.json"));
+}
+
 TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
   TempDir dir;
   writeCase(dir / "case", testing::tinyConeCase());
@@ -231,6 +245,76 @@ TEST(ChordfitCli, HeuristicRejectsANonPositiveSpacingOrDepth) {
         << r.err;
   }
   EXPECT_FALSE(std::filesystem::exists(dir / "cords.json"));
+}
+
+// --secondary-spacing 1e-9 used to take 21 GB and --primary-spacing 1e-8 to place 1 cord
+// (the count overflowed an int); spacings below 0.1 mm are refused before the case is read.
+TEST(ChordfitCli, HeuristicRefusesASpacingBelowATenthOfAMillimetre) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  for (const std::string option :
+       {"--primary-spacing 1e-08", "--secondary-spacing 1e-09", "--secondary-spacing 0.09"}) {
+    const auto r = runChordfit("heuristic " + quoted(small) + " " + option + " --out " +
+                               quoted(dir / "cords.json"));
+    EXPECT_EQ(r.exit_code, 2) << option << ": " << r.err;
+    const std::string name = option.substr(0, option.find(' '));
+    const std::string value = option.substr(option.find(' ') + 1);
+    EXPECT_NE(r.err.find("error: heuristic: " + name + ": must be at least 0.1 mm"),
+              std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("got " + value), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "cords.json"));
+}
+
+// --out "" used to mean the current directory: make-valve wrote there and printed
+// "wrote /case.json"; simulate, fit, sweep-cord and compare did all the work and then failed
+// to create "" (exit 1).
+TEST(ChordfitCli, AnEmptyOutIsRefusedBeforeTheWorkByEveryCommand) {
+  const auto example_dir = std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case";
+  const std::string example = quoted(example_dir);
+  const std::string cords = quoted(example_dir / "cords.json");
+  const std::string mesh = quoted(example_dir / "open.obj");
+  const std::pair<std::string, std::string> commands[] = {
+      {"make-valve", ""},
+      {"import-mesh", mesh + " --landmarks " + cords},
+      {"heuristic", example},
+      {"edit-cords", example},
+      {"metrics", example + " --mesh " + mesh},
+      {"simulate", example},
+      {"sweep-cord", example},
+      {"make-case", "--preset normal"},
+      {"fit", example},
+      {"compare", example + " " + cords}};
+  for (const auto& [command, arguments] : commands) {
+    const auto r = runChordfit(command + " " + arguments + " --out ''");
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("error: " + command + ": --out: must not be empty"), std::string::npos)
+        << command << ": " << r.err;
+    EXPECT_EQ(r.out, "") << command << ": no work before the check";
+  }
+}
+
+// An --out that is (or passes through) a symbolic link to nowhere used to fail after the work
+// (exit 1) for a directory, and for a file to replace the link instead of writing its target.
+TEST(ChordfitCli, AnOutThroughADanglingSymbolicLinkIsRefusedBeforeTheWork) {
+  TempDir dir;
+  const std::string example =
+      quoted(std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case");
+  std::filesystem::create_symlink(dir / "missing", dir / "link");
+  const std::string problem = (dir / "link").string() + " is a symbolic link to " +
+                              (dir / "missing").string() + ", which does not exist";
+  for (const std::string& command : {"simulate " + example + " --out " + quoted(dir / "link"),
+                                     "make-valve --out " + quoted(dir / "link" / "case"),
+                                     "heuristic " + example + " --out " + quoted(dir / "link")}) {
+    const auto r = runChordfit(command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find(": --out: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(problem), std::string::npos) << command << ": " << r.err;
+    EXPECT_EQ(r.out, "") << command << ": no work before the check";
+  }
+  EXPECT_TRUE(std::filesystem::is_symlink(dir / "link")) << "the link is left alone";
+  EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
 }
 
 TEST(ChordfitCli, UnknownCommandsAndMissingArgumentsAreUsageErrors) {

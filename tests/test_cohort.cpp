@@ -236,7 +236,8 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   EXPECT_NE(r.err.find("error: make-case: --planes"), std::string::npos) << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --edge 0.5");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: make-case: --edge: 0.5 mm gives a truth mesh finer than 0.5 mm"),
+  EXPECT_NE(r.err.find("error: make-case: --edge: must be in [1, 5] mm, got 0.5 (it gives a "
+                       "truth mesh finer than 0.5 mm"),
             std::string::npos)
       << r.err;
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --dropout 1.5");
@@ -267,6 +268,21 @@ class MakeCaseRun : public ::testing::Test {
 };
 TempDir* MakeCaseRun::dir_ = nullptr;
 testing::CommandResult* MakeCaseRun::result_ = nullptr;
+
+// --edge 0 used to be told "must be in [0.5, 5] mm", and then 0.5 was refused too: the range
+// stated is the one the command takes.
+TEST(MakeCaseCli, AnEdgeOutsideTheRangeIsToldTheRangeTheCommandTakes) {
+  TempDir dir;
+  for (const char* edge : {"0", "0.5", "0.99", "5.5", "nan"}) {
+    const auto r =
+        runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") + " --edge " + edge);
+    EXPECT_EQ(r.exit_code, 2) << edge;
+    EXPECT_NE(r.err.find("error: make-case: --edge: must be in [1, 5] mm, got "), std::string::npos)
+        << edge << ": " << r.err;
+    EXPECT_EQ(r.err.find("[0.5, 5]"), std::string::npos) << r.err;
+  }
+  EXPECT_FALSE(fs::exists(dir / "c" / "case.json"));
+}
 
 TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
   Diagnostics diagnostics;

@@ -200,6 +200,21 @@ TEST_F(CompareCommand, RejectsDuplicateLabels) {
   EXPECT_NE(r.err.find("\"same\" appears twice"), std::string::npos) << r.err;
 }
 
+// Without --labels the labels are the file names: a file given twice used to be reported as
+// `--labels: "c.json" appears twice`, an option the user never gave.
+TEST_F(CompareCommand, AFileGivenTwiceWithoutLabelsNamesTheCordFilesNotLabels) {
+  const std::string cords = quoted(caseDir() / "cords.json");
+  const auto r = runChordfit("compare " + quoted(caseDir()) + " " + cords + " " + cords);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: compare: CORDS: \"" + (caseDir() / "cords.json").string() +
+                       "\" is given twice (without --labels the file names label the rows; "
+                       "give --labels)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("--labels:"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("closing"), std::string::npos) << "no simulation may start";
+}
+
 TEST_F(CompareCommand, RejectsAMissingCordFileWithoutWritingAnything) {
   const fs::path out = *dir_ / "missing";
   const auto r =

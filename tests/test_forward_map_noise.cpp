@@ -1,4 +1,5 @@
 #include <cmath>
+#include <limits>
 
 #include <gtest/gtest.h>
 
@@ -30,6 +31,22 @@ TEST(MapNoise, MeasuresAlternatingNoiseOnASmoothMap) {
   // has 5 of one sign, 5 of the other), so the residual is about the amplitude.
   EXPECT_NEAR(noise.rms, amplitude, 0.25 * amplitude);
   EXPECT_NEAR(noise.slope, std::cos(1.0), 1e-3);
+}
+
+// sweep-cord --window 1073741824 used to crash here: i + half_window overflowed int and the
+// loop read far outside the samples.
+TEST(MapNoise, AWindowWiderThanTheSamplesLeavesNoInteriorSampleInsteadOfOverflowing) {
+  std::vector<double> s, q;
+  for (int i = 0; i <= 10; ++i) {
+    s.push_back(0.99 + 0.002 * i);
+    q.push_back(2.0 * s.back());
+  }
+  for (const int window : {11, 1073741824, std::numeric_limits<int>::max()}) {
+    const MapNoise noise = mapNoise(s, q, window);
+    EXPECT_EQ(noise.rms, 0.0) << window;
+    EXPECT_EQ(noise.max, 0.0) << window;
+    EXPECT_NEAR(noise.slope, 2.0, 1e-9) << window;
+  }
 }
 
 }  // namespace

@@ -137,6 +137,34 @@ TEST_F(AutomaticPlacement, SpacesPrimariesAsAskedAlongTheFreeEdge) {
   EXPECT_NEAR(primaries, expected, 0.15 * expected + 1.0);
 }
 
+// A spacing of 1e-8 mm used to overflow the int count and silently place a single primary.
+TEST_F(AutomaticPlacement, RefusesASpacingItsCountWouldOverflowInsteadOfPlacingOneCord) {
+  HeuristicOptions tiny = options_;
+  tiny.primary_spacing_mm = 1e-8;
+  EXPECT_THROW(placeCordAttachments(valve_.valve_case.mesh, tiny), std::invalid_argument);
+  tiny = options_;
+  tiny.secondary_spacing_mm = 1e-9;  // used to allocate 21 GB of bins
+  EXPECT_THROW(placeCordAttachments(valve_.valve_case.mesh, tiny), std::invalid_argument);
+}
+
+TEST(SpacedCordCount, RoundsLengthOverSpacingAndRefusesWhatAnIntCannotHold) {
+  EXPECT_EQ(spacedCordCount(81.0, 4.0, "primary"), 20);
+  EXPECT_EQ(spacedCordCount(82.0, 4.0, "primary"), 21);  // half away from zero, as lround
+  EXPECT_EQ(spacedCordCount(0.0, 4.0, "primary"), 0);
+  EXPECT_THROW(spacedCordCount(80.0, 0.05, "primary"), std::invalid_argument);
+  EXPECT_THROW(spacedCordCount(80.0, NAN, "primary"), std::invalid_argument);
+  EXPECT_THROW(spacedCordCount(1e300, 4.0, "primary"), std::invalid_argument);
+  EXPECT_THROW(spacedCordCount(INFINITY, 4.0, "primary"), std::invalid_argument);
+  try {
+    spacedCordCount(80.0, 1e-9, "secondary cord spacing");
+    ADD_FAILURE() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("secondary cord spacing: must be at least 0.1"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
 TEST_F(AutomaticPlacement, SplitsCordsEvenlyBetweenTheTwoTipsOnASymmetricValve) {
   const CordSet set = heuristicCordSet(valve_.valve_case);
   int anterolateral = 0;

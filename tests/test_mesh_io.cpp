@@ -9,6 +9,7 @@
 #include <random>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -317,6 +318,44 @@ TEST_F(MeshIoTest, ObjIndexJustPastTheEndSlipsThroughCgalAndReachesTheValidator)
   readOk(write("one_past.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), V, F);
   EXPECT_EQ(F, (Eigen::MatrixXi{{0, 1, 3}}));
   readFails(write("far_past.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"));
+}
+
+// A face with fewer than 3 corners used to be dropped, leaving a hole in a mesh that then
+// validated; so did an OBJ face whose index CGAL could not read as an int (the list ended
+// at 1 corner).
+TEST_F(MeshIoTest, AFaceWithFewerThanThreeCornersIsReportedNotDropped) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 2\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n1 1 0\n0 1 0\n3 0 1 2\n";
+  for (const auto& [face, corners] :
+       {std::pair{"2 0 2\n", "has 2 corners"}, std::pair{"1 3\n", "has 1 corner;"},
+        std::pair{"0\n", "has 0 corners"}}) {
+    const Problem p = readFails(write("short.ply", header + face));
+    EXPECT_EQ(p.where, "face 1") << face;
+    EXPECT_NE(p.what.find(corners), std::string::npos) << p.what;
+    EXPECT_NE(p.what.find("a face needs at least 3"), std::string::npos) << p.what;
+  }
+  const Problem p =
+      readFails(write("big_index.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2147483648 3\n"));
+  EXPECT_EQ(p.where, "face 1");
+  EXPECT_NE(p.what.find("has 1 corner; a face needs at least 3"), std::string::npos) << p.what;
+  EXPECT_NE(p.what.find("not a number in int range"), std::string::npos) << p.what;
+}
+
+// CGAL says only that it failed; the message used to stop there.
+TEST_F(MeshIoTest, AnAsciiPlyCgalCannotParseGetsAHintWhereToLook) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty double x\nproperty double y\n"
+      "property double z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const std::string& body : {std::string("0 0 0\n1e400 0 0\n0 1 0\n3 0 1 2\n"),
+                                  std::string("0 0 0\n1 0 0\n0 1 0\n3 0 1.5 2\n")}) {
+    const Problem p = readFails(write("bad_token.ply", header + body));
+    EXPECT_NE(p.what.find("CGAL could not parse the file (ASCII PLY: check that the header's "
+                          "element counts match the lines and that every value is a number"),
+              std::string::npos)
+        << p.what;
+  }
 }
 
 TEST_F(MeshIoTest, ObjGarbageAndNanAreReported) {

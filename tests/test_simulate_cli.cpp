@@ -328,5 +328,58 @@ TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
   EXPECT_FALSE(std::filesystem::exists(dir / "sweep" / "sweep.csv"));
 }
 
+// --window 1073741824 used to pass (2 * window + 1 overflowed to a negative count) and crash
+// after all the closures; the window is checked against the largest sweep up front.
+TEST(SweepCordCommand, RefusesAWindowNoSweepCanFillBeforeAnyClosure) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  for (const char* window : {"1001", "1073741824"}) {
+    const auto r = runChordfit("sweep-cord " + quoted(small) + " --window " + window +
+                               " --range 0.002 --step 0.001 --out " + quoted(dir / "sweep"));
+    EXPECT_EQ(r.exit_code, 2) << window << ": " << r.err;
+    EXPECT_NE(r.err.find("error: sweep-cord: --window: must be >= 2 and <= 1000, got " +
+                         std::string(window)),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("sweeping cord"), std::string::npos) << "no closure may start";
+  }
+  EXPECT_FALSE(std::filesystem::exists(dir / "sweep"));
+}
+
+// --step 1e-9 used to die in std::bad_alloc (exit 1) and --step 1e-6 to start 100,001
+// closures: the scale count is computed in double and capped before the case is read.
+TEST(SweepCordCommand, RefusesMoreThan2001ScalesNamingTheCountBeforeAnyClosure) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const std::pair<std::string, std::string> cases[] = {
+      {"--step 1e-6", "--range/--step: 0.05/1e-06 give 100001 scales"},
+      {"--step 1e-9", "--range/--step: 0.05/1e-09 give 1e+08 scales"},
+      {"--range 0.1 --step 0.0000999", "--range/--step: 0.1/9.99e-05 give 2003 scales"}};
+  for (const auto& [options, message] : cases) {
+    const auto r = runChordfit("sweep-cord " + quoted(small) + " " + options + " --out " +
+                               quoted(dir / "sweep"));
+    EXPECT_EQ(r.exit_code, 2) << options << ": " << r.err;
+    EXPECT_NE(r.err.find("error: sweep-cord: " + message), std::string::npos)
+        << options << ": " << r.err;
+    EXPECT_NE(r.err.find("at most 2001"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("sweeping cord"), std::string::npos) << "no closure may start";
+  }
+}
+
+// --cords <a directory> used to be "parsed" and reported as malformed JSON.
+TEST(SimulateCords, ACordsOptionNamingADirectoryIsRefusedAsADirectory) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  std::filesystem::create_directory(dir / "cords.json");
+  const auto r = runChordfit("simulate " + quoted(small) + " --cords " +
+                             quoted(dir / "cords.json") + " --out " + quoted(dir / "sim"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(
+      r.err.find("error: " + (dir / "cords.json").string() + ": is a directory, not a JSON file"),
+      std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "sim"));
+}
+
 }  // namespace
 }  // namespace chordfit

@@ -158,15 +158,30 @@ bool optionsArePositive(const char* command,
 
 namespace {
 
+// "<path> is a symbolic link to <target>, which does not exist" when `path` is a link whose
+// target is missing, else "": creating the directory there, or a file through it, would
+// fail only after the work (or replace the link instead of writing its target).
+std::string danglingLinkProblem(const std::filesystem::path& path) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::is_symlink(fs::symlink_status(path, ec)) || fs::exists(path, ec)) return "";
+  return path.string() + " is a symbolic link to " + fs::read_symlink(path, ec).string() +
+         ", which does not exist";
+}
+
 // Why outputs cannot go to `directory` (created later if missing), or "" when they can: its
-// nearest existing ancestor must be a directory in which a file can be created.
+// nearest existing ancestor must be a directory in which a file can be created, and no
+// missing part of the path may be a dangling symbolic link.
 std::string outputPlaceProblem(const std::string& directory) {
   namespace fs = std::filesystem;
   std::error_code ec;
   fs::path existing = fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
   while (!ec && !fs::exists(existing, ec) && existing.has_parent_path() &&
-         existing != existing.parent_path())
+         existing != existing.parent_path()) {
+    const std::string dangling = danglingLinkProblem(existing);
+    if (!dangling.empty()) return dangling;
     existing = existing.parent_path();
+  }
   if (ec) return ec.message();
   if (!fs::is_directory(existing, ec)) return existing.string() + " is not a directory";
   // Creating a file is the only reliable test: access(W_OK) says yes to root everywhere,
@@ -186,10 +201,20 @@ bool reportOutputProblem(const char* command, const std::string& out, const std:
   return false;
 }
 
+// An empty --out is a mistake (an unset variable in a script), not the current directory:
+// make-valve used to write there and print "wrote /case.json", the others to fail after the
+// work.
+bool reportEmptyOutput(const char* command, const std::string& out) {
+  if (!out.empty()) return false;
+  std::cerr << "error: " << command << ": --out: must not be empty\n";
+  return true;
+}
+
 }  // namespace
 
 bool outputDirectoryUsable(const char* command, const std::string& directory,
                            const std::vector<std::string>& files) {
+  if (reportEmptyOutput(command, directory)) return false;
   if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
   for (const std::string& name : files) {
     const std::filesystem::path file = std::filesystem::path(directory) / name;
@@ -203,9 +228,11 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
 }
 
 bool outputFileUsable(const char* command, const std::string& file) {
+  if (reportEmptyOutput(command, file)) return false;
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec) || std::filesystem::path(file).filename().empty())
     return reportOutputProblem(command, file, "is a directory; give the file to write");
+  if (!reportOutputProblem(command, file, danglingLinkProblem(file))) return false;
   return reportOutputProblem(
       command, file, outputPlaceProblem(std::filesystem::path(file).parent_path().string()));
 }

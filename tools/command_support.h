@@ -44,14 +44,17 @@ bool optionsArePositive(const char* command,
 
 // Whether the outputs can go to `directory` (created later if missing): its nearest existing
 // ancestor must be a writable directory, and none of the `files` the command writes there may
-// be an existing directory (the final rename onto it would fail after the work). On a problem
-// prints "error: <command>: --out: <path>: <reason>" and returns false. Checked before the
-// work starts, so that a fit does not run for minutes and then fail to write.
+// be an existing directory (the final rename onto it would fail after the work), and no
+// missing part of it may be a symbolic link to nowhere. On a problem prints
+// "error: <command>: --out: <path>: <reason>" ("--out: must not be empty" for "") and
+// returns false. Checked before the work starts, so that a fit does not run for minutes and
+// then fail to write.
 bool outputDirectoryUsable(const char* command, const std::string& directory,
                            const std::vector<std::string>& files = {});
 
 // The same for an output file: its directory must be usable as above and the file itself must
-// not be an existing directory (the final rename would fail after the work).
+// not be an existing directory (the final rename would fail after the work) nor a symbolic
+// link to nowhere (the rename would replace the link, not write its target).
 bool outputFileUsable(const char* command, const std::string& file);
 
 // For a case a command writes (make-valve, import-mesh): a fine mesh's automatic time step

@@ -64,22 +64,28 @@ std::vector<std::string> splitLabels(const std::string& text) {
 }
 
 // Labels name table rows: one per cord file, non-empty, unique, and free of the characters
-// that would break a Markdown or CSV row.
-bool checkLabels(const std::vector<std::string>& labels, std::size_t files) {
+// that would break a Markdown or CSV row. Without --labels they are the file names, and a
+// problem is the files' (a file given twice), not that of an option the user did not give.
+bool checkLabels(const std::vector<std::string>& labels, std::size_t files, bool defaulted) {
   if (labels.size() != files) {
     std::cerr << "error: compare: --labels: " << labels.size() << " label(s) for " << files
               << " cord file(s); give one label per file\n";
     return false;
   }
+  const char* source = defaulted ? "CORDS" : "--labels";
+  const char* hint =
+      defaulted ? " (without --labels the file names label the rows; give --labels)" : "";
   std::set<std::string> seen;
   for (const std::string& label : labels) {
     if (label.empty() || label.find_first_of("|\"\n") != std::string::npos) {
-      std::cerr << "error: compare: --labels: \"" << label
-                << "\": labels must be non-empty and contain no '|', '\"' or newline\n";
+      std::cerr << "error: compare: " << source << ": \"" << label
+                << "\": labels must be non-empty and contain no '|', '\"' or newline" << hint
+                << "\n";
       return false;
     }
     if (!seen.insert(label).second) {
-      std::cerr << "error: compare: --labels: \"" << label << "\" appears twice\n";
+      std::cerr << "error: compare: " << source << ": \"" << label
+                << (defaulted ? "\" is given twice" : "\" appears twice") << hint << "\n";
       return false;
     }
   }
@@ -183,7 +189,8 @@ int runCompare(const CompareOptions& options) {
   }
   std::vector<std::string> labels =
       options.labels.empty() ? options.cords_files : splitLabels(options.labels);
-  if (!checkLabels(labels, options.cords_files.size())) return kExitBadInput;
+  if (!checkLabels(labels, options.cords_files.size(), options.labels.empty()))
+    return kExitBadInput;
 
   auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;

@@ -1,6 +1,7 @@
 #include <cstdio>
 #include <iostream>
 #include <map>
+#include <utility>
 
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
@@ -43,6 +44,18 @@ int runHeuristic(const HeuristicCommandOptions& options) {
                            {"--secondary-depth", options.secondary_depth_mm}},
                           "a positive length in mm"))
     return kExitBadInput;
+  // A spacing finer than any mesh's edges places no more cords (heuristic.h,
+  // kMinCordSpacingMm); far finer, its count of targets used to overflow.
+  for (const auto& [option, spacing] :
+       {std::pair{"--primary-spacing", options.primary_spacing_mm},
+        std::pair{"--secondary-spacing", options.secondary_spacing_mm}}) {
+    if (spacing < kMinCordSpacingMm) {
+      std::cerr << "error: heuristic: " << option << ": must be at least " << kMinCordSpacingMm
+                << " mm (finer than the mesh's edges places no more cords), got " << spacing
+                << "\n";
+      return kExitBadInput;
+    }
+  }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
   HeuristicOptions heuristic;

@@ -330,22 +330,25 @@ int main(int argc, char** argv) {
     const char* command;
     std::string path;
     bool is_file;
-    bool optional;
     std::vector<std::string> files;
   };
   const OutputPlace places[] = {
-      {"make-valve", make_valve.out_dir, false, false, {}},
-      {"import-mesh", import_mesh.out_dir, false, false, {}},
-      {"heuristic", heuristic.out_file, true, false, {}},
-      {"edit-cords", edit_cords.out_file, true, false, {}},
-      {"metrics", metrics.out_file, true, true, {}},
-      {"simulate", simulate.out_dir, false, false, simulateOutputFiles(simulate)},
-      {"sweep-cord", sweep_cord.out_dir, false, false, sweepCordOutputFiles()},
-      {"make-case", make_case.out_dir, false, false, {}},
-      {"fit", fit.out_dir, false, false, fitOutputFiles(fit)},
-      {"compare", compare.out_dir, false, true, compareOutputFiles(compare)}};
+      {"make-valve", make_valve.out_dir, false, {}},
+      {"import-mesh", import_mesh.out_dir, false, {}},
+      {"heuristic", heuristic.out_file, true, {}},
+      {"edit-cords", edit_cords.out_file, true, {}},
+      {"metrics", metrics.out_file, true, {}},
+      {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate)},
+      {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles()},
+      {"make-case", make_case.out_dir, false, {}},
+      {"fit", fit.out_dir, false, fitOutputFiles(fit)},
+      {"compare", compare.out_dir, false, compareOutputFiles(compare)}};
   for (const OutputPlace& place : places) {
-    if (!app.got_subcommand(place.command) || (place.optional && place.path.empty())) continue;
+    // Whether --out was given, not whether it is empty: an empty one is refused, not skipped
+    // (make-case reports a missing --out itself; --list needs none).
+    if (!app.got_subcommand(place.command) ||
+        app.get_subcommand(place.command)->count("--out") == 0)
+      continue;
     const bool usable = place.is_file
                             ? outputFileUsable(place.command, place.path)
                             : outputDirectoryUsable(place.command, place.path, place.files);

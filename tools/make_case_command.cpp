@@ -72,10 +72,14 @@ int runMakeCase(const MakeCaseOptions& options) {
   // point insertions) diverged three times, the last with the step quartered, after ~10
   // minutes (2026-11-27), and the insertion patch such fine truths now get was not tried
   // there. --edge 1 settles (truth 0.5 mm, 2,648 steps). docs/performance.md, "Fine meshes".
-  if (std::isfinite(options.edge_mm) && options.edge_mm >= 0.5 && options.edge_mm < 1.0) {
-    std::cerr << "error: make-case: --edge: " << options.edge_mm
-              << " mm gives a truth mesh finer than 0.5 mm, which has not been seen to close "
-                 "(--edge 0.5 diverged); use 1 mm or more\n";
+  // So the command's range is [1, 5] mm, stated as such: the library's [0.5, 5] named a
+  // range whose lower half was then refused.
+  if (!(std::isfinite(options.edge_mm) && options.edge_mm >= 1.0 && options.edge_mm <= 5.0)) {
+    std::cerr << "error: make-case: --edge: must be in [1, 5] mm, got " << options.edge_mm;
+    if (options.edge_mm >= 0.5 && options.edge_mm < 1.0)
+      std::cerr << " (it gives a truth mesh finer than 0.5 mm, which has not been seen to "
+                   "close: --edge 0.5 diverged)";
+    std::cerr << "\n";
     return kExitBadInput;
   }
 

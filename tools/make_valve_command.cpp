@@ -14,8 +14,10 @@ namespace chordfit::cli {
 namespace {
 
 // "<field> must be ..." from makeParametricValve as "<option>: must be ..." when an option sets
-// the field; empty otherwise.
+// the field, with the other fields it names (a bound derived from them) as options too; empty
+// when no option sets the field.
 std::string optionMessage(const std::string& message) {
+  // closed_saddle_height_mm before saddle_height_mm, which it contains (the replacements).
   static const std::pair<const char*, const char*> kOptions[] = {
       {"target_edge_mm", "--edge"},
       {"ap_diameter_mm", "--ap"},
@@ -29,7 +31,13 @@ std::string optionMessage(const std::string& message) {
       {"indentation_depth", "--indentation"}};
   for (const auto& [field, option] : kOptions) {
     const std::string prefix = std::string(field) + " ";
-    if (message.rfind(prefix, 0) == 0) return option + (": " + message.substr(prefix.size()));
+    if (message.rfind(prefix, 0) != 0) continue;
+    std::string text = option + (": " + message.substr(prefix.size()));
+    for (const auto& [other, other_option] : kOptions) {
+      for (std::size_t at = text.find(other); at != std::string::npos; at = text.find(other))
+        text.replace(at, std::string(other).size(), other_option);
+    }
+    return text;
   }
   return "";
 }

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <sstream>
 #include <thread>
@@ -29,6 +30,12 @@ namespace {
 // The signal a finite-difference step of this relative size sees (issue: 0.5 %).
 constexpr double kReferenceStep = 0.005;
 constexpr int kP2 = 1 * 3 + 1;  // posterior leaflet (label 1), middle third
+// The most scales one sweep runs: each is a full closure (seconds to minutes), and 2,001 is
+// already a step of 1e-4 over +-0.1 or 5e-4 over the widest range; more is a mistyped
+// --step rather than a plan (1e-9 used to die in std::bad_alloc, 1e-6 started 100,001
+// closures). The widest --window is the one that this many scales can still fill.
+constexpr int kMaxScales = 2001;
+constexpr int kMaxWindow = (kMaxScales - 1) / 2;
 
 // The P2 primary cord whose vertex lies nearest the posterior midline (angle pi).
 int defaultP2PrimaryCord(const ValveCase& c, const CordSet& cords) {
@@ -95,21 +102,33 @@ int runSweepCord(const SweepCordOptions& options) {
     std::cerr << "error: sweep-cord: --range/--step: need 0 < step <= range < 0.5\n";
     return kExitBadInput;
   }
-  // A quadratic through fewer than 5 points (window 2) leaves no residual to call noise;
+  // A quadratic through fewer than 5 points (window 2) leaves no residual to call noise; a
+  // window wider than the most scales a sweep may have (kMaxScales) could never be filled;
   // --cord -1 is the default (the P2 primary cord, see defaultP2PrimaryCord).
   const struct {
     const char* option;
-    int value, minimum;
-  } counts[] = {{"--window", options.window, 2},
-                {"--threads", options.threads, 1},
-                {"--cord", options.cord, -1}};
+    int value, minimum, maximum;
+  } counts[] = {{"--window", options.window, 2, kMaxWindow},
+                {"--threads", options.threads, 1, std::numeric_limits<int>::max()},
+                {"--cord", options.cord, -1, std::numeric_limits<int>::max()}};
   for (const auto& count : counts)
-    if (count.value < count.minimum) {
+    if (count.value < count.minimum || count.value > count.maximum) {
       std::cerr << "error: sweep-cord: " << count.option << ": must be >= " << count.minimum
+                << (count.maximum < std::numeric_limits<int>::max()
+                        ? " and <= " + std::to_string(count.maximum)
+                        : "")
                 << ", got " << count.value << "\n";
       return kExitBadInput;
     }
-  const int count = static_cast<int>(std::lround(2.0 * options.range / options.step)) + 1;
+  // In double: a tiny step would overflow an int (and then allocate or loop on garbage).
+  const double scales = std::round(2.0 * options.range / options.step) + 1.0;
+  if (scales > kMaxScales) {
+    std::cerr << "error: sweep-cord: --range/--step: " << options.range << "/" << options.step
+              << " give " << scales << " scales, one closure each; at most " << kMaxScales
+              << " (a coarser --step or a shorter --range)\n";
+    return kExitBadInput;
+  }
+  const int count = static_cast<int>(scales);
   if (count < 2 * options.window + 1) {  // no full window: no noise to report
     std::cerr << "error: sweep-cord: --window " << options.window << " needs at least "
               << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
