@@ -39,13 +39,15 @@ std::string inputFileProblem(const std::filesystem::path& path, const std::strin
   std::error_code ec;
   const fs::file_status status = fs::status(path, ec);
   if (status.type() == fs::file_type::not_found) return "file not found";
+  // No permission, a loop of links: status() fails with a type of none, not a device.
+  if (ec) return "cannot be read (" + ec.message() + ")";
   if (fs::is_directory(status)) return "is a directory, not " + what;
   if (!fs::is_regular_file(status)) return "is not a regular file (a device, a pipe or a socket)";
   const std::uintmax_t size = fs::file_size(path, ec);
   if (ec) return "cannot be read (" + ec.message() + ")";
   if (size > kMaxInputFileBytes)
-    return "is " + std::to_string(size >> 20) + " MiB; an input file may have at most " +
-           std::to_string(kMaxInputFileBytes >> 20) + " MiB";
+    return "is larger than " + std::to_string(kMaxInputFileBytes >> 20) +
+           " MiB, the most an input file may have (" + std::to_string(size) + " bytes)";
   return "";
 }
 

@@ -466,8 +466,7 @@ void soupToEigen(const std::vector<DoublePoint>& points, const std::vector<Polyg
     V(row, 2) = points[i].z();
   }
   Eigen::Index triangles = 0;
-  for (const Polygon& p : polygons)
-    if (p.size() >= 3) triangles += static_cast<Eigen::Index>(p.size() - 2);
+  for (const Polygon& p : polygons) triangles += static_cast<Eigen::Index>(p.size() - 2);
   F.resize(triangles, 3);
   Eigen::Index row = 0;
   for (const Polygon& p : polygons) {
@@ -582,7 +581,7 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
   if (!error.empty()) return false;
   soupToEigen(points, polygons, V, F);
   if (F.rows() == 0) {
-    error = "no polygons with 3 or more corners";
+    error = "no faces";
     return false;
   }
   return true;

@@ -13,8 +13,8 @@ namespace chordfit {
 // Reads a polygon soup (PLY, OBJ, STL, OFF) with CGAL::IO::read_polygon_soup and
 // fan-triangulates polygons. STL soups are welded (duplicate points merged).
 // Returns false with a short reason in `error` on failure.
-bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V,
-                          Eigen::MatrixXi& F, std::string& error);
+bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
+                          std::string& error);
 
 // Exact point-to-triangle-mesh distances with a CGAL AABB tree.
 class SurfaceDistance {

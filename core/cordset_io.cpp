@@ -53,7 +53,6 @@ bool readCordPoint(const json& value, const std::string& where, JsonFields& fiel
 // cases: up to ~300 mm), so a rest length above 1000 mm is a typo or a unit slip. A real
 // chord (E ~50 MPa, 0.5 mm², 20 mm) has a compliance near 1 mm/N and the bundled cases use 0
 // or 0.05; at 10 mm/N a systolic load of ~1 N would stretch a cord by a centimetre.
-constexpr double kMaxRestLengthMm = 1000.0;
 constexpr double kMaxComplianceMmPerN = 10.0;
 constexpr const char* kRestLengthWhy =
     "chordae are 10-40 mm long, a ruptured one in make-case ten times that";
@@ -126,7 +125,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "rest_length_mm"), "rest length must be positive");
       ok = false;
     }
-    ok = ok && atMost(cord.rest_length, kMaxRestLengthMm, "mm", kRestLengthWhy,
+    ok = ok && atMost(cord.rest_length, kMaxCordRestLengthMm, "mm", kRestLengthWhy,
                       fieldPath(where, "rest_length_mm"), fields);
   } else {
     ok = false;
@@ -138,7 +137,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "seed_rest_length_mm"), "seed rest length must be positive");
       ok = false;
     }
-    ok = ok && atMost(cord.seed_rest_length, kMaxRestLengthMm, "mm", kRestLengthWhy,
+    ok = ok && atMost(cord.seed_rest_length, kMaxCordRestLengthMm, "mm", kRestLengthWhy,
                       fieldPath(where, "seed_rest_length_mm"), fields);
   }
   if (const json* compliance = fields.member(value, where, "compliance_mm_per_N", false)) {

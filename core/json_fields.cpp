@@ -107,13 +107,14 @@ std::string indexPath(const std::string& parent, std::size_t index) {
 bool JsonFields::knownKeys(const nlohmann::json& object, const std::string& where,
                            std::initializer_list<const char*> known) {
   if (!object.is_object()) return true;  // the type is reported where the object is read
-  // Two edits catch a dropped or doubled letter and a swap, without pairing unrelated words.
-  constexpr std::size_t kMaxTypoEdits = 2;
   bool ok = true;
   for (const auto& item : object.items()) {
     const std::string& key = item.key();
+    // Two edits catch a dropped or doubled letter and a swap in a word; in a key of four
+    // letters or fewer two edits pair unrelated words ("id" -> "tip"), so one there.
+    const std::size_t max_typo_edits = key.size() <= 4 ? 1 : 2;
     std::string nearest;
-    std::size_t nearest_edits = kMaxTypoEdits + 1;
+    std::size_t nearest_edits = max_typo_edits + 1;
     bool is_known = false;
     for (const char* name : known) {
       is_known |= key == name;

@@ -112,23 +112,25 @@ TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {
 }
 
 TEST_F(CompareCommand, RemovesTheFiguresOfCordSetsAnEarlierCompareHadAndKeepsOtherFiles) {
-  // An earlier compare of more cord sets into the same directory left enface_2.svg and
-  // enface_10.svg; beside this run's one figure they would read as its own.
+  // An earlier compare of two cord sets into the same directory left enface_2.svg; beside
+  // this run's one figure it would read as its own. Files no run recorded stay.
   const fs::path out = *dir_ / "earlier-run";
-  fs::create_directories(out);
-  for (const char* name :
-       {"enface_2.svg", "enface_10.svg", "enface_01.svg", "enface_x.svg", "notes.txt"})
-    testing::writeText(out / name, "earlier");
+  const auto earlier =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
+                  quoted(*dir_ / "loose.json") + " --quiet --out " + quoted(out));
+  ASSERT_EQ(earlier.exit_code, 0) << earlier.err;
+  ASSERT_TRUE(fs::exists(out / "enface_2.svg"));
+  for (const char* name : {"enface_10.svg", "enface_01.svg", "notes.txt"})
+    testing::writeText(out / name, "the user's");
   const auto r = runChordfit("compare " + quoted(caseDir()) + " " +
                              quoted(caseDir() / "cords.json") + " --quiet --out " + quoted(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(fs::exists(out / "enface_2.svg"));
-  EXPECT_FALSE(fs::exists(out / "enface_10.svg"));
-  EXPECT_NE(readText(out / "enface_1.svg"), "earlier");
-  for (const char* name : {"enface_01.svg", "enface_x.svg", "notes.txt"})
-    EXPECT_EQ(readText(out / name), "earlier") << name << " is not a figure compare numbers";
+  EXPECT_TRUE(fs::exists(out / "enface_1.svg"));
+  for (const char* name : {"enface_10.svg", "enface_01.svg", "notes.txt"})
+    EXPECT_EQ(readText(out / name), "the user's") << name << ": no run recorded it";
   EXPECT_NE(r.out.find("wrote " + (out / "compare.md").string() +
-                       ", compare.csv, sections.svg, enface_1.svg"),
+                       ", compare.csv, sections.svg, enface_1.svg; removed enface_2.svg"),
             std::string::npos)
       << r.out;
 }

@@ -66,6 +66,20 @@ TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
   EXPECT_NE(r.err.find("--scale-bounds"), std::string::npos) << r.err;
 }
 
+// An upper bound that lets a cord outgrow what a cord set may hold (1000 mm) used to fail only
+// after the fit, when its cords.json was read back for the fitted closure.
+TEST(FitCommand, RejectsAnUpperScaleBoundNoCordSetCanHoldBeforeFitting) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 0.7,100 --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the upper bound 100 lets a cord of "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("a cord set holds at most 1000 mm"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit"));
+}
+
 TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
   TempDir dir;
   const auto r = runChordfit("fit " + quoted(smallCase()) + " --distance nearest --out " +

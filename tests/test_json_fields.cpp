@@ -41,7 +41,7 @@ TEST(LoadJsonFile, RefusesAnEmptyPathADirectoryADeviceAndAHugeFileNamingTheFile)
       {"", "given.json: no file given"},
       {dir / "cords.json", "given.json: is a directory, not a JSON file"},
       {"/dev/null", "given.json: is not a regular file"},
-      {dir / "huge.json", "given.json: is 512 MiB; an input file may have at most 512 MiB"}};
+      {dir / "huge.json", "given.json: is larger than 512 MiB, the most an input file may have"}};
   for (const auto& [path, message] : cases) {
     Diagnostics diagnostics;
     EXPECT_FALSE(loadJsonFile(path, "given.json", diagnostics)) << path;

@@ -59,21 +59,35 @@ TEST_F(SimulateCommand, WritesTheClosedMeshWithScalarsAndMetrics) {
 
 TEST_F(SimulateCommand, RemovesTheOpenedStateAnEarlierOpeningRunLeftAndKeepsOtherFiles) {
   // An earlier `simulate --phase open` into the same directory; its opened state beside this
-  // run's closure would read as this run's.
+  // run's closure would read as this run's. A file the user put there stays.
   const std::filesystem::path out = dir_ / "sim";
-  std::filesystem::create_directories(out);
-  for (const char* name : {"opened.ply", "opened.vtk", "notes.txt"})
-    testing::writeText(out / name, "earlier");
+  const auto opening =
+      runChordfit("simulate " + quoted(case_dir_) + " --phase open --quiet --out " + quoted(out));
+  ASSERT_EQ(opening.exit_code, 0) << opening.err;
+  ASSERT_TRUE(std::filesystem::exists(out / "opened.ply"));
+  testing::writeText(out / "notes.txt", "the user's");
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out / "opened.ply"));
   EXPECT_FALSE(std::filesystem::exists(out / "opened.vtk"));
-  EXPECT_EQ(testing::readText(out / "notes.txt"), "earlier") << "not a file simulate writes";
+  EXPECT_EQ(testing::readText(out / "notes.txt"), "the user's");
   EXPECT_TRUE(std::filesystem::exists(out / "closed.ply"));
   EXPECT_NE(r.out.find("wrote " + (out / "closed.ply").string() +
-                       ", closed.vtk, metrics.json, enface.svg\n"),
+                       ", closed.vtk, metrics.json, enface.svg; removed opened.ply, opened.vtk "
+                       "(an earlier run's)\n"),
             std::string::npos)
       << r.out;
+}
+
+TEST_F(SimulateCommand, KeepsAFileOfAnOutputsNameThatNoRunWrote) {
+  // opened.ply put there by hand (no chordfit run recorded it) is the user's, not stale.
+  const std::filesystem::path out = dir_ / "sim";
+  std::filesystem::create_directories(out);
+  testing::writeText(out / "opened.ply", "the user's");
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(testing::readText(out / "opened.ply"), "the user's");
+  EXPECT_EQ(r.out.find("removed"), std::string::npos) << r.out;
 }
 
 TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {

@@ -22,10 +22,10 @@ std::string readText(const fs::path& file) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
-TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndLeavesNoStaging) {
+TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndRecordsThem) {
   TempDir tmp;
   const fs::path out = tmp.path() / "out";
-  std::vector<std::string> published;
+  StagedOutput::Published published;
   {
     StagedOutput staged(out, {"a.txt", "b.txt", "c.txt"});
     writeText(staged.dir() / "c.txt", "c");
@@ -33,29 +33,41 @@ TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndLeavesNoStaging) {
     EXPECT_FALSE(fs::exists(out / "a.txt"));  // nothing is visible before publishing
     published = staged.publish();
   }
-  EXPECT_EQ(published, (std::vector<std::string>{"a.txt", "c.txt"}));
+  EXPECT_EQ(published.written, (std::vector<std::string>{"a.txt", "c.txt"}));
+  EXPECT_TRUE(published.removed.empty());
   EXPECT_EQ(readText(out / "a.txt"), "a");
   EXPECT_EQ(readText(out / "c.txt"), "c");
-  EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 2);
+  EXPECT_EQ(readText(out / kOutputRecordName), "a.txt\nc.txt\n");
+  // The two files and the record; no staging directory is left.
+  EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator()), 3);
   EXPECT_EQ(wroteLine(out, published), "wrote " + (out / "a.txt").string() + ", c.txt");
 }
 
-TEST(StagedOutput, RemovesTheCommandsFilesThisRunDidNotWriteButNoDirectoryNorOtherFile) {
+TEST(StagedOutput, RemovesOnlyAnEarlierRunsRecordedFilesThisRunDoesNotWrite) {
   TempDir tmp;
   const fs::path out = tmp.path() / "out";
   fs::create_directories(out / "d.txt");
-  for (const char* name : {"a.txt", "b.txt", "old.txt", "mine.txt"})
+  for (const char* name : {"a.txt", "b.txt", "old.txt", "users.txt", "other.txt"})
     writeText(out / name, "earlier");
+  // An earlier run published all but users.txt, which the user put there.
+  writeText(out / kOutputRecordName, "a.txt\nb.txt\nd.txt\nold.txt\nother.txt\n");
+  StagedOutput::Published published;
   {
-    StagedOutput staged(out, {"a.txt", "b.txt", "d.txt"}, {"old.txt"});
+    StagedOutput staged(out, {"a.txt", "b.txt", "d.txt", "users.txt"}, {"old.txt"});
     writeText(staged.dir() / "a.txt", "a");
-    EXPECT_EQ(staged.publish(), std::vector<std::string>{"a.txt"});
+    published = staged.publish();
   }
+  EXPECT_EQ(published.written, std::vector<std::string>{"a.txt"});
+  EXPECT_EQ(published.removed, (std::vector<std::string>{"b.txt", "old.txt"}));
   EXPECT_EQ(readText(out / "a.txt"), "a");
-  EXPECT_FALSE(fs::exists(out / "b.txt")) << "declared, not written: an earlier run's";
+  EXPECT_FALSE(fs::exists(out / "b.txt")) << "declared, not written: the earlier run's";
   EXPECT_FALSE(fs::exists(out / "old.txt")) << "superseded";
   EXPECT_TRUE(fs::is_directory(out / "d.txt")) << "a directory is never removed";
-  EXPECT_EQ(readText(out / "mine.txt"), "earlier") << "not the command's";
+  EXPECT_EQ(readText(out / "users.txt"), "earlier") << "declared, but no run recorded it";
+  EXPECT_EQ(readText(out / "other.txt"), "earlier") << "recorded, but not this command's";
+  EXPECT_EQ(readText(out / kOutputRecordName), "a.txt\nd.txt\nother.txt\n");
+  EXPECT_EQ(wroteLine(out, published),
+            "wrote " + (out / "a.txt").string() + "; removed b.txt, old.txt (an earlier run's)");
 }
 
 TEST(StagedOutput, AnUndeclaredFileIsRefusedAndNothingIsPublished) {

@@ -167,7 +167,7 @@ struct FitCommandOptions {
   bool quiet = false;
 };
 int runFit(const FitCommandOptions& options);
-std::vector<std::string> fitOutputFiles(const FitCommandOptions& options);
+std::vector<std::string> fitOutputFiles();
 
 }  // namespace chordfit::cli
 

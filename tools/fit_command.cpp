@@ -3,6 +3,7 @@
 // outputs. The closed mesh and its metrics are written by the simulate command's code path
 // (runSimulate on the fitted cords: a full closure from the open state, the same files and
 // scalars as `chordfit simulate`), then metrics.json is extended with the fit's keys.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -91,6 +92,17 @@ int runFit(const FitCommandOptions& o) {
   }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
+  // A scale at the upper bound must leave a cord set the readers take (cords.json is read
+  // back for the fitted closure); found after the fit, it would cost the whole run.
+  for (const Cord& cord : seed->cords) {
+    const double reach = std::max(cord.seed_rest_length, cord.rest_length) * o.scale_bounds[1];
+    if (cord.locked || reach <= kMaxCordRestLengthMm) continue;
+    std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
+              << " lets a cord of " << std::max(cord.seed_rest_length, cord.rest_length)
+              << " mm reach " << reach << " mm; a cord set holds at most " << kMaxCordRestLengthMm
+              << " mm\n";
+    return kExitBadInput;
+  }
   const auto case_settings =
       caseSettingsOrReport(*valve_case, o.case_dir, "fit", o.settings_overrides);
   if (!case_settings) return kExitBadInput;
@@ -132,7 +144,7 @@ int runFit(const FitCommandOptions& o) {
     return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
   }
 
-  StagedOutput staged(o.out_dir, fitOutputFiles(o));
+  StagedOutput staged(o.out_dir, fitOutputFiles());
   const std::filesystem::path& out = staged.dir();
   writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
   // The tissue the cords were fitted on, when the tissue pre-fit changed it; the closure
@@ -207,7 +219,7 @@ int runFit(const FitCommandOptions& o) {
                             {"fitted closure", fit.final_evaluation.closed_V, "", false, 2.0}},
                            {valve_case->name + ": seed and fitted closures against the tracings (" +
                             o.optimizer + ", " + o.params + ")"}));
-  const std::vector<std::string> published = staged.publish();
+  const StagedOutput::Published published = staged.publish();
 
   std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
               fit.seconds, fit.termination.c_str());
@@ -231,7 +243,7 @@ int runFit(const FitCommandOptions& o) {
   return kExitOk;
 }
 
-std::vector<std::string> fitOutputFiles(const FitCommandOptions&) {
+std::vector<std::string> fitOutputFiles() {
   // tissue.json only when the tissue pre-fit changed the tissue, uncertainty.csv only when
   // the uncertainty could be computed.
   std::vector<std::string> files = {"cords.json", "tissue.json"};

@@ -341,7 +341,7 @@ int main(int argc, char** argv) {
       {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate)},
       {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles()},
       {"make-case", make_case.out_dir, false, {}},
-      {"fit", fit.out_dir, false, fitOutputFiles(fit)},
+      {"fit", fit.out_dir, false, fitOutputFiles()},
       {"compare", compare.out_dir, false, compareOutputFiles(compare)}};
   for (const OutputPlace& place : places) {
     // Whether --out was given, not whether it is empty: an empty one is refused, not skipped

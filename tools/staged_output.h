@@ -7,9 +7,10 @@
 // The staging directory knows the names the command declares (its *OutputFiles function in
 // commands.h, which main.cpp's pre-flight checks before any work): a file written but not
 // declared is refused at publish(), so the pre-flight's list cannot drift from the writer.
-// Publishing also removes the command's files that this run did not write (declared but not
-// written, or `superseded`), so the directory never holds one run's results beside an earlier
-// run's, e.g. opened.ply of an earlier `simulate --phase open` beside a new closed.ply.
+// Publishing also removes the command's files that an earlier run wrote and this run does not
+// (declared but not written, or `superseded`), e.g. opened.ply of an earlier `simulate --phase
+// open` beside a new closed.ply: only names a chordfit run published there, as the directory's
+// record of them (.chordfit-outputs) says, so a file the user put there is never removed.
 #pragma once
 
 #include <filesystem>
@@ -32,19 +33,26 @@ class StagedOutput {
 
   // Where the command writes its files.
   const std::filesystem::path& dir() const { return staging_; }
+  struct Published {
+    std::vector<std::string> written;  // in the declared order
+    std::vector<std::string> removed;  // an earlier run's files this run superseded
+  };
   // Moves every file written into the staging directory to the output directory, replacing
-  // files of the same name, then removes the declared files not written and the superseded
-  // ones (files only, never a directory); returns the names written, in the declared order.
-  // Throws, changing nothing, when a written file was not declared or a directory is in the
-  // way of one.
-  std::vector<std::string> publish();
+  // files of the same name, then removes the earlier run's files this run supersedes (files
+  // only, never a directory) and updates the record. Throws, changing nothing, when a written
+  // file was not declared or a directory is in the way of one.
+  Published publish();
 
  private:
   std::filesystem::path out_, staging_;
   std::vector<std::string> declared_, superseded_;
 };
 
-// "wrote DIR/first, second, ...": the line a command prints after publishing `names`.
-std::string wroteLine(const std::filesystem::path& out_dir, const std::vector<std::string>& names);
+// The record of the files chordfit runs published in a directory (one name per line).
+inline constexpr const char* kOutputRecordName = ".chordfit-outputs";
+
+// "wrote DIR/first, second, ...[; removed x, y (an earlier run's)]": the line a command prints
+// after publishing.
+std::string wroteLine(const std::filesystem::path& out_dir, const StagedOutput::Published& files);
 
 }  // namespace chordfit::cli

@@ -242,7 +242,7 @@ int runSweepCord(const SweepCordOptions& options) {
   writeFileAtomically(out / "sweep.csv", sweepCsv(points));
   writeFileAtomically(out / "sweep.svg", svgLinePlots(panels, 1, 720, 360));
   writeFileAtomically(out / "sweep.json", summary.dump(2) + "\n");
-  const std::vector<std::string> published = staged.publish();
+  const StagedOutput::Published published = staged.publish();
   for (const char* key : {"mean_deviation", "vertex_height"}) {
     if (!summary.contains(key)) continue;
     const auto& n = summary[key];
