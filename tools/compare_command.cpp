@@ -158,6 +158,13 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
   return md;
 }
 
+// The atrial view of the k-th cord set given (1-based): enface_<k>.svg.
+constexpr const char* kEnfacePrefix = "enface_";
+constexpr const char* kEnfaceSuffix = ".svg";
+std::string enfaceFigureName(std::size_t k) {
+  return kEnfacePrefix + std::to_string(k) + kEnfaceSuffix;
+}
+
 // enface_K.svg files in out_dir with K > count: an earlier compare of more cord sets wrote
 // them, and beside this run's figures they would read as its own.
 std::vector<std::string> enfaceFiguresBeyond(const std::string& out_dir, std::size_t count) {
@@ -165,7 +172,7 @@ std::vector<std::string> enfaceFiguresBeyond(const std::string& out_dir, std::si
   std::error_code ec;
   for (const auto& entry : std::filesystem::directory_iterator(out_dir, ec)) {
     const std::string name = entry.path().filename().string();
-    const std::string prefix = "enface_", suffix = ".svg";
+    const std::string prefix = kEnfacePrefix, suffix = kEnfaceSuffix;
     if (name.size() <= prefix.size() + suffix.size() || name.rfind(prefix, 0) != 0 ||
         name.compare(name.size() - suffix.size(), suffix.size(), suffix) != 0)
       continue;
@@ -275,7 +282,7 @@ int runCompare(const CompareOptions& options) {
     // One atrial view per set, numbered in the order given (labels need not be file names).
     for (std::size_t i = 0; i < sets.size(); ++i) {
       writeFileAtomically(
-          out / ("enface_" + std::to_string(i + 1) + ".svg"),
+          out / enfaceFigureName(i + 1),
           enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
                           sets[i].metrics.orifice));
     }
@@ -288,7 +295,7 @@ int runCompare(const CompareOptions& options) {
 std::vector<std::string> compareOutputFiles(const CompareOptions& options) {
   std::vector<std::string> files = {"compare.md", "compare.csv", "sections.svg"};
   for (std::size_t k = 1; k <= options.cords_files.size(); ++k)
-    files.push_back("enface_" + std::to_string(k) + ".svg");
+    files.push_back(enfaceFigureName(k));
   return files;
 }
 

@@ -95,12 +95,12 @@ int runFit(const FitCommandOptions& o) {
   // A scale at the upper bound must leave a cord set the readers take (cords.json is read
   // back for the fitted closure); found after the fit, it would cost the whole run.
   for (const Cord& cord : seed->cords) {
-    const double reach = std::max(cord.seed_rest_length, cord.rest_length) * o.scale_bounds[1];
+    const double length = std::max(cord.seed_rest_length, cord.rest_length);
+    const double reach = length * o.scale_bounds[1];
     if (cord.locked || reach <= kMaxCordRestLengthMm) continue;
     std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
-              << " lets a cord of " << std::max(cord.seed_rest_length, cord.rest_length)
-              << " mm reach " << reach << " mm; a cord set holds at most " << kMaxCordRestLengthMm
-              << " mm\n";
+              << " lets a cord of " << length << " mm reach " << reach
+              << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
     return kExitBadInput;
   }
   const auto case_settings =

@@ -81,6 +81,9 @@ void writeState(const std::filesystem::path& dir, const std::string& stem, const
   writeVtk(dir / (stem + ".vtk"), V, c.mesh.F, scalars);
 }
 
+// The opened state's files (writeState "opened"), written with --phase open only.
+std::vector<std::string> openedStateFiles() { return {"opened.ply", "opened.vtk"}; }
+
 }  // namespace
 
 int runSimulate(const SimulateOptions& options) {
@@ -136,9 +139,7 @@ int runSimulate(const SimulateOptions& options) {
   }
   // A closure alone supersedes the opened state of an earlier --phase open.
   StagedOutput staged(options.out_dir, simulateOutputFiles(options),
-                      options.phase == "open"
-                          ? std::vector<std::string>{}
-                          : std::vector<std::string>{"opened.ply", "opened.vtk"});
+                      options.phase == "open" ? std::vector<std::string>{} : openedStateFiles());
   const std::filesystem::path& out = staged.dir();
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
@@ -173,7 +174,10 @@ int runSimulate(const SimulateOptions& options) {
 
 std::vector<std::string> closureOutputFiles(bool open_phase) {
   std::vector<std::string> files = {"closed.ply", "closed.vtk"};
-  if (open_phase) files.insert(files.end(), {"opened.ply", "opened.vtk"});
+  if (open_phase) {
+    const std::vector<std::string> opened = openedStateFiles();
+    files.insert(files.end(), opened.begin(), opened.end());
+  }
   files.insert(files.end(), {"metrics.json", "enface.svg"});
   return files;
 }
