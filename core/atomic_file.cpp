@@ -9,27 +9,43 @@
 
 namespace chordfit {
 
-void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes) {
+namespace {
+
+// The file a write to `path` should replace: through a symbolic link, its target, so that a
+// link the user made (e.g. latest.json -> runs/7/cords.json) still points at the new result
+// instead of being replaced by a plain file. A dangling link is left to the caller's checks.
+std::filesystem::path writeTarget(const std::filesystem::path& path) {
   namespace fs = std::filesystem;
   std::error_code ec;
+  if (!fs::is_symlink(fs::symlink_status(path, ec)) || !fs::exists(path, ec)) return path;
+  const fs::path target = fs::canonical(path, ec);
+  return ec ? path : target;
+}
+
+}  // namespace
+
+void writeFileAtomically(const std::filesystem::path& requested, const std::string& bytes) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  const fs::path path = writeTarget(requested);
   if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
   // The pid keeps concurrent writers (e.g. sharded experiments) from sharing a temp file.
   fs::path tmp = path;
   tmp += ".tmp." + std::to_string(::getpid());
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(path.string() + ": cannot open for writing");
+    if (!out) throw std::runtime_error(requested.string() + ": cannot open for writing");
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.flush();
     if (!out) {
       fs::remove(tmp, ec);
-      throw std::runtime_error(path.string() + ": write failed");
+      throw std::runtime_error(requested.string() + ": write failed");
     }
   }
   fs::rename(tmp, path, ec);
   if (ec) {
     fs::remove(tmp, ec);
-    throw std::runtime_error(path.string() + ": cannot move temporary file into place");
+    throw std::runtime_error(requested.string() + ": cannot move temporary file into place");
   }
 }
 

@@ -10,7 +10,8 @@
 namespace chordfit {
 
 // Writes `bytes` to `path` atomically (temp file in the same directory + rename).
-// Creates missing parent directories. Throws std::runtime_error naming the path on failure.
+// Creates missing parent directories. A symbolic link is written through: its target gets the
+// bytes and the link stays. Throws std::runtime_error naming the path on failure.
 void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
 // The largest input file any reader takes. A fine valve mesh (a million triangles, ten times

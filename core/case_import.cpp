@@ -22,6 +22,15 @@ std::string mm(double value) {
   return text;
 }
 
+// `out` with the error `what` about the input `input` (for the landmarks, those at fault).
+ImportedCase failed(ImportedCase out, ImportInput input, std::string what,
+                    std::vector<int> landmarks = {}) {
+  out.error = std::move(what);
+  out.error_input = input;
+  out.error_landmarks = std::move(landmarks);
+  return out;
+}
+
 // Index into `loop` of the vertex nearest to p, and its distance.
 int nearestInLoop(const Eigen::MatrixXd& V, const std::vector<int>& loop, const Eigen::Vector3d& p,
                   double& distance) {
@@ -126,18 +135,18 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   ImportedCase out;
   const std::vector<std::vector<int>> loops = boundaryLoops(F);
   if (loops.empty()) {
-    out.error = "the mesh has no boundary loop (a valve surface has its annulus as a boundary)";
-    return out;
+    return failed(std::move(out), ImportInput::kMesh,
+                  "the mesh has no boundary loop (a valve surface has its annulus as a boundary)");
   }
   // NaN passes every distance bound below (comparisons with it are false).
   const std::pair<const char*, const Eigen::Vector3d*> named[] = {
       {"anterolateral commissure", &landmarks.anterolateral},
       {"posteromedial commissure", &landmarks.posteromedial},
       {"anterior", &landmarks.anterior}};
-  for (const auto& [what, point] : named) {
-    if (!point->allFinite()) {
-      out.error = std::string("the ") + what + " landmark is not a finite point";
-      return out;
+  for (int k = 0; k < 3; ++k) {
+    if (!named[k].second->allFinite()) {
+      return failed(std::move(out), ImportInput::kLandmarks,
+                    std::string("the ") + named[k].first + " landmark is not a finite point", {k});
     }
   }
   // 1. The loop nearest to both commissures.
@@ -159,16 +168,19 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   static const char* kNames[] = {"anterolateral", "posteromedial"};
   for (int c = 0; c < 2; ++c) {
     if (out.commissure_distance_mm[c] > kMaxLandmarkDistanceMm) {
-      out.error = std::string("the ") + kNames[c] + " commissure landmark is " +
-                  mm(out.commissure_distance_mm[c]) + " from the nearest boundary loop (at most " +
-                  mm(kMaxLandmarkDistanceMm) + "): is it on the annulus?";
-      return out;
+      return failed(std::move(out), ImportInput::kLandmarks,
+                    std::string("the ") + kNames[c] + " commissure landmark is " +
+                        mm(out.commissure_distance_mm[c]) +
+                        " from the nearest boundary loop (at most " + mm(kMaxLandmarkDistanceMm) +
+                        "): is it on the annulus?",
+                    {c});
     }
   }
   if (al == pm) {
-    out.error = "both commissure landmarks are nearest to the same annulus vertex " +
-                std::to_string(ring[al]);
-    return out;
+    return failed(std::move(out), ImportInput::kLandmarks,
+                  "both commissure landmarks are nearest to the same annulus vertex " +
+                      std::to_string(ring[al]),
+                  {0, 1});
   }
   // 2. The arcs, traversed from AL: steps 0..pm_step, then pm_step..n.
   const int pm_step = (pm - al + n) % n;
@@ -179,15 +191,16 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     const double shown = std::isfinite(d_anterior)
                              ? d_anterior
                              : (V.row(ring[0]).transpose() - landmarks.anterior).stableNorm();
-    out.error = "the anterior landmark is " + mm(shown) + " from the annulus ring (at most " +
-                mm(kMaxAnteriorLandmarkDistanceMm) + "): is it on the anterior annulus?";
-    return out;
+    return failed(std::move(out), ImportInput::kLandmarks,
+                  "the anterior landmark is " + mm(shown) + " from the annulus ring (at most " +
+                      mm(kMaxAnteriorLandmarkDistanceMm) + "): is it on the anterior annulus?",
+                  {2});
   }
   if (anterior_step == 0 || anterior_step == pm_step) {
-    out.error =
-        "the anterior landmark is nearest to a commissure; place it on the anterior "
-        "annulus between the commissures";
-    return out;
+    return failed(std::move(out), ImportInput::kLandmarks,
+                  "the anterior landmark is nearest to a commissure; place it on the anterior "
+                  "annulus between the commissures",
+                  {2});
   }
   const bool first_is_anterior = anterior_step < pm_step;
   Eigen::VectorXi labels = Eigen::VectorXi::Constant(V.rows(), -1);
@@ -203,8 +216,9 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     arc_length[(j < pm_step) == first_is_anterior ? kAnterior : kPosterior] += edge;
   }
   if (sources[kPosterior].empty()) {
-    out.error = "no annulus vertex lies between the commissures on the posterior side";
-    return out;
+    // The commissures are neighbours on the ring.
+    return failed(std::move(out), ImportInput::kLandmarks,
+                  "no annulus vertex lies between the commissures on the posterior side", {0, 1});
   }
   out.anterior_fraction = arc_length[kAnterior] / (arc_length[kAnterior] + arc_length[kPosterior]);
   // 3. Labels of the other vertices: the leaflet whose annulus arc is nearer along the edges.
@@ -213,8 +227,8 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   for (Eigen::Index v = 0; v < V.rows(); ++v) {
     if (labels(v) >= 0) continue;
     if (!std::isfinite(to_anterior(v)) && !std::isfinite(to_posterior(v))) {
-      out.error = "vertex " + std::to_string(v) + " is not connected to the annulus";
-      return out;
+      return failed(std::move(out), ImportInput::kMesh,
+                    "vertex " + std::to_string(v) + " is not connected to the annulus");
     }
     labels(v) = to_anterior(v) <= to_posterior(v) ? kAnterior : kPosterior;
   }
@@ -224,11 +238,13 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   Eigen::MatrixXd closed = ring_open;
   if (closed_curve.rows() > 0) {
     if (closed_curve.rows() < 3) {
-      out.error = "the closed annulus curve needs at least 3 points";
-      return out;
+      return failed(std::move(out), ImportInput::kClosedAnnulus,
+                    "the closed annulus curve needs at least 3 points");
     }
-    closed = resampleClosedRing(V, ring, al, pm_step, closed_curve, out.error);
-    if (!out.ok()) return out;
+    std::string curve_error;
+    closed = resampleClosedRing(V, ring, al, pm_step, closed_curve, curve_error);
+    if (!curve_error.empty())
+      return failed(std::move(out), ImportInput::kClosedAnnulus, curve_error);
   }
   out.closed_shift_mm = (closed - ring_open).rowwise().norm().mean();
 

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -36,9 +37,16 @@ struct ImportLandmarks {
   Eigen::Vector3d anterior;       // a point of the anterior annulus, e.g. its midpoint
 };
 
+// The input an import error is about, so that a command names the file (or option) that gave
+// it rather than always the mesh.
+enum class ImportInput { kMesh, kLandmarks, kClosedAnnulus };
+
 struct ImportedCase {
   ValveCase valve_case;  // name, mesh (V, F, leaflet labels, annulus), annulus_closed
   std::string error;     // non-empty: what is wrong with the input, in words
+  ImportInput error_input = ImportInput::kMesh;  // which input `error` is about
+  // With kLandmarks: the landmarks at fault, 0-based in ImportLandmarks' order (AL, PM, anterior).
+  std::vector<int> error_landmarks;
   double commissure_distance_mm[2] = {0.0, 0.0};  // landmark to its ring vertex (AL, PM)
   double anterior_fraction = 0.0;                 // anterior arc / ring perimeter (open state)
   double closed_shift_mm = 0.0;                   // mean ring displacement open -> closed

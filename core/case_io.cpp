@@ -182,9 +182,12 @@ bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, Js
 bool readTracing(const json& entry, const std::string& where, const fs::path& dir,
                  const std::vector<std::string>& leaflet_names, JsonFields& fields,
                  Tracing& tracing) {
-  bool ok = true;
+  // The keys writeCase writes, and "file": a misspelt optional "leaflet" would otherwise
+  // leave the tracing unlabelled, measured to the whole mesh, without a word.
+  bool ok = fields.knownKeys(entry, where, {"plane", "leaflet", "points", "file"});
   if (const json* plane = fields.member(entry, where, "plane", true)) {
     const std::string at = fieldPath(where, "plane");
+    ok &= fields.knownKeys(*plane, at, {"origin", "normal"});
     if (const json* origin = fields.member(*plane, at, "origin", true)) {
       ok &= fields.vec3(*origin, fieldPath(at, "origin"), tracing.plane_origin);
     } else {
@@ -510,6 +513,12 @@ void writeCase(const fs::path& directory, const ValveCase& c) {
   }
   if (c.simulation_json != "{}") document["simulation"] = json::parse(c.simulation_json);
   writeFileAtomically(directory / kCaseFile, document.dump(2) + "\n");
+}
+
+std::vector<std::string> caseFileNames() {
+  return {
+      kCaseFile,       "open.ply",     "leaflets.json", "annulus_ring.json", "annulus_closed.json",
+      "tracings.json", "pm_tips.json", "cords.json",    "tissue.json"};
 }
 
 bool loadTissueFile(const fs::path& path, const std::string& name, ValveCase& valve_case,

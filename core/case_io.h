@@ -3,6 +3,8 @@
 
 #include <filesystem>
 #include <optional>
+#include <string>
+#include <vector>
 
 #include "core/case_data.h"
 #include "core/diagnostics.h"
@@ -25,9 +27,12 @@ bool readTracingsFile(const std::filesystem::path& path,
                       Diagnostics& diagnostics);
 
 // Writes a case directory: open.ply, leaflets.json, annulus_ring.json, annulus_closed.json,
-// and tracings.json / pm_tips.json / cords.json when present, then case.json last (so an
-// interrupted write leaves no loadable half-case). Each file is written atomically.
+// and tracings.json / pm_tips.json / cords.json / tissue.json when present, then case.json
+// last (so an interrupted write leaves no loadable half-case). Each file is written atomically.
 void writeCase(const std::filesystem::path& directory, const ValveCase& valve_case);
+// Every file name writeCase may write, for the commands that declare their outputs
+// (tools/staged_output.h).
+std::vector<std::string> caseFileNames();
 
 // Regional tissue file (docs/case-format.md, `tissue.json`): reads `path` (named `name` in
 // messages) into valve_case.tissue_stiffness, checking one factor in (0, 1000] per mesh

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <sstream>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -20,6 +21,9 @@ json vec3Json(const Eigen::Vector3d& p) { return json::array({p.x(), p.y(), p.z(
 // "point": {"vertices": [i, j, k], "weights": [a, b, c]}; `vertex` becomes the vertex of
 // largest weight unless the file names one.
 bool readCordPoint(const json& value, const std::string& where, JsonFields& fields, Cord& cord) {
+  // The keys writeCordSet writes; any other is named, with the key it may have meant, instead
+  // of being dropped (a misspelt "weights" would only read as missing).
+  const bool keys_known = fields.knownKeys(value, where, {"vertices", "weights"});
   const json* vertices = fields.member(value, where, "vertices", true);
   const json* weights = fields.member(value, where, "weights", true);
   if (vertices == nullptr || weights == nullptr) return false;
@@ -44,7 +48,7 @@ bool readCordPoint(const json& value, const std::string& where, JsonFields& fiel
   b.maxCoeff(&largest);
   cord.vertex = p.vertices[largest];
   cord.point = p;
-  return true;
+  return keys_known;
 }
 
 // Upper bounds of a cord's values: beyond them (1e308 was accepted) the closure diverges,
@@ -184,6 +188,9 @@ bool readTips(const json& array, const std::string& where, JsonFields& fields,
   tips.clear();
   for (std::size_t i = 0; i < array.size(); ++i) {
     const std::string at = indexPath(where, i);
+    // The keys tipsJson writes: a misspelt "closed_position" would otherwise leave the tip
+    // static without a word.
+    ok &= fields.knownKeys(array[i], at, {"name", "position", "closed_position"});
     PmTip tip;
     tip.name = "tip" + std::to_string(i);
     if (const json* name = fields.member(array[i], at, "name", false)) {
@@ -257,24 +264,35 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
 
 bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& file,
                        Diagnostics& diagnostics) {
-  bool ok = true;
+  // A cord set made for another mesh (a make-case truth/cords.json, on the finer truth mesh)
+  // has most of its cords beyond this one: the first few are named, then one line says so,
+  // instead of one line per cord and point.
+  constexpr int kNamedCords = 3;
+  int bad_cords = 0;
   for (std::size_t i = 0; i < set.cords.size(); ++i) {
     const Cord& cord = set.cords[i];
-    if (cord.vertex < 0 || cord.vertex >= vertex_count) {
-      diagnostics.error(file, indexPath("cords", i) + ".vertex",
-                        "vertex " + std::to_string(cord.vertex) + " does not exist (mesh has " +
-                            std::to_string(vertex_count) + " vertices)");
-      ok = false;
-    }
+    std::vector<std::pair<std::string, std::string>> problems;  // field, problem
+    if (cord.vertex < 0 || cord.vertex >= vertex_count)
+      problems.emplace_back(".vertex", "vertex " + std::to_string(cord.vertex) +
+                                           " does not exist (mesh has " +
+                                           std::to_string(vertex_count) + " vertices)");
     if (cord.point) {
       const std::string problem = cordPointProblem(*cord.point, vertex_count);
-      if (!problem.empty()) {
-        diagnostics.error(file, indexPath("cords", i) + ".point", problem);
-        ok = false;
-      }
+      if (!problem.empty()) problems.emplace_back(".point", problem);
     }
+    if (problems.empty()) continue;
+    if (++bad_cords > kNamedCords) continue;
+    for (const auto& [field, problem] : problems)
+      diagnostics.error(file, indexPath("cords", i) + field, problem);
   }
-  return ok;
+  if (bad_cords > kNamedCords)
+    diagnostics.error(file, "cords",
+                      std::to_string(bad_cords - kNamedCords) + " more cords (" +
+                          std::to_string(bad_cords) + " of " + std::to_string(set.cords.size()) +
+                          ") attach beyond the mesh's " + std::to_string(vertex_count) +
+                          " vertices: was this cord set made for another mesh? (a make-case "
+                          "truth/cords.json belongs to truth/case)");
+  return bad_cords == 0;
 }
 
 json tipsJson(const std::vector<PmTip>& tips) {

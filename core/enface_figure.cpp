@@ -6,6 +6,7 @@
 #include <sstream>
 #include <vector>
 
+#include "core/carpentier.h"
 #include "core/metrics.h"
 #include "core/svg_text.h"
 
@@ -57,9 +58,10 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   if (ring_points.empty()) lo = hi = Eigen::Vector2d::Zero();
   lo -= Eigen::Vector2d::Constant(kMarginMm);
   hi += Eigen::Vector2d::Constant(kMarginMm);
-  // Wide enough for the title (about 7 px per character at 13 px).
+  // Wide enough for the legend's height scale (~490 px) and the title (about 7 px per
+  // character at 13 px).
   const double width =
-      std::max({320.0, (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
+      std::max({500.0, (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
   const double height = (hi.y() - lo.y()) * s;
   const double left = 0.5 * (width - (hi.x() - lo.x()) * s);
   auto px = [&](const Eigen::Vector2d& q) {
@@ -112,6 +114,27 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   svg << "</g>\n<polygon class=\"annulus\" points=\"" << points(ring_points)
       << "\" fill=\"none\" stroke=\"" << kRingColour << "\" stroke-width=\"1.5\"/>\n";
 
+  // Carpentier segment names outside the ring, each beside the middle of its stretch of
+  // annulus (its ring points' mean, pushed out from the centre into the margin).
+  const Eigen::VectorXi vertex_segment = openStateSegments(mesh);
+  std::vector<Eigen::Vector2d> segment_sum(6, Eigen::Vector2d::Zero());
+  std::vector<int> segment_count(6, 0);
+  for (std::size_t i = 0; i < ring_points.size(); ++i) {
+    const int segment = vertex_segment(mesh.annulus(static_cast<Eigen::Index>(i)));
+    if (segment < 0 || segment >= 6) continue;
+    segment_sum[segment] += ring_points[i];
+    ++segment_count[segment];
+  }
+  svg << "<g class=\"segments\" font-size=\"11\" fill=\"#222\" text-anchor=\"middle\">\n";
+  for (int segment = 0; segment < 6; ++segment) {
+    if (segment_count[segment] == 0) continue;
+    const Eigen::Vector2d middle = segment_sum[segment] / segment_count[segment];
+    const Eigen::Vector2d label = middle + 2.5 * middle.normalized();
+    svg << "<text x=\"" << px(label).x() << "\" y=\"" << px(label).y() + 4 << "\">"
+        << escapeXml(segmentName(mesh.leaflet_names, segment)) << "</text>\n";
+  }
+  svg << "</g>\n";
+
   // Legend: two rows under the drawing.
   const double y0 = kTitlePx + height + 16.0;
   auto swatch = [&](double x, double y, const std::string& fill, const std::string& label) {
@@ -135,14 +158,21 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
         << shade(0, t) << "\"/><rect x=\"" << x << "\" y=\"" << y1 - 4
         << "\" width=\"20\" height=\"6\" fill=\"" << shade(1, t) << "\"/>\n";
     if (k % 2 == 0) {
+      // The end swatches stand for every height beyond them.
+      const std::string prefix = k == 0 ? "\xE2\x89\xA4 " : k == steps ? "\xE2\x89\xA5 " : "";
       svg << "<text x=\"" << x + 10 << "\" y=\"" << y1 + 13
-          << "\" font-size=\"10\" text-anchor=\"middle\">" << kDarkestMm + 2.0 * k << "</text>\n";
+          << "\" font-size=\"10\" text-anchor=\"middle\">" << prefix << kDarkestMm + 2.0 * k
+          << "</text>\n";
     }
   }
+  const double rows_x = 240.0 + 22.0 * (steps + 1) + 4.0;
+  svg << "<text x=\"" << rows_x << "\" y=\"" << y1 - 4 << "\" font-size=\"9\">"
+      << escapeXml(anterior) << "</text><text x=\"" << rows_x << "\" y=\"" << y1 + 4
+      << "\" font-size=\"9\">" << escapeXml(posterior) << "</text>\n";
   char note[160];
   std::snprintf(note, sizeof note,
-                "atrial view, anterior up; leaflets drawn \xC2\xB1 %.2g mm (tissue), the highest "
-                "on top",
+                "atrial view, anterior up, anterolateral commissure left; leaflets drawn "
+                "\xC2\xB1 %.2g mm (tissue), the highest on top",
                 options.tissue_radius_mm);
   svg << "<text x=\"10\" y=\"" << y1 + 30 << "\" font-size=\"11\" fill=\"#444\">" << note
       << "</text>\n</svg>\n";

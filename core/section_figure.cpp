@@ -129,7 +129,9 @@ std::string sectionFigureSvg(const ValveMesh& mesh, const Eigen::MatrixXd& close
   }
   SvgFigureOptions figure;
   figure.title = options.title;
-  figure.x_label = "in-plane axis u (mm)";
+  // u's direction (tracingPlanes: the plane's angle turns it from a toward l, the
+  // anterolateral side), so that a reader can tell which end of a section is anterior.
+  figure.x_label = "u (mm): +u anterior at 0 deg, turned toward AL";
   figure.y_label = "height along n_AP, atrium up (mm)";
   figure.columns = std::max(1, std::min<int>(3, static_cast<int>(planes.size())));
   return crossSectionsSvg(panels, figure);
@@ -140,8 +142,20 @@ std::string caseSectionFigureSvg(const ValveCase& valve_case,
                                  const SectionFigureOptions& options) {
   if (valve_case.tracings.empty()) return "";
   const ClosedAnnulus closed = closedAnnulus(valve_case);
-  return sectionFigureSvg(valve_case.mesh, closed.ring, valve_case.tracings,
-                          tracingPlanes(valve_case.tracings, closed.frame), layers, options);
+  // A tracing's normal may have either sign, and u = normal x w with it: turn each plane so
+  // that +u is the direction at its angle from the anterior axis (as longAxisPlanes makes
+  // them), the orientation the figure's axis label states.
+  std::vector<ImagePlane> planes = tracingPlanes(valve_case.tracings, closed.frame);
+  for (ImagePlane& plane : planes) {
+    const Eigen::Vector3d at_angle =
+        std::cos(plane.angle) * closed.frame.a + std::sin(plane.angle) * closed.frame.l;
+    if (plane.u.dot(at_angle) < 0.0) {
+      plane.u = -plane.u;
+      plane.normal = -plane.normal;
+    }
+  }
+  return sectionFigureSvg(valve_case.mesh, closed.ring, valve_case.tracings, planes, layers,
+                          options);
 }
 
 }  // namespace chordfit

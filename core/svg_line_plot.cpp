@@ -55,7 +55,10 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
   xr.finish();
   yr.finish();
   const std::vector<double> xt = niceTicks(xr.lo, xr.hi);
-  const std::vector<double> yt = niceTicks(yr.lo, yr.hi);
+  // On a log axis the ticks are values (1, 2, 5 x 10^k), placed at their exponents.
+  std::vector<double> yt = panel.log_y ? logTicks(yr.lo, yr.hi) : niceTicks(yr.lo, yr.hi);
+  if (panel.log_y)
+    for (double& y : yt) y = std::log10(y);
   xr.lo = std::min(xr.lo, xt.front()), xr.hi = std::max(xr.hi, xt.back());
   yr.lo = std::min(yr.lo, yt.front()), yr.hi = std::max(yr.hi, yt.back());
   auto px = [&](double x) { return left + margin_left + (x - xr.lo) / (xr.hi - xr.lo) * plot_w; };
@@ -78,8 +81,10 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
   for (double y : yt) {
     svg << "<line x1='" << left + margin_left << "' y1='" << py(y) << "' x2='"
         << left + margin_left + plot_w << "' y2='" << py(y) << "' stroke='#ddd'/>\n";
+    // A log tick is 1, 2 or 5 x 10^k: its own value is its precision.
+    const double value = panel.log_y ? std::pow(10.0, y) : y;
     const std::string label =
-        panel.log_y ? formatTick(std::pow(10.0, y), std::pow(10.0, y)) : formatTick(y, y_step);
+        panel.log_y ? formatTick(value, value * (1.0 - 1e-9)) : formatTick(y, y_step);
     svg << "<text x='" << left + margin_left - 6 << "' y='" << py(y) + 4
         << "' text-anchor='end' font-size='11'>" << label << "</text>\n";
   }
@@ -89,6 +94,10 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
       << ") rotate(-90)' text-anchor='middle' font-size='12'>" << escapeXml(panel.y_label)
       << "</text>\n";
 
+  // The legend's width from its longest label (about 6.2 px per character at 11 px).
+  std::size_t longest_label = 0;
+  for (const PlotSeries& s : panel.series) longest_label = std::max(longest_label, s.label.size());
+  const double legend_width = 30.0 + 6.2 * static_cast<double>(longest_label);
   for (std::size_t k = 0; k < panel.series.size(); ++k) {
     const PlotSeries& s = panel.series[k];
     const char* colour = kPalette[k % (sizeof kPalette / sizeof *kPalette)];
@@ -108,8 +117,8 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
         path += buffer;
         pen_down = true;
       }
-      svg << "<path d='" << path << "' fill='none' stroke='" << colour
-          << "' stroke-width='1.5'/>\n";
+      svg << "<path d='" << path << "' fill='none' stroke='" << colour << "' stroke-width='1.5'"
+          << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
     }
     if (s.markers) {
       for (std::size_t i = 0; i < n; ++i) {
@@ -120,9 +129,14 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
       }
     }
     const double ly = top + margin_top + 14 + 16 * static_cast<double>(k);
-    const double lx = left + margin_left + plot_w - 150;
-    svg << "<line x1='" << lx << "' y1='" << ly - 4 << "' x2='" << lx + 18 << "' y2='" << ly - 4
-        << "' stroke='" << colour << "' stroke-width='2'/>\n";
+    const double lx = left + margin_left + plot_w - legend_width;
+    if (s.line)
+      svg << "<line x1='" << lx << "' y1='" << ly - 4 << "' x2='" << lx + 18 << "' y2='" << ly - 4
+          << "' stroke='" << colour << "' stroke-width='2'"
+          << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
+    else  // markers only: a marker, not a line, in the legend
+      svg << "<circle cx='" << lx + 9 << "' cy='" << ly - 4 << "' r='3' fill='" << colour
+          << "'/>\n";
     svg << "<text x='" << lx + 22 << "' y='" << ly << "' font-size='11'>" << escapeXml(s.label)
         << "</text>\n";
   }
@@ -140,11 +154,35 @@ std::vector<double> niceTicks(double lo, double hi, int target) {
     if (step >= raw * (1.0 - 1e-9)) break;  // round-off must not skip a step
   }
   std::vector<double> ticks;
-  for (double t = std::floor(lo / step) * step; t <= hi + 0.5 * step; t += step) {
+  for (double t = std::floor(lo / step) * step;; t += step) {
     ticks.push_back(std::abs(t) < 1e-12 * step ? 0.0 : t);
-    if (ticks.size() > 100) break;
+    if (t >= hi - 1e-9 * step || ticks.size() > 100) break;
   }
   return ticks;
+}
+
+std::vector<double> logTicks(double lo_exponent, double hi_exponent, int max_ticks) {
+  const int first = static_cast<int>(std::floor(lo_exponent + 1e-9));
+  const int last = static_cast<int>(std::ceil(hi_exponent - 1e-9));
+  for (const std::vector<double>& mantissas :
+       {std::vector<double>{1, 2, 5}, std::vector<double>{1}}) {
+    std::vector<double> ticks;
+    for (int k = first; k <= last; ++k) {
+      for (double m : mantissas) {
+        const double exponent = std::log10(m) + k;
+        // Keep the last tick at or below the range and the first at or above it.
+        if (exponent < lo_exponent - 1e-9) {
+          ticks.assign(1, m * std::pow(10.0, k));
+          continue;
+        }
+        ticks.push_back(m * std::pow(10.0, k));
+        if (exponent >= hi_exponent - 1e-9) break;
+      }
+      if (!ticks.empty() && std::log10(ticks.back()) >= hi_exponent - 1e-9) break;
+    }
+    if (static_cast<int>(ticks.size()) <= max_ticks || mantissas.size() == 1) return ticks;
+  }
+  return {};
 }
 
 std::string svgLinePlots(const std::vector<PlotPanel>& panels, int columns, int panel_width,

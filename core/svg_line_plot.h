@@ -14,6 +14,7 @@ struct PlotSeries {
   std::vector<double> y;  // NaN values break the line
   bool markers = false;   // draw a small circle at each point
   bool line = true;
+  bool dashed = false;  // a dashed line: tells apart a series drawn over another
 };
 
 struct PlotPanel {
@@ -29,7 +30,13 @@ struct PlotPanel {
 std::string svgLinePlots(const std::vector<PlotPanel>& panels, int columns = 1,
                          int panel_width = 560, int panel_height = 360);
 
-// Tick positions covering [lo, hi] with about `target` steps of 1, 2 or 5 x 10^k.
+// Tick positions covering [lo, hi] with about `target` steps of 1, 2 or 5 x 10^k: the first
+// at or below lo, the last at or above hi, so no point lies on the frame beyond a tick.
 std::vector<double> niceTicks(double lo, double hi, int target = 6);
+
+// Tick values (not exponents) for a log axis over [10^lo_exponent, 10^hi_exponent]: 1, 2, 5
+// x 10^k, or the decades alone when those would be more than `max_ticks`; the first at or
+// below the range, the last at or above it.
+std::vector<double> logTicks(double lo_exponent, double hi_exponent, int max_ticks = 9);
 
 }  // namespace chordfit

@@ -466,4 +466,13 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   writeCase(directory, s.valve_case);
 }
 
+std::vector<std::string> syntheticCaseFileNames() {
+  std::vector<std::string> files = caseFileNames();
+  for (const char* name : {"cords.json", "closed.ply", "closed.vtk", "metrics.json", "truth.json",
+                           "cross_sections.svg", "enface.svg"})
+    files.push_back(std::string("truth/") + name);
+  for (const std::string& name : caseFileNames()) files.push_back("truth/case/" + name);
+  return files;
+}
+
 }  // namespace chordfit

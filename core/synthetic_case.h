@@ -136,6 +136,9 @@ CordSet trueCordsOnCaseMesh(const CordSet& case_cords, const CordSet& truth_cord
 // case. Every file is written atomically. No file records wall times, so the same options
 // give byte-identical files.
 void writeSyntheticCase(const std::filesystem::path& directory, const SyntheticCase& synthetic);
+// Every file writeSyntheticCase may write, relative to the directory: caseFileNames(), then the
+// truth's ("truth/cords.json", ..., "truth/case/case.json", ...).
+std::vector<std::string> syntheticCaseFileNames();
 
 // The JSON text of truth/truth.json.
 std::string syntheticTruthJson(const SyntheticCase& synthetic);

@@ -70,13 +70,20 @@ class ProgressAndBudget : public ceres::IterationCallback {
   ProgressAndBudget(FitObjective& objective, const std::vector<double>& x)
       : objective_(objective), x_(x) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
-    const auto at = objective_.cached(toVector(x_.data(), static_cast<int>(x_.size())));
+    // After a rejected step x stays where it was, but Ceres reports the trial point's cost
+    // (measured: costs above the best with one closure each); the trial is the closure run
+    // last, so its AvgD goes with that cost.
+    const auto at = summary.step_is_successful
+                        ? objective_.cached(toVector(x_.data(), static_cast<int>(x_.size())))
+                        : objective_.latest();
     objective_.recordIteration("ceres", summary.iteration, summary.cost,
                                at ? at->mean_deviation_mm : NAN);
-    // The next Jacobian is at a new point; the current point's count of non-slack
-    // parameters is the estimate (jacobian() refuses it exactly if the budget falls short).
-    if (!objective_.budgetAllows(
-            1 + objective_.jacobianSims(toVector(x_.data(), static_cast<int>(x_.size()))))) {
+    // Go on while a trial step fits: it needs one closure and uses the Jacobian at x, already
+    // computed. When an accepted trial's own Jacobian no longer fits, jacobian() refuses it
+    // and the solve ends there, the trial kept as the best point seen. (Stopping as soon as
+    // a trial *and* its Jacobian no longer fit left up to a Jacobian's worth of the budget
+    // unused, and a fit without a single step after its first Jacobian.)
+    if (!objective_.budgetAllows(1)) {
       budget_reached = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
@@ -108,10 +115,13 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   if (n == 0) return "nothing to fit (every cord is locked)";
   std::vector<double> x(parameters.initial().data(), parameters.initial().data() + n);
   const bool start_known = objective.cached(parameters.initial()) != nullptr;
-  if (!objective.budgetAllows((start_known ? 0 : 1) +
-                              objective.jacobianSims(parameters.initial()))) {
+  // The start's closure, its Jacobian and one trial step: less cannot move x.
+  const int first_step_sims =
+      (start_known ? 0 : 1) + objective.jacobianSims(parameters.initial()) + 1;
+  if (!objective.budgetAllows(first_step_sims)) {
     return "budget of " + std::to_string(objective.maxSims()) +
-           " forward runs is below one Jacobian (" + std::to_string(1 + 2 * n) + " runs)";
+           " forward runs is below one Jacobian and a step (" + std::to_string(first_step_sims) +
+           " runs, " + std::to_string(objective.maxSims() - objective.forwardSims()) + " left)";
   }
 
   ceres::Problem problem;
@@ -157,7 +167,13 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
   if (callback.budget_reached || objective.budgetRefused()) {
-    return "budget of " + std::to_string(objective.maxSims()) + " forward runs reached";
+    const int refused = objective.refusedJacobianSims();
+    return "budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
+           (refused > 0
+                ? " (the Jacobian at the last accepted step needs " + std::to_string(refused) +
+                      " runs, " + std::to_string(objective.maxSims() - objective.forwardSims()) +
+                      " were left)"
+                : std::string());
   }
   return std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
                      : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "

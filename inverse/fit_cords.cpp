@@ -1,10 +1,20 @@
 #include "inverse/fit_cords.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "core/metrics.h"
 
 namespace chordfit::inverse {
+
+std::string prefitSkipReason(const CordSet& seed) {
+  // The cord pre-fits rescale free cords the user did not set; with none, each of their
+  // closures would close the seed again.
+  const bool any_free =
+      std::any_of(seed.cords.begin(), seed.cords.end(), [](const Cord& c) { return !c.locked; });
+  if (!any_free || std::any_of(seed.cords.begin(), seed.cords.end(), isFreeNonManual)) return "";
+  return "every free cord is manual (the user's values are the optimiser's start)";
+}
 
 FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
                     const SimulationSettings& settings, const FitOptions& options) {
@@ -55,8 +65,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto budget_allows = [&](int sims) {
     return outcome.forward_sims + sims + 1 <= options.max_sims;
   };
+  const std::string skip_reason = prefitSkipReason(seed);
+  const bool prefit_has_cords = skip_reason.empty();
+  if ((options.prefit.enabled || options.segment_prefit.enabled) && seed_parameters.size() > 0)
+    outcome.prefit_skipped = skip_reason;
   const int common_sims = options.prefit.points + options.prefit.refine_points;
-  if (options.prefit.enabled && seed_parameters.size() > 0 && budget_allows(common_sims)) {
+  if (options.prefit.enabled && prefit_has_cords && seed_parameters.size() > 0 &&
+      budget_allows(common_sims)) {
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
     // The kind stage only when it fits as well (a small budget keeps the common factor).
@@ -71,7 +86,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     start_evaluation = result.best;
     record("prefit", 1, start_evaluation, start_evaluation.cost);
   }
-  if (options.segment_prefit.enabled && seed_parameters.size() > 0 &&
+  if (options.segment_prefit.enabled && prefit_has_cords && seed_parameters.size() > 0 &&
       options.mode != ParameterMode::kGroups && budget_allows(6 * options.segment_prefit.points)) {
     SegmentPrefitOptions segment = options.segment_prefit;
     segment.threads = options.finite_difference.threads;

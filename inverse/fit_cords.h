@@ -49,6 +49,10 @@ struct FitOptions {
   std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
 };
 
+// Why the cord pre-fits (global and segment) have nothing to do on `seed`, or "": they
+// rescale only free cords without a manual value.
+std::string prefitSkipReason(const CordSet& seed);
+
 struct FitOutcome {
   std::string error;  // bad options or a failed seed closure; the rest is then unset
   CordSet seed;       // as given
@@ -58,6 +62,9 @@ struct FitOutcome {
   // Each fitted cord's span there (closedSpans, cord_insertion.h): below its rest length by
   // more than kSlackMarginMm = slack.
   Eigen::VectorXd closed_spans;
+  // Why the global and segment pre-fits did not run although enabled ("" when they ran or
+  // were disabled): e.g. every free cord is manual, so no factor would change a cord.
+  std::string prefit_skipped;
   double prefit_factor = 1.0;  // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment

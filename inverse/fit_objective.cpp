@@ -60,6 +60,7 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::jacobian(const Eigen::Vecto
   if (entry->jacobian) return entry->jacobian;
   if (!budgetAllows(jacobianSims(x))) {
     budget_refused_ = true;
+    refused_jacobian_sims_ = jacobianSims(x);
     error = "forward-run budget exhausted";
     return nullptr;
   }

@@ -67,6 +67,13 @@ class FitObjective {
   std::shared_ptr<const ForwardEvaluation> best() const { return best_; }
   // Adds a full closure run elsewhere (e.g. the pre-fit's best) to the cache, uncounted.
   void remember(const ForwardEvaluation& evaluation);
+  // The closure run or remembered last (a rejected trial step's, in the Ceres driver), or
+  // nullptr before any.
+  std::shared_ptr<const ForwardEvaluation> latest() const {
+    return cache_.empty() ? nullptr : cache_.back().evaluation;
+  }
+  // Forward runs of the last Jacobian the budget refused (0: none refused).
+  int refusedJacobianSims() const { return refused_jacobian_sims_; }
   // The cached full closure at x, or nullptr (no forward run).
   std::shared_ptr<const ForwardEvaluation> cached(const Eigen::VectorXd& x);
   // The Jacobian computed at x, if it is still cached, or nullptr (no forward run).
@@ -88,6 +95,7 @@ class FitObjective {
   int max_sims_;
   int sims_;
   bool budget_refused_ = false;
+  int refused_jacobian_sims_ = 0;
   Clock::time_point start_;
   std::function<void(const IterationRecord&)> on_iteration_;
   std::deque<Entry> cache_;  // most recent last; a few entries suffice (LM: current + trial)

@@ -77,6 +77,8 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
   PrefitResult result;
   result.start = seed;
   result.best = seed_evaluation;
+  // Every free cord manual (a seed the user edited): every factor gives the seed again.
+  if (std::none_of(seed.cords.begin(), seed.cords.end(), isFreeNonManual)) return result;
   const Eigen::VectorXd no_regularisation;
   const double seed_cost = residual.cost(seed_evaluation.data, no_regularisation);
 
@@ -131,10 +133,13 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
 
   // Kind stage: secondaries, then primaries, each around the current factors.
   const int kind_half = options.kind_points / 2;
-  const bool has_both = std::any_of(seed.cords.begin(), seed.cords.end(),
-                                    [](const Cord& c) { return c.kind == CordKind::kPrimary; }) &&
-                        std::any_of(seed.cords.begin(), seed.cords.end(),
-                                    [](const Cord& c) { return c.kind == CordKind::kSecondary; });
+  // Only kinds the factors act on: a kind whose cords are all manual or locked would close
+  // the same cords again.
+  auto has_free = [&](CordKind kind) {
+    return std::any_of(seed.cords.begin(), seed.cords.end(),
+                       [&](const Cord& c) { return c.kind == kind && isFreeNonManual(c); });
+  };
+  const bool has_both = has_free(CordKind::kPrimary) && has_free(CordKind::kSecondary);
   for (int kind = 0; has_both && kind_half > 0 && kind < 2; ++kind) {
     const bool secondaries = kind == 0;
     std::vector<std::pair<double, double>> pairs;

@@ -166,6 +166,39 @@ TEST(CaseImport, AnAnteriorLandmarkOffTheAnnulusOrANonFiniteLandmarkIsRefused) {
   EXPECT_EQ(error(not_finite), "the posteromedial commissure landmark is not a finite point");
 }
 
+// Each error says which input it is about, so that import-mesh names the landmarks' point or
+// the closed annulus file instead of the mesh file.
+TEST(CaseImport, AnErrorNamesTheInputAndTheLandmarksAtFault) {
+  const ValveCase& truth = valve().valve_case;
+  const ImportLandmarks good = landmarksOf(truth.mesh);
+  const auto import = [&](const ImportLandmarks& l, const Eigen::MatrixXd& curve) {
+    return importValveCase(truth.mesh.V, truth.mesh.F, l, curve, "bad");
+  };
+  const auto expectLandmarks = [](const ImportedCase& imported, std::vector<int> at_fault) {
+    EXPECT_FALSE(imported.ok());
+    EXPECT_EQ(imported.error_input, ImportInput::kLandmarks) << imported.error;
+    EXPECT_EQ(imported.error_landmarks, at_fault) << imported.error;
+  };
+  ImportLandmarks not_finite = good;
+  not_finite.anterior.x() = INFINITY;
+  expectLandmarks(import(not_finite, {}), {2});
+  ImportLandmarks far = good;
+  far.anterior.x() += 40.0;
+  expectLandmarks(import(far, {}), {2});
+  ImportLandmarks far_commissure = good;
+  far_commissure.posteromedial.z() += 20.0;
+  expectLandmarks(import(far_commissure, {}), {1});
+  ImportLandmarks same = good;
+  same.posteromedial = good.anterolateral;
+  expectLandmarks(import(same, {}), {0, 1});
+
+  const ImportedCase short_curve = import(good, truth.annulus_closed.topRows(2));
+  EXPECT_EQ(short_curve.error_input, ImportInput::kClosedAnnulus) << short_curve.error;
+  const Eigen::MatrixXd V{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const Eigen::MatrixXi F{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  EXPECT_EQ(importValveCase(V, F, good, {}, "closed").error_input, ImportInput::kMesh);
+}
+
 TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   TempDir dir;
   const ValveCase& truth = valve().valve_case;
@@ -209,11 +242,6 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   EXPECT_EQ((*loaded->tips)[1].position, Eigen::Vector3d(2, -12, -18));
   EXPECT_EQ(runChordfit("validate " + quoted(case_dir)).exit_code, 0);
 
-  r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
-                  quoted(dir / "landmarks.json") + " --out " + quoted(case_dir));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("exists and is not empty"), std::string::npos) << r.err;
-
   writePointList(dir / "two.json", points.topRows(2));
   r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
                   quoted(dir / "two.json") + " --out " + quoted(dir / "other"));
@@ -224,9 +252,99 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("missing.ply"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "other"));
-  for (const auto& entry : fs::directory_iterator(dir.path())) {
-    EXPECT_EQ(entry.path().string().find("import-tmp"), std::string::npos) << entry.path();
-  }
+}
+
+// The parametric valve's mesh and landmarks as a user's files in `dir`: valve.ply and
+// landmarks.json; returns the landmarks (one per row: AL, PM, anterior).
+Eigen::MatrixXd writeImportInputs(const fs::path& dir) {
+  const ValveCase& truth = valve().valve_case;
+  writePly(dir / "valve.ply", truth.mesh.V, truth.mesh.F);
+  const ImportLandmarks l = landmarksOf(truth.mesh);
+  Eigen::MatrixXd points(3, 3);
+  points << l.anterolateral.transpose(), l.posteromedial.transpose(), l.anterior.transpose();
+  writePointList(dir / "landmarks.json", points);
+  return points;
+}
+
+// import-mesh used to refuse any directory that was not empty, its own earlier output too.
+// Now it publishes as every command does: an earlier run's files it no longer writes go, a
+// file the user put there stays, and one of the user's that the case would replace (the
+// mesh kept as open.ply beside it) is refused, leaving everything as it was.
+TEST(ImportMeshCli, ReplacesAnEarlierImportKeepsTheUsersFilesAndRefusesToReplaceOne) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  writePointList(dir / "tips.json", Eigen::MatrixXd{{2, 12, -18}, {2, -12, -18}});
+  const std::string inputs =
+      quoted(dir / "valve.ply") + " --landmarks " + quoted(dir / "landmarks.json");
+  const fs::path case_dir = dir / "case";
+  auto r = runChordfit("import-mesh " + inputs + " --pm-tips " + quoted(dir / "tips.json") +
+                       " --out " + quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(case_dir / "pm_tips.json"));
+  testing::writeText(case_dir / "notes.txt", "the user's");
+
+  r = runChordfit("import-mesh " + inputs + " --out " + quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + (case_dir / "case.json").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("; removed pm_tips.json (an earlier run's)"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(case_dir / "pm_tips.json"));
+  EXPECT_EQ(testing::readText(case_dir / "notes.txt"), "the user's");
+  EXPECT_EQ(runChordfit("validate " + quoted(case_dir)).exit_code, 0);
+
+  const fs::path mine = dir / "mine";
+  fs::create_directories(mine);
+  fs::copy_file(dir / "valve.ply", mine / "open.ply");
+  const std::string mesh_bytes = testing::readText(mine / "open.ply");
+  r = runChordfit("import-mesh " + quoted(mine / "open.ply") + " --landmarks " +
+                  quoted(dir / "landmarks.json") + " --out " + quoted(mine));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: import-mesh: --out: " + (mine / "open.ply").string() +
+                       ": exists and was not written by chordfit; import-mesh does not replace "
+                       "it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::readText(mine / "open.ply"), mesh_bytes);
+  EXPECT_EQ(std::distance(fs::directory_iterator(mine), fs::directory_iterator()), 1)
+      << "nothing else written, no staging directory left";
+}
+
+// Landmark problems used to be reported under the mesh file's name; they are the --landmarks
+// file's, at the point that is wrong, and a closed-annulus problem is that file's.
+TEST(ImportMeshCli, NamesTheLandmarkPointOrTheClosedAnnulusFileAtFault) {
+  TempDir dir;
+  const Eigen::MatrixXd points = writeImportInputs(dir.path());
+  const auto import = [&](const fs::path& landmarks, const std::string& more) {
+    return runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                       quoted(landmarks) + more + " --out " + quoted(dir / "case"));
+  };
+  Eigen::MatrixXd far = points;
+  far(2, 0) += 40.0;
+  writePointList(dir / "far.json", far);
+  auto r = import(dir / "far.json", "");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(
+      r.err.find("error: " + (dir / "far.json").string() + ": point 3: the anterior landmark is "),
+      std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(" mm from the annulus ring (at most 10.00 mm)"), std::string::npos) << r.err;
+  Eigen::MatrixXd far_commissure = points;
+  far_commissure(1, 2) += 20.0;
+  writePointList(dir / "far_commissure.json", far_commissure);
+  r = import(dir / "far_commissure.json", "");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: " + (dir / "far_commissure.json").string() +
+                       ": point 2: the posteromedial commissure landmark is "),
+            std::string::npos)
+      << r.err;
+  writePointList(dir / "closed.json", valve().valve_case.annulus_closed.topRows(2), true);
+  r = import(dir / "landmarks.json", " --closed-annulus " + quoted(dir / "closed.json"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: " + (dir / "closed.json").string() +
+                       ": the closed annulus curve needs at least 3 points"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("valve.ply"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "case"));
 }
 
 }  // namespace

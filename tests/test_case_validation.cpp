@@ -1,5 +1,6 @@
 // `chordfit validate` end to end: a good case passes with a summary; every kind of bad input
 // named by the foundation issue gives "error: <file>: <where>: <problem>" and exit code 2.
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <regex>
@@ -272,6 +273,45 @@ TEST_F(ValidateCommand, ReportsAnUnknownCordKeySuggestingTheNearestKnownOne) {
               "\"compliance_mm_per_N\"\\?");
 }
 
+// A misspelt "closed_position" used to leave the tip static without a word, in pm_tips.json
+// as in a cord set's tips.
+TEST_F(ValidateCommand, ReportsAnUnknownTipKeySuggestingTheNearestKnownOne) {
+  writeText(dir_ / "pm_tips.json",
+            R"({"tips": [{"name": "anterolateral", "position": [0, 5, -20],
+                          "closed_positon": [0, 5, -19]}]})");
+  editCaseJson([](nlohmann::json& j) { j["pm_tips"] = "pm_tips.json"; });
+  expectError("pm_tips\\.json",
+              "tips\\[0\\]\\.closed_positon: unknown key; did you mean \"closed_position\"\\?");
+
+  editCaseJson([](nlohmann::json& j) { j.erase("pm_tips"); });
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), Eigen::Vector3d(0, 5, -19)});
+  Cord cord;
+  cord.vertex = 9;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords = {cord};
+  writeCordSet(dir_ / "cords.json", set);
+  nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
+  cords["tips"][0]["label"] = "AL";
+  writeText(dir_ / "cords.json", cords.dump());
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json", "tips\\[0\\]\\.label: unknown key\n");
+}
+
+// A misspelt "leaflet" used to leave the tracing unlabelled (measured to the whole mesh).
+TEST_F(ValidateCommand, ReportsAnUnknownTracingKeySuggestingTheNearestKnownOne) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflett": "posterior", "points": [[1, 0, -2], [2, 0, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.leaflett: unknown key; did you mean \"leaflet\"\\?");
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0], "spacing": 1},
+                              "points": [[1, 0, -2], [2, 0, -2]]}]})");
+  expectError("tracings\\.json", "tracings\\[0\\]\\.plane\\.spacing: unknown key\n");
+}
+
 TEST_F(ValidateCommand, ReportsATimeStepTooSmallToUse) {
   editCaseJson([](nlohmann::json& j) { j["simulation"] = {{"dt_ms", 1e-300}}; });
   expectError("[^\\n]*case\\.json", "simulation\\.dt_ms: 1e-300 is below");
@@ -427,6 +467,65 @@ TEST(CaseRoundTrip, WriteThenLoadGivesTheSameCase) {
   EXPECT_EQ(loaded->tracings[0].leaflet, 1);
   ASSERT_TRUE(loaded->tips.has_value());
   EXPECT_EQ((*loaded->tips)[0].position, Eigen::Vector3d(1, 2, -20));
+}
+
+// The tiny cone with every optional part a case can have: tracings with a leaflet, PM tips with
+// closed positions, cords with a point insertion, regional tissue.
+ValveCase tinyConeCaseWithEverything() {
+  ValveCase original = tinyConeCase();
+  Tracing t;
+  t.points = Eigen::MatrixXd::Random(4, 3);
+  t.points.col(1).setZero();
+  t.plane_origin = Eigen::Vector3d(0, 0, 0);
+  t.plane_normal = Eigen::Vector3d(0, 1, 0);
+  t.leaflet = 0;
+  original.tracings.push_back(t);
+  const PmTip tip{"anterolateral", Eigen::Vector3d(1, 2, -20), Eigen::Vector3d(1, 2, -19)};
+  original.tips = std::vector<PmTip>{tip};
+  CordSet set;
+  set.tips = {tip};
+  Cord cord;
+  cord.point = CordPoint{{8, 9, 1}, Eigen::Vector3d(0.5, 0.3, 0.2)};
+  cord.vertex = 8;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords = {cord};
+  original.cords = set;
+  original.tissue_stiffness = Eigen::VectorXd::Constant(original.mesh.V.rows(), 0.5);
+  return original;
+}
+
+// Unknown keys are errors in tips, tracings, cords and their points: every key chordfit writes
+// there must be among the known ones when the case is read back.
+TEST(CaseRoundTrip, EveryKeyChordfitWritesIsKnownOnReading) {
+  TempDir dir;
+  const ValveCase original = tinyConeCaseWithEverything();
+  writeCase(dir.path(), original);
+  const PmTip& tip = (*original.tips)[0];
+  const Cord& cord = original.cords->cords[0];
+  Diagnostics diagnostics;
+  const auto loaded = loadCase(dir.path(), diagnostics);
+  ASSERT_TRUE(loaded.has_value()) << diagnostics.problems().front().file << ": "
+                                  << diagnostics.problems().front().where << ": "
+                                  << diagnostics.problems().front().what;
+  EXPECT_EQ((*loaded->tips)[0].closed_position, tip.closed_position);
+  EXPECT_EQ(loaded->cords->tips[0].closed_position, tip.closed_position);
+  EXPECT_EQ(loaded->cords->cords[0].point->weights, cord.point->weights);
+  EXPECT_EQ(loaded->tracings[0].leaflet, 0);
+}
+
+// The commands writing a case declare caseFileNames() as their outputs, and their staging
+// directory refuses any other file: writeCase must stay within it.
+TEST(CaseRoundTrip, WritesNoFileBesidesCaseFileNames) {
+  TempDir dir;
+  writeCase(dir.path(), tinyConeCaseWithEverything());
+  const std::vector<std::string> declared = caseFileNames();
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+    const std::string name = entry.path().filename().string();
+    EXPECT_NE(std::find(declared.begin(), declared.end(), name), declared.end()) << name;
+  }
+  EXPECT_EQ(files, static_cast<int>(declared.size())) << "the case has every part";
 }
 
 TEST(CaseRoundTrip, RegionalTissueIsWrittenAndReadBack) {

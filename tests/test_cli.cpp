@@ -178,6 +178,38 @@ TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
   EXPECT_EQ(runChordfit("validate " + quoted(dir / "case")).exit_code, 0);
 }
 
+// make-valve into a directory holding a case used to replace case.json and leave the earlier
+// case's tracings, cords and truth beside it, describing another valve. Now it publishes as
+// every command does: the files an earlier chordfit run wrote there and the new case lacks go,
+// the user's own stay.
+TEST(ChordfitCli, MakeValveOverAnEarlierCaseRemovesWhatTheNewCaseLacksAndKeepsTheUsersFiles) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  auto r = runChordfit("make-case --preset normal-1 --edge 3.0 --planes 2 --quiet --out " +
+                       quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(std::filesystem::exists(case_dir / "truth" / "case" / "case.json"));
+  r = runChordfit("heuristic " + quoted(case_dir) + " --out " +
+                  quoted(case_dir / "heuristic_cords.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  testing::writeText(case_dir / "notes.txt", "the user's");
+
+  r = runChordfit("make-valve --edge 3.0 --out " + quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("wrote " + (case_dir / "case.json").string() +
+                       ", open.ply, leaflets.json, annulus_ring.json, annulus_closed.json; "
+                       "removed tracings.json, cords.json, truth/cords.json, "),
+            std::string::npos)
+      << r.out;
+  for (const char* stale : {"tracings.json", "cords.json", "truth"})
+    EXPECT_FALSE(std::filesystem::exists(case_dir / stale)) << stale;
+  EXPECT_TRUE(std::filesystem::exists(case_dir / "heuristic_cords.json"));
+  EXPECT_EQ(testing::readText(case_dir / "notes.txt"), "the user's");
+  r = runChordfit("validate " + quoted(case_dir));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("parametric-mitral"), std::string::npos) << r.out;
+}
+
 TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
   TempDir dir;
   const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --edge -1");

@@ -284,6 +284,27 @@ TEST(MakeCaseCli, AnEdgeOutsideTheRangeIsToldTheRangeTheCommandTakes) {
   EXPECT_FALSE(fs::exists(dir / "c" / "case.json"));
 }
 
+// A case over an earlier one: the earlier run's files the new case lacks go (here the lesion
+// tissue of a prolapse-A2 truth under a normal one), the user's stay.
+TEST(MakeCaseCli, AnEarlierCasesFilesTheNewOneLacksAreRemovedAndTheUsersKept) {
+  TempDir dir;
+  const fs::path case_dir = dir / "c";
+  auto r =
+      runChordfit("make-case --preset prolapse-A2 --quiet --out " + quoted(case_dir) + kFastCase);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(fs::exists(case_dir / "truth" / "case" / "tissue.json"));
+  testing::writeText(case_dir / "truth" / "notes.txt", "the user's");
+  r = runChordfit("make-case --preset normal-1 --quiet --out " + quoted(case_dir) + kFastCase);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("; removed truth/case/tissue.json (an earlier run's)"), std::string::npos)
+      << r.out;
+  EXPECT_FALSE(fs::exists(case_dir / "truth" / "case" / "tissue.json"));
+  EXPECT_EQ(testing::readText(case_dir / "truth" / "notes.txt"), "the user's");
+  const auto truth = nlohmann::json::parse(testing::readText(case_dir / "truth" / "truth.json"));
+  EXPECT_EQ(truth["preset"], "normal-1");
+  EXPECT_EQ(runChordfit("validate " + quoted(case_dir / "truth" / "case")).exit_code, 0);
+}
+
 TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
   Diagnostics diagnostics;
   const auto c = loadCase(caseDir(), diagnostics);

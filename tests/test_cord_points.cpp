@@ -10,12 +10,12 @@
 #include <nlohmann/json.hpp>
 
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/cord_attachments.h"
 #include "core/cord_insertion.h"
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
-#include "core/closure_model.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -117,6 +117,17 @@ TEST_F(CordPointValidation, RejectsTwoVerticesOrAVertexOutsideThePoint) {
   expectError(R"({"tip": 0, "vertex": 3, "point": {"vertices": [9, 10, 11],
                   "weights": [0.5, 0.5, 0.0]}, "rest_length_mm": 18.0})",
               "cords\\[0\\]\\.vertex: vertex 3 is not one of the point's vertices");
+}
+
+// The point's keys are checked as the cord's are: a misspelt one is named with the key meant,
+// an extra one is not dropped without a word.
+TEST_F(CordPointValidation, RejectsAnUnknownPointKeySuggestingTheNearestKnownOne) {
+  expectError(R"({"tip": 0, "point": {"vertices": [9, 10, 11], "weigths": [0.5, 0.5, 0.0]},
+                  "rest_length_mm": 18.0})",
+              "cords\\[0\\]\\.point\\.weigths: unknown key; did you mean \"weights\"\\?");
+  expectError(R"({"tip": 0, "point": {"vertices": [9, 10, 11], "weights": [0.5, 0.5, 0.0],
+                  "triangle": 4}, "rest_length_mm": 18.0})",
+              "cords\\[0\\]\\.point\\.triangle: unknown key\n");
 }
 
 // ---------------------------------------------------------------------------------------

@@ -99,6 +99,57 @@ TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+TEST(FitCommand, RejectsANegativeTipWeightWithExitCode2) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --params scales+tips --tip-weight -1 --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: fit: --tip-weight: must be a finite number >= 0, got -1"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
+// The tip prior (--tip-weight) is recorded where a reader of the results looks for it.
+TEST(FitCommand, TipWeightIsRecordedInMetricsAndReport) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --params scales+tips --tip-weight 0.5 --no-prefit --no-uncertainty "
+                             "--max-sims 1 --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_EQ(metrics["tip_weight"].get<double>(), 0.5);
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
+                .find("PM tip offsets: box ±8 mm per axis, prior 0.5 mm of residual per mm"),
+            std::string::npos);
+}
+
+// A seed whose free cords are all manual (edit-cords --all): the cord pre-fits would close
+// the seed again for every factor, so they do not run, and the fit says why.
+TEST(FitCommand, SkipsThePrefitsWhenEveryFreeCordIsManual) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(smallCase()) + " --all 0.8 --out " +
+                        quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
+                  " --no-uncertainty --max-sims 20 --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("pre-fits skipped: every free cord is manual"), std::string::npos) << r.out;
+  const std::string csv = testing::readText(dir / "fit" / "convergence.csv");
+  EXPECT_EQ(csv.find("\nprefit,"), std::string::npos) << csv;
+  EXPECT_EQ(csv.find("\nsegments,"), std::string::npos) << csv;
+  // The budget goes to the optimiser alone (here too small for its first Jacobian of the 32
+  // cords: the seed's closure, then the one written out).
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_EQ(metrics["forward_sims"].get<int>(), 2);
+  EXPECT_NE(
+      testing::readText(dir / "fit" / "report.md").find("(skipped: every free cord is manual"),
+      std::string::npos);
+}
+
 TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
   TempDir dir;
   for (const std::string option :
@@ -214,7 +265,8 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   testing::writeText(dir / "seed.json", seed.dump(2));
   const auto r =
       runChordfit("fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
-                  " --no-prefit --max-sims 4 --threads 2 --out " + quoted(dir / "fit"));
+                  " --no-prefit --max-sims 5 --threads 2 --out " + quoted(dir / "fit"));
+  // 5 = the seed, a Jacobian (2), a trial step and the slack release's closure.
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("ceres   iter"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("| seed |"), std::string::npos) << r.out;
@@ -242,7 +294,7 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
             std::string::npos);
   EXPECT_EQ(metrics["optimizer"], "ceres");
   EXPECT_EQ(metrics["distance"], "own-leaflet");     // the default data residual
-  EXPECT_LE(metrics["forward_sims"].get<int>(), 5);  // budget 4 + the closure written
+  EXPECT_LE(metrics["forward_sims"].get<int>(), 6);  // budget 5 + the closure written
   EXPECT_GE(metrics["unsettled_sims"].get<int>(), 0);
   EXPECT_LT(metrics["unsettled_sims"].get<int>(), metrics["forward_sims"].get<int>());
   EXPECT_LE(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>());

@@ -8,8 +8,8 @@
 #include <set>
 
 #include "core/case_io.h"
-#include "core/metrics.h"
 #include "core/closure_model.h"
+#include "core/metrics.h"
 #include "inverse/fit_cords.h"
 #include "tests/test_support.h"
 
@@ -178,7 +178,8 @@ TEST(InverseFit, KeepsEveryScaleWithinItsBounds) {
 TEST(InverseFit, EveryOptimizerRunsThroughTheCommonInterfaceWithinItsBudget) {
   const RecoveryProblem& p = recoveryProblem();
   for (const std::string& name : inverse::optimizerNames()) {
-    constexpr int kBudget = 10;  // seed + one Ceres Jacobian (8) + a trial point
+    // seed + one Ceres Jacobian (8) + a trial point + the slack release's closure
+    constexpr int kBudget = 11;
     const inverse::FitOutcome fit =
         inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions(name, kBudget, 2));
     ASSERT_TRUE(fit.ok()) << name << ": " << fit.error;
@@ -187,6 +188,22 @@ TEST(InverseFit, EveryOptimizerRunsThroughTheCommonInterfaceWithinItsBudget) {
     EXPECT_LE(fit.final_evaluation.cost, fit.seed_evaluation.cost) << name;
     EXPECT_FALSE(fit.termination.empty()) << name;
   }
+}
+
+// 14 closures: the seed, a Jacobian (8) and 4 left, fewer than the next Jacobian needs, and one
+// kept for the slack release. The 4 go to trial steps from the first Jacobian (an accepted one
+// is kept as the best point seen) instead of being left unused.
+TEST(InverseFit, SpendsWhatIsLeftAfterItsLastJacobianOnTrialSteps) {
+  const RecoveryProblem& p = recoveryProblem();
+  const inverse::FitOutcome fit =
+      inverse::fitCords(p.valve_case, p.base, p.settings, perCordOptions("ceres", 14, 2));
+  ASSERT_TRUE(fit.ok()) << fit.error;
+  const int release = fit.slack_release.empty() ? 0 : 1;
+  EXPECT_GE(fit.forward_sims - release, 10) << "no trial step after the first Jacobian";
+  EXPECT_LE(fit.forward_sims, 14);
+  EXPECT_LT(fit.final_evaluation.cost, fit.seed_evaluation.cost);
+  EXPECT_NE(fit.termination.find("budget of 13 forward runs reached"), std::string::npos)
+      << fit.termination;
 }
 
 TEST(InverseFit, GivesBitIdenticalResultsWithOneAndTwoThreads) {

@@ -101,5 +101,80 @@ TEST(StagedOutput, ADirectoryInTheWayRefusesTheWholeSet) {
   EXPECT_TRUE(fs::is_directory(out / "b.txt"));
 }
 
+// make-case's truth: files in subdirectories, each directory with its own record, so that
+// no record names a file outside its directory (the case's own never mentions the truth).
+TEST(StagedOutput, PublishesFilesInSubdirectoriesWithTheRecordOfEachBesideThem) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  StagedOutput::Published published;
+  {
+    StagedOutput staged(out, {"case.json", "truth/truth.json", "truth/case/case.json"});
+    fs::create_directories(staged.dir() / "truth" / "case");
+    writeText(staged.dir() / "case.json", "case");
+    writeText(staged.dir() / "truth" / "truth.json", "truth");
+    writeText(staged.dir() / "truth" / "case" / "case.json", "fine case");
+    published = staged.publish();
+  }
+  EXPECT_EQ(published.written,
+            (std::vector<std::string>{"case.json", "truth/truth.json", "truth/case/case.json"}));
+  EXPECT_EQ(readText(out / "truth" / "case" / "case.json"), "fine case");
+  EXPECT_EQ(readText(out / kOutputRecordName), "case.json\n");
+  EXPECT_EQ(readText(out / "truth" / kOutputRecordName), "truth.json\n");
+  EXPECT_EQ(readText(out / "truth" / "case" / kOutputRecordName), "case.json\n");
+  EXPECT_TRUE(publishedByChordfit(out / "truth" / "case" / "case.json"));
+  EXPECT_FALSE(publishedByChordfit(out / "truth" / "case" / "open.ply"));
+}
+
+// A later run that writes no truth (make-valve over a make-case directory) supersedes it: the
+// earlier run's files go, and a directory with them, unless the user put something there.
+TEST(StagedOutput, RemovesAnEarlierRunsSubdirectoryUnlessTheUserPutAFileInIt) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  const std::vector<std::string> truth = {"truth/truth.json", "truth/case/case.json",
+                                          "truth/case/tissue.json"};
+  {
+    const std::vector<std::string> earlier = {"case.json", truth[0], truth[1], truth[2]};
+    StagedOutput staged(out, earlier);
+    fs::create_directories(staged.dir() / "truth" / "case");
+    for (const std::string& name : earlier) writeText(staged.dir() / name, "earlier");
+    staged.publish();
+  }
+  writeText(out / "truth" / "notes.txt", "the user's");
+  StagedOutput::Published published;
+  {
+    StagedOutput staged(out, {"case.json"}, truth);
+    writeText(staged.dir() / "case.json", "later");
+    published = staged.publish();
+  }
+  EXPECT_EQ(published.removed, truth);
+  EXPECT_FALSE(fs::exists(out / "truth" / "case")) << "it held only the earlier run's files";
+  EXPECT_EQ(readText(out / "truth" / "notes.txt"), "the user's");
+  EXPECT_FALSE(fs::exists(out / "truth" / kOutputRecordName)) << "nothing of chordfit's left";
+  EXPECT_EQ(readText(out / kOutputRecordName), "case.json\n");
+  fs::remove(out / "truth" / "notes.txt");
+  {
+    StagedOutput staged(out, {"case.json"}, truth);
+    writeText(staged.dir() / "case.json", "again");
+    staged.publish();
+  }
+  EXPECT_TRUE(fs::is_directory(out / "truth")) << "a directory without a record is not ours";
+}
+
+TEST(StagedOutput, AFileWhereAnOutputDirectoryGoesRefusesTheWholeSet) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  fs::create_directories(out);
+  writeText(out / "truth", "a file");
+  {
+    StagedOutput staged(out, {"case.json", "truth/truth.json"});
+    fs::create_directories(staged.dir() / "truth");
+    writeText(staged.dir() / "case.json", "case");
+    writeText(staged.dir() / "truth" / "truth.json", "truth");
+    EXPECT_THROW(staged.publish(), std::runtime_error);
+  }
+  EXPECT_FALSE(fs::exists(out / "case.json"));
+  EXPECT_EQ(readText(out / "truth"), "a file");
+}
+
 }  // namespace
 }  // namespace chordfit::cli

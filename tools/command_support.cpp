@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
@@ -19,6 +20,7 @@
 #include "core/cordset_io.h"
 #include "core/heuristic.h"
 #include "core/metrics.h"
+#include "core/synthetic_case.h"
 #include "tools/commands.h"
 
 namespace chordfit::cli {
@@ -223,6 +225,14 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
     if (std::filesystem::is_directory(std::filesystem::symlink_status(file, ec)))
       return reportOutputProblem(command, file.string(),
                                  "a directory of that name is in the way of an output file");
+    // A name in a subdirectory (make-case's truth/): a file where the directory goes.
+    for (std::filesystem::path sub = std::filesystem::path(name).parent_path(); !sub.empty();
+         sub = sub.parent_path()) {
+      const auto status = std::filesystem::status(std::filesystem::path(directory) / sub, ec);
+      if (std::filesystem::exists(status) && !std::filesystem::is_directory(status))
+        return reportOutputProblem(command, (std::filesystem::path(directory) / sub).string(),
+                                   "a file of that name is in the way of an output directory");
+    }
   }
   return true;
 }
@@ -235,6 +245,13 @@ bool outputFileUsable(const char* command, const std::string& file) {
   if (!reportOutputProblem(command, file, danglingLinkProblem(file))) return false;
   return reportOutputProblem(
       command, file, outputPlaceProblem(std::filesystem::path(file).parent_path().string()));
+}
+
+std::vector<std::string> caseDirectoryFilesBesides(const std::vector<std::string>& declared) {
+  std::vector<std::string> others;
+  for (const std::string& name : syntheticCaseFileNames())
+    if (std::find(declared.begin(), declared.end(), name) == declared.end()) others.push_back(name);
+  return others;
 }
 
 int fitStepCapToMesh(ValveCase& valve_case) {

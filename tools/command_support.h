@@ -44,8 +44,9 @@ bool optionsArePositive(const char* command,
 
 // Whether the outputs can go to `directory` (created later if missing): its nearest existing
 // ancestor must be a writable directory, and none of the `files` the command writes there may
-// be an existing directory (the final rename onto it would fail after the work), and no
-// missing part of it may be a symbolic link to nowhere. On a problem prints
+// be an existing directory (the final rename onto it would fail after the work) nor go into a
+// subdirectory where a file stands, and no missing part of it may be a symbolic link to
+// nowhere. On a problem prints
 // "error: <command>: --out: <path>: <reason>" ("--out: must not be empty" for "") and
 // returns false. Checked before the work starts, so that a fit does not run for minutes and
 // then fail to write.
@@ -56,6 +57,12 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
 // not be an existing directory (the final rename would fail after the work) nor a symbolic
 // link to nowhere (the rename would replace the link, not write its target).
 bool outputFileUsable(const char* command, const std::string& file);
+
+// The files of a case directory (make-valve, import-mesh, make-case) besides `declared`, the
+// ones a command writing it declares: an earlier case's there, e.g. make-case's truth/ under a
+// new make-valve case, would describe another valve, so they go with it (StagedOutput's
+// `superseded`; only files a chordfit run published).
+std::vector<std::string> caseDirectoryFilesBesides(const std::vector<std::string>& declared);
 
 // For a case a command writes (make-valve, import-mesh): a fine mesh's automatic time step
 // can make the default step cap end before, or soon after, the pressure ramp. Then the case

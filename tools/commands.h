@@ -29,6 +29,9 @@ struct MakeValveOptions {
   ValveParameters parameters;
 };
 int runMakeValve(const MakeValveOptions& options);
+// The case's files (caseFileNames, core/case_io.h). The pre-flight checks these names and
+// StagedOutput refuses any other (tools/staged_output.h); likewise for each *OutputFiles.
+std::vector<std::string> makeValveOutputFiles();
 
 struct HeuristicCommandOptions {
   std::string case_dir;
@@ -94,6 +97,8 @@ struct MakeCaseOptions {
   bool quiet = false;
 };
 int runMakeCase(const MakeCaseOptions& options);
+// The case's files and the truth's under truth/ (syntheticCaseFileNames, core/synthetic_case.h).
+std::vector<std::string> makeCaseOutputFiles();
 
 }  // namespace chordfit::cli
 
@@ -153,6 +158,7 @@ struct FitCommandOptions {
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
+  double tip_weight = 0.05;              // RegularisationWeights::tip_per_mm
   bool prefit = true;                    // global and segment pre-fits before the optimiser
   bool tissue_prefit = false;            // softer tissue per segment, after the cord pre-fits
   bool slack_release = true;             // slack cords to the kind's typical scale at the end
@@ -209,5 +215,7 @@ struct ImportMeshOptions {
   std::string out_dir;
 };
 int runImportMesh(const ImportMeshOptions& options);
+// The case's files, as make-valve's.
+std::vector<std::string> importMeshOutputFiles();
 
 }  // namespace chordfit::cli

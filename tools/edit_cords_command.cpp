@@ -1,6 +1,7 @@
 // edit-cords: scale and lock cords as the paper's editor does, so a manual cord set can be
 // made, fitted from (fit --seed-cords keeps locked cords and starts from the manual ones) and
 // compared (compare heuristic.json manual.json fit/cords.json).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -263,8 +264,13 @@ int runEditCords(const EditCordsOptions& options) {
 
   writeCordSet(options.out_file, set, &mesh);
 
-  std::printf("edit-cords: %d cords, %zu edited, %zu locked now, %zu unlocked -> %s\n", count,
-              edited.size(), lock.size(), unlock.size(), options.out_file.c_str());
+  const auto locked_in_all = std::count_if(set.cords.begin(), set.cords.end(),
+                                           [](const Cord& cord) { return cord.locked; });
+  std::printf(
+      "edit-cords: %d cords, %zu edited, %zu locked by --lock, %zu unlocked, %ld locked in "
+      "all -> %s\n",
+      count, edited.size(), lock.size(), unlock.size(), static_cast<long>(locked_in_all),
+      options.out_file.c_str());
   bool any_changed = false;
   for (int i = 0; i < count; ++i) {
     any_changed |= before.cords[i].rest_length != set.cords[i].rest_length ||
@@ -286,9 +292,15 @@ int runEditCords(const EditCordsOptions& options) {
                 b.rest_length, b.scale(), toString(b.provenance), b.locked ? "yes" : "no");
   }
   if (left_locked > 0) {
-    std::printf("  (%d scalings skipped locked cords; --unlock them first to change them)\n",
-                left_locked);
+    std::printf(
+        "  (%d locked cord%s left alone by the scalings; --unlock them first to change "
+        "them)\n",
+        left_locked, left_locked == 1 ? "" : "s");
   }
+  if (!any_changed && !requests.empty() && moves.empty())
+    std::fprintf(stderr,
+                 "warning: edit-cords: nothing changed: every cord the scalings name is "
+                 "locked\n");
   if (outside_bounds > 0) {
     std::printf(
         "note: %d unlocked cords have a scale outside the fit's default bounds [%.1f, %.1f]; "

@@ -72,6 +72,11 @@ int runFit(const FitCommandOptions& o) {
               << o.section_weight << "\n";
     return kExitBadInput;
   }
+  if (!(o.tip_weight >= 0.0) || !std::isfinite(o.tip_weight)) {
+    std::cerr << "error: fit: --tip-weight: must be a finite number >= 0, got " << o.tip_weight
+              << "\n";
+    return kExitBadInput;
+  }
   if (!optionsArePositive("fit",
                           {{"--max-sims", o.max_sims},
                            {"--threads", o.threads},
@@ -126,11 +131,15 @@ int runFit(const FitCommandOptions& o) {
   options.finite_difference.skip_slack = !o.fd_slack_closures;
   options.residual.own_leaflet = o.distance == "own-leaflet";
   options.residual.section_weight = o.section_weight;
+  options.residual.weights.tip_per_mm = o.tip_weight;
   options.uncertainty = o.uncertainty;
   if (!o.quiet) {
     std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
                 valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
                 o.max_sims, o.threads);
+    const std::string skip_reason = inverse::prefitSkipReason(*seed);
+    if (o.prefit && !skip_reason.empty())
+      std::printf("pre-fits skipped: %s\n", skip_reason.c_str());
     options.on_iteration = [](const IterationRecord& r) {
       std::printf("%-7s iter %4d  cost %10.4f  best %10.4f  mean %7.4f mm  sims %4d  %7.1f s\n",
                   r.stage.c_str(), r.iteration, r.cost, r.best_cost, r.mean_deviation_mm,
@@ -190,6 +199,7 @@ int runFit(const FitCommandOptions& o) {
                               {"secondary_reference", fit.slack_release.secondary_reference}};
   metrics["distance"] = o.distance;  // the data residual the fit minimised
   metrics["section_weight"] = o.section_weight;
+  metrics["tip_weight"] = o.tip_weight;
   metrics["scale_bounds"] = o.scale_bounds;
   if (o.uncertainty) {
     nlohmann::json u = {{"jacobian_sims", fit.uncertainty.jacobian_sims},

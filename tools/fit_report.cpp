@@ -36,6 +36,13 @@ CordUncertaintyText cordUncertainty(const inverse::FitOutcome& fit, std::size_t 
   CordUncertaintyText text;
   const int p = cord < fit.cord_parameter.size() ? fit.cord_parameter[cord] : -1;
   if (p < 0 || !fit.uncertainty.ok() || fit.x(p) <= 0.0) return text;
+  if (fit.uncertainty.sensitivity(p) == 0.0) {
+    // No tracing point moves with it (a slack cord): its SD would be the prior's width alone,
+    // hundreds of percent, read as a measurement.
+    text.sd = "prior only";
+    text.sensitivity = "0";
+    return text;
+  }
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, "%.1f%s", 100.0 * fit.uncertainty.sd(p) / fit.x(p),
                 fit.uncertainty.at_bound[p] ? " (at bound)" : "");
@@ -74,7 +81,10 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled) {
   if (!enabled) return "off (--no-slack-release)";
   const inverse::SlackReleaseProposal& p = fit.slack_release;
   auto reference = [&](double value) {
-    return value > 0.0 ? formatFixed(value, 3) : std::string("none taut");
+    // The reference leaves out the segments the segment pre-fit rescaled or the fit
+    // prolapses (slack_release.h): taut cords there do not count.
+    return value > 0.0 ? formatFixed(value, 3)
+                       : std::string("none (no taut cord outside rescaled or prolapsing segments)");
   };
   const std::string typical = "typical scale: primaries " + reference(p.primary_reference) +
                               ", secondaries " + reference(p.secondary_reference);
@@ -108,21 +118,30 @@ std::string convergenceCsv(const std::vector<IterationRecord>& history) {
 }
 
 std::string convergenceSvg(const std::vector<IterationRecord>& history, const std::string& name) {
-  PlotSeries cost{"cost at the current point", {}, {}, true, true};
-  PlotSeries best{"best cost", {}, {}, false, true};
+  // The cost as a line, each stage's points as markers of their own colour (seed, pre-fits,
+  // optimiser, release), the best cost dashed: equal to the cost wherever a step improved,
+  // it would hide under it as a solid line.
+  PlotSeries cost{"cost", {}, {}, false, true};
+  PlotSeries best{"best so far", {}, {}, false, true, true};
   PlotSeries mean{"mean deviation (AvgD)", {}, {}, true, true};
+  std::vector<PlotSeries> stages;
   for (const IterationRecord& r : history) {
     cost.x.push_back(r.forward_sims), cost.y.push_back(r.cost);
     best.x.push_back(r.forward_sims), best.y.push_back(r.best_cost);
     mean.x.push_back(r.forward_sims), mean.y.push_back(r.mean_deviation_mm);
+    if (stages.empty() || stages.back().label != r.stage)
+      stages.push_back(PlotSeries{r.stage, {}, {}, true, false});
+    stages.back().x.push_back(r.forward_sims), stages.back().y.push_back(r.cost);
   }
-  const std::vector<PlotPanel> panels = {
-      {"Fit cost (" + name + ")", "forward simulations", "cost", {cost, best}, true},
-      {"Mean deviation to the tracings",
-       "forward simulations",
-       "mean deviation (mm)",
-       {mean},
-       false}};
+  std::vector<PlotSeries> cost_series{cost, best};
+  cost_series.insert(cost_series.end(), stages.begin(), stages.end());
+  const std::vector<PlotPanel> panels = {{"Fit cost (" + name + ")", "forward simulations",
+                                          "cost (mm², log scale)", cost_series, true},
+                                         {"Mean deviation to the tracings",
+                                          "forward simulations",
+                                          "mean deviation (mm)",
+                                          {mean},
+                                          false}};
   return svgLinePlots(panels, 1, 720, 320);
 }
 
@@ -172,6 +191,9 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   md << "# Cord fit: " << c.name << "\n\n";
   md << "- parameters: " << o.params << " (" << fit.x.size() << "), optimizer: " << o.optimizer
      << ", scale bounds [" << o.scale_bounds[0] << ", " << o.scale_bounds[1] << "]\n";
+  if (o.params == "scales+tips")
+    md << "- PM tip offsets: box ±" << o.tip_box_mm << " mm per axis, prior "
+       << formatWeight(o.tip_weight) << " mm of residual per mm of offset (--tip-weight)\n";
   md << "- data residual: "
      << (o.distance == "own-leaflet" ? "each tracing point to its own leaflet's closed surface"
                                      : "each tracing point to the whole closed mesh")
@@ -182,7 +204,10 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                       "their plane's tracings are charged)"
                                 : std::string("off"))
      << "\n";
-  md << "- global pre-fit factor: " << fit.prefit_factor << (o.prefit ? "" : " (disabled)")
+  md << "- global pre-fit factor: " << fit.prefit_factor
+     << (!o.prefit                     ? " (disabled)"
+         : !fit.prefit_skipped.empty() ? " (skipped: " + fit.prefit_skipped + ")"
+                                       : std::string())
      << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
      << fit.prefit_secondary_factor << "\n";
   md << "- segment pre-fit: "
@@ -203,8 +228,9 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
     for (const std::string& item : o.settings_overrides) md << " `" << item << "`";
     md << "\n";
   }
-  md << "- forward simulations: " << fit.forward_sims << ", fit time: " << fit.seconds
-     << " s, threads: " << o.threads << "\n";
+  md << "- forward simulations: " << fit.forward_sims + 1 << " (" << fit.forward_sims
+     << " in the fit, 1 for the closure written out; metrics.json forward_sims), fit time: "
+     << fit.seconds << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n\n";
@@ -241,7 +267,9 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
      << "); sensitivity: how far the data residuals move (root sum of squares) per 1 % of the "
         "cord's length. Closed span: the cord's tip-to-vertex distance in the fitted closure; a "
         "slack cord (span below its length) pulls on nothing there, so any length down to its "
-        "span closes the valve the same way: the tracings bound it from below only. "
+        "span closes the valve the same way: the tracings bound it from below only. ± SD "
+        "\"prior only\": no tracing point moves with the cord, so its length is the prior's "
+        "(the seed's and its neighbours'), not a measurement. "
      << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
      << identifiedCords(fit) << " of " << freeCords(fit)
      << " free cords are determined to better than 3 %.\n\n"

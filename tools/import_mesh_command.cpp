@@ -1,10 +1,13 @@
 // import-mesh: a case directory from a segmented open-state valve mesh and three landmarks
-// (core/case_import.h), written to a temporary sibling directory, validated by loading it
-// back, and only then moved into place, so a failure leaves nothing behind.
+// (core/case_import.h), written to a staging directory, validated by loading it back, and only
+// then published (tools/staged_output.h), so a failure leaves the directory as it was.
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
+#include <string>
 #include <system_error>
+#include <vector>
 
 #include "core/case_import.h"
 #include "core/case_io.h"
@@ -12,6 +15,7 @@
 #include "core/mesh_io.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -28,14 +32,80 @@ int fail(const std::string& file, const std::string& what) {
   return kExitBadInput;
 }
 
+// "point 3", "points 1 and 2": the landmarks at fault as the points of the --landmarks file,
+// counted from 1 in the file's order, which is the one thing every curve format shares.
+std::string landmarkPoints(const std::vector<int>& landmarks) {
+  std::string text = landmarks.size() == 1 ? "point " : "points ";
+  for (std::size_t k = 0; k < landmarks.size(); ++k) {
+    if (k > 0) text += k + 1 == landmarks.size() ? " and " : ", ";
+    text += std::to_string(landmarks[k] + 1);
+  }
+  return text;
+}
+
+// An import error under the input that gave what is wrong: the mesh file, the point of the
+// --landmarks file, or the --closed-annulus file.
+int failImport(const ImportMeshOptions& options, const ImportedCase& imported) {
+  switch (imported.error_input) {
+    case ImportInput::kLandmarks:
+      return fail(options.landmarks_file,
+                  landmarkPoints(imported.error_landmarks) + ": " + imported.error);
+    case ImportInput::kClosedAnnulus:
+      return fail(options.closed_annulus_file, imported.error);
+    case ImportInput::kMesh:
+      break;
+  }
+  return fail(options.mesh_file, imported.error);
+}
+
+// The first file of `staging` that would replace one in `out` that no chordfit run wrote, or
+// nullopt. The inputs are the user's own files and often sit where the case goes (the mesh as
+// open.ply, the tracings as tracings.json): those are refused, not replaced; an earlier
+// import's or make-valve's files are replaced.
+std::optional<fs::path> userFileInTheWay(const fs::path& staging, const fs::path& out) {
+  for (const fs::directory_entry& entry : fs::directory_iterator(staging)) {
+    const fs::path file = out / entry.path().filename();
+    std::error_code ec;
+    if (fs::exists(fs::symlink_status(file, ec)) && !publishedByChordfit(file)) return file;
+  }
+  return std::nullopt;
+}
+
+// Writes the case into a staging directory in `out`, loads it back with every check of
+// `validate`, and publishes it unless it would replace a file of the user's. On a problem
+// prints it and returns nullopt, leaving `out` as it was (removed again when this created it).
+std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
+                                                          const ValveCase& valve_case,
+                                                          ValveCase& loaded) {
+  std::error_code ec;
+  const bool out_existed = fs::exists(out, ec);
+  {
+    const std::vector<std::string> files = importMeshOutputFiles();
+    StagedOutput staged(out, files, caseDirectoryFilesBesides(files));
+    writeCase(staged.dir(), valve_case);
+    Diagnostics check;
+    std::optional<ValveCase> read_back = loadCase(staged.dir(), check);
+    const std::optional<fs::path> in_the_way = userFileInTheWay(staged.dir(), out);
+    if (!read_back) {
+      std::cerr << "error: import-mesh: the imported case does not validate:\n";
+      check.print(std::cerr);
+    } else if (in_the_way) {
+      std::cerr << "error: import-mesh: --out: " << in_the_way->string()
+                << ": exists and was not written by chordfit; import-mesh does not replace it "
+                   "(give a new directory for the case, or move the file)\n";
+    } else {
+      loaded = std::move(*read_back);
+      return staged.publish();
+    }
+  }
+  if (!out_existed) fs::remove(out, ec);  // empty again once the staging directory is gone
+  return std::nullopt;
+}
+
 }  // namespace
 
 int runImportMesh(const ImportMeshOptions& options) {
   const fs::path out(options.out_dir);
-  std::error_code ec;
-  if (fs::exists(out, ec) && !fs::is_empty(out, ec)) {
-    return fail(options.out_dir, "exists and is not empty; give a new directory for the case");
-  }
   Diagnostics diagnostics;
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
@@ -65,7 +135,7 @@ int runImportMesh(const ImportMeshOptions& options) {
   l.anterior = landmarks.points.row(2).transpose();
   const std::string name = options.name.empty() ? out.filename().string() : options.name;
   ImportedCase imported = importValveCase(V, F, l, closed.points, name);
-  if (!imported.ok()) return fail(options.mesh_file, imported.error);
+  if (!imported.ok()) return failImport(options, imported);
   imported.valve_case.tracings = tracings;
   if (tips.points.rows() > 0) {
     std::vector<PmTip> pm_tips;
@@ -79,21 +149,11 @@ int runImportMesh(const ImportMeshOptions& options) {
     imported.valve_case.tips = pm_tips;
   }
 
-  // Write beside the target, load it back (every check of `validate`), then move it in place.
   fitStepCapToMesh(imported.valve_case);
-  const fs::path staging = out.parent_path() / (out.filename().string() + ".import-tmp");
-  fs::remove_all(staging, ec);
-  writeCase(staging, imported.valve_case);
-  Diagnostics check;
-  const auto loaded = loadCase(staging, check);
-  if (!loaded) {
-    fs::remove_all(staging, ec);
-    std::cerr << "error: import-mesh: the imported case does not validate:\n";
-    check.print(std::cerr);
-    return kExitBadInput;
-  }
-  fs::remove(out, ec);  // an empty directory, if any
-  fs::rename(staging, out);
+  ValveCase loaded;
+  const std::optional<StagedOutput::Published> published =
+      writeValidatedCase(out, imported.valve_case, loaded);
+  if (!published) return kExitBadInput;
 
   const ValveCase& c = imported.valve_case;
   std::printf("import-mesh: %s -> %s\n", options.mesh_file.c_str(), options.out_dir.c_str());
@@ -121,7 +181,7 @@ int runImportMesh(const ImportMeshOptions& options) {
         "%.2f mm\n",
         options.closed_annulus_file.c_str(), imported.closed_shift_mm);
   }
-  std::cout << caseSummary(*loaded);
+  std::cout << caseSummary(loaded) << wroteLine(out, *published) << "\n";
   if (tracings.empty()) {
     std::printf(
         "next: add the tracings of the closed valve (--tracings, or docs/case-format.md "
@@ -134,5 +194,7 @@ int runImportMesh(const ImportMeshOptions& options) {
   }
   return kExitOk;
 }
+
+std::vector<std::string> importMeshOutputFiles() { return caseFileNames(); }
 
 }  // namespace chordfit::cli

@@ -133,8 +133,9 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
 void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   CLI::App* cmd = app.add_subcommand(
       "make-case", "Write a synthetic case with known truth (cohort preset; truth in DIR/truth)");
-  cmd->add_option("--preset", o.preset, "Cohort preset (see --list)");
-  cmd->add_option("--out", o.out_dir, "Output case directory");
+  // Not ->required(): --list needs neither; runMakeCase asks for them otherwise.
+  cmd->add_option("--preset", o.preset, "Cohort preset (see --list); required unless --list");
+  cmd->add_option("--out", o.out_dir, "Output case directory; required unless --list");
   cmd->add_option("--seed", o.seed, "Patient seed (same seed => identical files)")
       ->check(CLI::Validator(  // the unsigned option would wrap "-1" silently
           [](std::string& value) {
@@ -148,7 +149,7 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_option("--noise", o.noise_mm, "Tracing noise SD, mm (in-plane)")->capture_default_str();
   cmd->add_option("--dropout", o.dropout, "Fraction of the traced length lost to dropout")
       ->capture_default_str();
-  cmd->add_option("--edge", o.edge_mm, "Case mesh edge length, mm (truth: edge / 2)")
+  cmd->add_option("--edge", o.edge_mm, "Case mesh edge length, mm, in [1, 5] (truth: edge / 2)")
       ->capture_default_str();
   cmd->add_option("--threads", o.threads,
                   "Threads of the truth closure (the same truth, bit for bit, for any count)")
@@ -171,7 +172,9 @@ void addCompare(CLI::App& app, CompareOptions& o) {
   cmd->add_option("--tissues", o.tissues,
                   "Regional tissue files, comma-separated, one per file ('-': the case's own), "
                   "e.g. a tissue-prefit fit's tissue.json");
-  cmd->add_option("--out", o.out_dir, "Write compare.md and compare.csv here");
+  cmd->add_option("--out", o.out_dir,
+                  "Write compare.md, compare.csv, sections.svg and enface_K.svg (one per cord "
+                  "set) here");
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
   addSettingOverrides(cmd, o.settings_overrides);
 }
@@ -194,7 +197,10 @@ void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
                   "Curve file with the papillary-muscle tips, anterolateral first (default: "
                   "the heuristic places them)");
   cmd->add_option("--name", o.name, "Case name (default: the output directory's name)");
-  cmd->add_option("--out", o.out_dir, "New case directory")->required();
+  cmd->add_option("--out", o.out_dir,
+                  "Output case directory (an earlier chordfit case there is replaced; a file of "
+                  "yours the case would replace is refused)")
+      ->required();
 }
 
 void addEditCords(CLI::App& app, EditCordsOptions& o) {
@@ -240,14 +246,20 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_option("--tip-box", o.tip_box_mm, "PM tip offset bound per axis, mm (scales+tips)")
       ->capture_default_str();
-  cmd->add_flag("!--no-prefit", o.prefit,
-                "Skip both pre-fits (global scale factor, then per-segment scales)");
+  cmd->add_option("--tip-weight", o.tip_weight,
+                  "Prior on the PM tip offsets (scales+tips): mm of residual per mm of offset, "
+                  "per coordinate (docs/fitting.md, \"Regularisation\")")
+      ->capture_default_str();
+  cmd->add_flag_callback(
+      "--no-prefit", [&o] { o.prefit = false; },
+      "Skip both pre-fits (global scale factor, then per-segment scales)");
   cmd->add_flag("--tissue-prefit", o.tissue_prefit,
                 "Also try softer tissue per segment (0.3, 0.1, 0.05 of the modulus) before the "
                 "optimiser; writes tissue.json");
-  cmd->add_flag("!--no-slack-release", o.slack_release,
-                "Keep slack cords where the optimiser left them instead of raising them to the "
-                "valve's typical scale of their kind (the median of its taut cords)");
+  cmd->add_flag_callback(
+      "--no-slack-release", [&o] { o.slack_release = false; },
+      "Keep slack cords where the optimiser left them instead of raising them to the "
+      "valve's typical scale of their kind (the median of its taut cords)");
   cmd->add_option("--fd-step", o.fd_scale_step, "Central-difference step on a scale")
       ->capture_default_str();
   cmd->add_option("--fd-tip-step", o.fd_tip_step_mm, "Central-difference step on a tip, mm")
@@ -265,9 +277,10 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
                   "Weight of the section residuals: closed-mesh sections farther than 1.5 mm "
                   "from the tracings of their plane (0: off; docs/fitting.md)")
       ->capture_default_str();
-  cmd->add_flag("!--no-uncertainty", o.uncertainty,
-                "Skip the per-parameter uncertainty after the fit (uncertainty.csv; up to 2 "
-                "closures per parameter)");
+  cmd->add_flag_callback(
+      "--no-uncertainty", [&o] { o.uncertainty = false; },
+      "Skip the per-parameter uncertainty after the fit (uncertainty.csv; up to 2 "
+      "closures per parameter)");
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
   addSettingOverrides(cmd, o.settings_overrides);
@@ -319,8 +332,13 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    const int code = app.exit(e);
-    return code == 0 ? kExitOk : kExitBadInput;
+    // --help is a "parse error" with exit code 0: CLI11 prints the help.
+    if (e.get_exit_code() == 0) return app.exit(e) == 0 ? kExitOk : kExitBadInput;
+    // Every other usage error in the form of the commands' own checks: "error: COMMAND: ...".
+    const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
+    std::cerr << "error: " << (command.empty() ? "" : command + ": ") << e.what() << " (chordfit "
+              << (command.empty() ? "" : command + " ") << "--help)\n";
+    return kExitBadInput;
   }
   // Before any work: an output place that cannot be written is a usage error (exit 2). A
   // directory the command writes into, or a file it writes; metrics and compare write only
@@ -333,14 +351,14 @@ int main(int argc, char** argv) {
     std::vector<std::string> files;
   };
   const OutputPlace places[] = {
-      {"make-valve", make_valve.out_dir, false, {}},
-      {"import-mesh", import_mesh.out_dir, false, {}},
+      {"make-valve", make_valve.out_dir, false, makeValveOutputFiles()},
+      {"import-mesh", import_mesh.out_dir, false, importMeshOutputFiles()},
       {"heuristic", heuristic.out_file, true, {}},
       {"edit-cords", edit_cords.out_file, true, {}},
       {"metrics", metrics.out_file, true, {}},
       {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate)},
       {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles()},
-      {"make-case", make_case.out_dir, false, {}},
+      {"make-case", make_case.out_dir, false, makeCaseOutputFiles()},
       {"fit", fit.out_dir, false, fitOutputFiles()},
       {"compare", compare.out_dir, false, compareOutputFiles(compare)}};
   for (const OutputPlace& place : places) {

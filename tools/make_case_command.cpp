@@ -10,6 +10,7 @@
 #include "core/synthetic_case.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -104,7 +105,11 @@ int runMakeCase(const MakeCaseOptions& options) {
     std::cerr << "error: " << options.preset << ": " << e.what() << "\n";
     return kExitSimulationFailed;
   }
-  writeSyntheticCase(options.out_dir, synthetic);
+  // Staged: all or nothing, and an earlier run's files this one does not write (a lesion
+  // preset's truth/case/tissue.json, import-mesh's pm_tips.json) go.
+  StagedOutput staged(options.out_dir, makeCaseOutputFiles());
+  writeSyntheticCase(staged.dir(), synthetic);
+  const StagedOutput::Published published = staged.publish();
 
   const ProlapseResult& prolapse = synthetic.truth_metrics.mesh_prolapse;
   const bool as_intended = prolapse.segments == synthetic.preset.intended_prolapse;
@@ -143,9 +148,11 @@ int runMakeCase(const MakeCaseOptions& options) {
   std::cout << "noise floor (true closed mesh vs tracings):\n"
             << table1Header()
             << table1Row(synthetic.valve_case.name + " truth", synthetic.truth_metrics);
-  std::printf("wrote %s (case) and %s/truth (%.1f s)\n", options.out_dir.c_str(),
-              options.out_dir.c_str(), synthetic.seconds);
+  std::printf("wrote %s (case) and %s/truth (%.1f s)%s\n", options.out_dir.c_str(),
+              options.out_dir.c_str(), synthetic.seconds, removedNote(published).c_str());
   return kExitOk;
 }
+
+std::vector<std::string> makeCaseOutputFiles() { return syntheticCaseFileNames(); }
 
 }  // namespace chordfit::cli

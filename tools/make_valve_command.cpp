@@ -2,12 +2,14 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "core/case_io.h"
 #include "core/curve_io.h"
 #include "core/parametric_valve.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -69,9 +71,16 @@ int runMakeValve(const MakeValveOptions& options) {
   }
   valve.valve_case.name = options.name;
   fitStepCapToMesh(valve.valve_case);
-  writeCase(options.out_dir, valve.valve_case);
-  std::cout << "wrote " << options.out_dir << "/case.json\n" << caseSummary(valve.valve_case);
+  // An earlier case there (make-valve's, import-mesh's, make-case's) has files this one does
+  // not, its tracings, cords, truth: they go, so that none describes another valve beside it.
+  const std::vector<std::string> files = makeValveOutputFiles();
+  StagedOutput staged(options.out_dir, files, caseDirectoryFilesBesides(files));
+  writeCase(staged.dir(), valve.valve_case);
+  const StagedOutput::Published published = staged.publish();
+  std::cout << wroteLine(options.out_dir, published) << "\n" << caseSummary(valve.valve_case);
   return kExitOk;
 }
+
+std::vector<std::string> makeValveOutputFiles() { return caseFileNames(); }
 
 }  // namespace chordfit::cli

@@ -46,56 +46,120 @@ std::vector<std::string> recordedOutputs(const fs::path& dir) {
   return names;
 }
 
+// The files written into `staging`, as paths relative to it ("a.txt", "truth/case/case.json"),
+// sorted: the same order of renames on every file system. A nested run's record (fit's closure
+// publishes into fit's staging directory) is not one of them; ours follow.
+std::vector<std::string> stagedFiles(const fs::path& staging) {
+  std::vector<std::string> files;
+  for (const fs::directory_entry& entry : fs::recursive_directory_iterator(staging)) {
+    if (entry.is_directory() || entry.path().filename() == kOutputRecordName) continue;
+    files.push_back(entry.path().lexically_relative(staging).generic_string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+// Throws when something in `out` is in the way of the staged file `name`: a directory where
+// the file goes (a rename onto it fails), or a file where one of its directories goes. Found
+// before the first move, it leaves the output directory as it was instead of half old, half
+// new.
+void checkNothingInTheWay(const fs::path& out, const std::string& name) {
+  std::error_code ec;
+  // symlink_status: a link to a directory is replaced by the rename, not in the way.
+  if (fs::is_directory(fs::symlink_status(out / name, ec)))
+    throw std::runtime_error((out / name).string() +
+                             ": a directory of that name is in the way of the output file "
+                             "(nothing was written)");
+  for (fs::path dir = fs::path(name).parent_path(); !dir.empty(); dir = dir.parent_path()) {
+    const fs::file_status status = fs::status(out / dir, ec);
+    if (fs::exists(status) && !fs::is_directory(status))
+      throw std::runtime_error((out / dir).string() +
+                               ": a file of that name is in the way of an output directory "
+                               "(nothing was written)");
+  }
+}
+
+// The directories (relative to the output directory, "" for itself) that hold any of `names`,
+// with every directory above them; deepest first, so a directory is tidied after those in it.
+std::vector<std::string> directoriesOf(const std::vector<std::string>& names) {
+  std::vector<std::string> dirs = {""};
+  for (const std::string& name : names) {
+    for (fs::path dir = fs::path(name).parent_path(); !dir.empty(); dir = dir.parent_path())
+      if (!contains(dirs, dir.generic_string())) dirs.push_back(dir.generic_string());
+  }
+  // A directory's path is a prefix of those in it, so it sorts before them.
+  std::sort(dirs.rbegin(), dirs.rend());
+  return dirs;
+}
+
+// Rewrites the record of `out`/`dir`: what it listed and is still there, and `written_here`
+// (this run's files in it, by name). A subdirectory with neither gets no record; one whose
+// record ends empty held only an earlier run's files: it loses the record, and is removed
+// itself when nothing else is left in it (a file the user put there keeps it).
+void updateRecord(const fs::path& out, const std::string& dir,
+                  const std::vector<std::string>& written_here) {
+  const fs::path place = out / dir;
+  const std::vector<std::string> recorded = recordedOutputs(place);
+  std::vector<std::string> kept;
+  for (const std::string& name : recorded) {
+    std::error_code ec;
+    if (!contains(written_here, name) && fs::exists(fs::symlink_status(place / name, ec)))
+      kept.push_back(name);
+  }
+  kept.insert(kept.end(), written_here.begin(), written_here.end());
+  std::sort(kept.begin(), kept.end());
+  if (kept.empty() && !dir.empty()) {
+    std::error_code ec;
+    if (recorded.empty() && !fs::exists(place / kOutputRecordName, ec)) return;  // not ours
+    fs::remove(place / kOutputRecordName, ec);
+    fs::remove(place, ec);  // only when empty
+    return;
+  }
+  std::string text;
+  for (const std::string& name : kept) text += name + "\n";
+  writeFileAtomically(place / kOutputRecordName, text);
+}
+
 }  // namespace
 
+bool publishedByChordfit(const fs::path& file) {
+  return contains(recordedOutputs(file.parent_path()), file.filename().string());
+}
+
 StagedOutput::Published StagedOutput::publish() {
-  std::vector<std::string> files;
-  for (const fs::directory_entry& entry : fs::directory_iterator(staging_)) {
-    const std::string name = entry.path().filename().string();
-    if (name == kOutputRecordName) continue;  // a nested run's (fit's closure); ours follows
+  const std::vector<std::string> files = stagedFiles(staging_);
+  for (const std::string& name : files) {
     if (!contains(declared_, name))
       throw std::logic_error("internal: " + name +
                              " was written but is not among the command's declared output "
                              "files (nothing was published)");
-    files.push_back(name);
   }
-  std::sort(files.begin(), files.end());  // the same order of renames on every file system
-  // A rename onto a directory fails; found before the first move, it leaves the output
-  // directory as it was instead of half old, half new.
+  for (const std::string& name : files) checkNothingInTheWay(out_, name);
   for (const std::string& name : files) {
-    std::error_code ec;
-    // symlink_status: a link to a directory is replaced by the rename, not in the way.
-    if (fs::is_directory(fs::symlink_status(out_ / name, ec)) &&
-        !fs::is_directory(staging_ / name, ec))
-      throw std::runtime_error((out_ / name).string() +
-                               ": a directory of that name is in the way of the output file "
-                               "(nothing was written)");
+    fs::create_directories((out_ / name).parent_path());
+    fs::rename(staging_ / name, out_ / name);
   }
-  for (const std::string& name : files) fs::rename(staging_ / name, out_ / name);
 
   Published published;
   std::vector<std::string> stale;
   for (const std::string& name : declared_)
     (contains(files, name) ? published.written : stale).push_back(name);
   stale.insert(stale.end(), superseded_.begin(), superseded_.end());
-  std::vector<std::string> record = recordedOutputs(out_);
   for (const std::string& name : stale) {
     std::error_code ec;
-    if (!contains(record, name) || fs::is_directory(fs::symlink_status(out_ / name, ec))) continue;
+    if (!publishedByChordfit(out_ / name) || fs::is_directory(fs::symlink_status(out_ / name, ec)))
+      continue;
     if (fs::remove(out_ / name, ec)) published.removed.push_back(name);
   }
-  // The record: what it listed and is still there, and what this run wrote.
-  std::vector<std::string> kept;
-  for (const std::string& name : record) {
-    std::error_code ec;
-    if (!contains(files, name) && fs::exists(fs::symlink_status(out_ / name, ec)))
-      kept.push_back(name);
+  std::vector<std::string> names = declared_;
+  names.insert(names.end(), superseded_.begin(), superseded_.end());
+  for (const std::string& dir : directoriesOf(names)) {
+    std::vector<std::string> written_here;
+    for (const std::string& name : files)
+      if (fs::path(name).parent_path().generic_string() == dir)
+        written_here.push_back(fs::path(name).filename().string());
+    updateRecord(out_, dir, written_here);
   }
-  kept.insert(kept.end(), files.begin(), files.end());
-  std::sort(kept.begin(), kept.end());
-  std::string text;
-  for (const std::string& name : kept) text += name + "\n";
-  writeFileAtomically(out_ / kOutputRecordName, text);
   return published;
 }
 
@@ -103,10 +167,15 @@ std::string wroteLine(const fs::path& out_dir, const StagedOutput::Published& fi
   std::string line = "wrote ";
   for (std::size_t i = 0; i < files.written.size(); ++i)
     line += i == 0 ? (out_dir / files.written[i]).string() : ", " + files.written[i];
+  return line + removedNote(files);
+}
+
+std::string removedNote(const StagedOutput::Published& files) {
+  std::string note;
   for (std::size_t i = 0; i < files.removed.size(); ++i)
-    line += (i == 0 ? "; removed " : ", ") + files.removed[i];
-  if (!files.removed.empty()) line += " (an earlier run's)";
-  return line;
+    note += (i == 0 ? "; removed " : ", ") + files.removed[i];
+  if (!files.removed.empty()) note += " (an earlier run's)";
+  return note;
 }
 
 }  // namespace chordfit::cli

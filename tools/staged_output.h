@@ -11,6 +11,11 @@
 // (declared but not written, or `superseded`), e.g. opened.ply of an earlier `simulate --phase
 // open` beside a new closed.ply: only names a chordfit run published there, as the directory's
 // record of them (.chordfit-outputs) says, so a file the user put there is never removed.
+//
+// A declared name may be a relative path ("truth/case/case.json": make-case's truth): each
+// directory's files are recorded in that directory's own record, so a record names only the
+// files beside it, and a directory that held nothing but an earlier run's files is removed
+// with them.
 #pragma once
 
 #include <filesystem>
@@ -22,8 +27,9 @@ namespace chordfit::cli {
 class StagedOutput {
  public:
   // Creates out_dir if missing and a fresh staging directory inside it. `declared`: every
-  // file name the command may write there. `superseded`: names of files an earlier run of the
-  // command, with other options, may have left there and this run does not write.
+  // file name (or relative path) the command may write there. `superseded`: names of files an
+  // earlier run of the command with other options, or of another command writing the same kind
+  // of directory (a case), may have left there and this run does not write.
   StagedOutput(const std::filesystem::path& out_dir, std::vector<std::string> declared,
                std::vector<std::string> superseded = {});
   // Removes the staging directory and whatever is still in it.
@@ -39,8 +45,9 @@ class StagedOutput {
   };
   // Moves every file written into the staging directory to the output directory, replacing
   // files of the same name, then removes the earlier run's files this run supersedes (files
-  // only, never a directory) and updates the record. Throws, changing nothing, when a written
-  // file was not declared or a directory is in the way of one.
+  // only; a directory only when that leaves it empty) and updates the records. Throws,
+  // changing nothing, when a written file was not declared, a directory is in the way of one
+  // or a file in the way of a directory it goes into.
   Published publish();
 
  private:
@@ -51,8 +58,14 @@ class StagedOutput {
 // The record of the files chordfit runs published in a directory (one name per line).
 inline constexpr const char* kOutputRecordName = ".chordfit-outputs";
 
+// Whether a chordfit run published `file`: its directory's record lists it.
+bool publishedByChordfit(const std::filesystem::path& file);
+
 // "wrote DIR/first, second, ...[; removed x, y (an earlier run's)]": the line a command prints
 // after publishing.
 std::string wroteLine(const std::filesystem::path& out_dir, const StagedOutput::Published& files);
+// Its tail, "; removed x, y (an earlier run's)", or "" when nothing was removed: for a command
+// that names what it wrote in its own words (make-case).
+std::string removedNote(const StagedOutput::Published& files);
 
 }  // namespace chordfit::cli
