@@ -78,7 +78,8 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
   EXPECT_EQ(rows[0], (std::vector<std::string>{
                          "label", "cords_file", "area_mm2", "min_mm", "median_mm", "max_mm",
                          "mean_mm", "sd_mm", "prolapse_reconstructed", "section_prolapse_segments",
-                         "prolapse_segments", "tracing_prolapse_segments", "converged", "steps"}));
+                         "prolapse_segments", "tracing_prolapse_segments", "converged", "steps",
+                         "recovery_median_pct", "recovery_median_pct_taut", "max_tip_offset_mm"}));
   for (std::size_t r = 1; r < rows.size(); ++r) {
     ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
     EXPECT_TRUE(rows[r][8] == "yes" || rows[r][8] == "no") << rows[r][8];
@@ -100,6 +101,34 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
             std::string::npos);
   EXPECT_NE(readText(out / "enface_2.svg").find(", loose: closed valve from the atrium"),
             std::string::npos);
+}
+
+// The bundled case is a make-case case: each set is also measured against its truth. The
+// truth's own lengths and tips read 0; the heuristic's do not.
+TEST_F(CompareCommand, MeasuresEachCordSetAgainstTheCasesTruth) {
+  nlohmann::json cords = nlohmann::json::parse(readText(caseDir() / "cords.json"));
+  const nlohmann::json truth = nlohmann::json::parse(readText(caseDir() / "truth" / "truth.json"));
+  ASSERT_EQ(cords["cords"].size(), truth["cords"].size());
+  for (std::size_t i = 0; i < cords["cords"].size(); ++i) {
+    cords["cords"][i]["rest_length_mm"] = truth["cords"][i]["true_rest_length_mm"];
+    cords["cords"][i]["provenance"] = "manual";
+  }
+  for (std::size_t k = 0; k < cords["tips"].size(); ++k)
+    cords["tips"][k]["position"] = truth["tips"][k]["true_position"];
+  const fs::path out = *dir_ / "truth-compare";
+  testing::writeText(out / "true.json", cords.dump(1));
+  const auto r = runChordfit("compare " + quoted(caseDir()) + " " +
+                             quoted(caseDir() / "cords.json") + " " + quoted(out / "true.json") +
+                             " --labels heuristic,true --quiet --out " + quoted(out));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto rows = csvRows(readText(out / "compare.csv"));
+  ASSERT_EQ(rows.size(), 3u);
+  ASSERT_EQ(rows[0].size(), 17u);
+  EXPECT_EQ(rows[2][14], "0.000") << "the truth's lengths";
+  EXPECT_EQ(rows[2][16], "0.000") << "the truth's tips";
+  EXPECT_GT(std::stod(rows[1][14]), 5.0) << "the heuristic is the lengths' upper bound";
+  EXPECT_NE(r.out.find("rest lengths against the truth:  0.0 %"), std::string::npos) << r.out;
+  EXPECT_NE(readText(out / "compare.md").find("Against the case's truth"), std::string::npos);
 }
 
 TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {

@@ -1,0 +1,97 @@
+#include "tools/truth_recovery.h"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <limits>
+
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
+
+namespace chordfit::cli {
+
+namespace {
+
+double median(std::vector<double> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
+// A warning, not an error: the comparison itself does not need the truth.
+std::nullopt_t ignoreTruth(const std::filesystem::path& file, const std::string& what) {
+  std::cerr << "warning: " << file.string() << ": " << what << "; compared without the truth\n";
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
+  const std::filesystem::path file = case_dir / "truth" / "truth.json";
+  std::error_code ec;
+  if (!std::filesystem::exists(file, ec)) return std::nullopt;
+  std::string text;
+  if (!readWholeFile(file, text)) return ignoreTruth(file, "cannot be read");
+  const nlohmann::json truth = nlohmann::json::parse(text, nullptr, false);
+  if (truth.is_discarded()) return ignoreTruth(file, "unreadable JSON");
+  const auto number = [](const nlohmann::json& j, const char* key) {
+    return j.is_object() && j.contains(key) && j[key].is_number();
+  };
+  if (!truth.is_object() || !truth.contains("cords") || !truth["cords"].is_array())
+    return ignoreTruth(file, "cords: expected an array");
+  CaseTruth result;
+  for (std::size_t i = 0; i < truth["cords"].size(); ++i) {
+    const nlohmann::json& c = truth["cords"][i];
+    if (!number(c, "true_rest_length_mm") || !(c["true_rest_length_mm"].get<double>() > 0.0))
+      return ignoreTruth(
+          file, "cords[" + std::to_string(i) + "].true_rest_length_mm: expected a positive number");
+    TrueCord cord;
+    cord.rest_length_mm = c["true_rest_length_mm"].get<double>();
+    cord.ruptured = c.value("ruptured", false);
+    cord.taut = number(c, "true_closed_tension_n") && c["true_closed_tension_n"].get<double>() > 0;
+    result.cords.push_back(cord);
+  }
+  if (truth.contains("tips") && truth["tips"].is_array()) {
+    for (const nlohmann::json& t : truth["tips"]) {
+      const nlohmann::json p = t.is_object() ? t.value("true_position", nlohmann::json()) : nullptr;
+      if (!p.is_array() || p.size() != 3 || !p[0].is_number() || !p[1].is_number() ||
+          !p[2].is_number())
+        return ignoreTruth(file, "tips: each needs a true_position [x, y, z]");
+      result.tip_positions.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+    }
+  }
+  return result;
+}
+
+TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth) {
+  TruthRecovery r;
+  if (set.cords.size() != truth.cords.size()) {
+    r.problem = std::to_string(set.cords.size()) + " cords against the truth's " +
+                std::to_string(truth.cords.size());
+    return r;
+  }
+  std::vector<double> all, taut;
+  for (std::size_t i = 0; i < set.cords.size(); ++i) {
+    const TrueCord& t = truth.cords[i];
+    if (t.ruptured) continue;
+    const double error = 100.0 * std::abs(set.cords[i].rest_length / t.rest_length_mm - 1.0);
+    all.push_back(error);
+    if (t.taut) taut.push_back(error);
+  }
+  r.cords = static_cast<int>(all.size());
+  r.taut_cords = static_cast<int>(taut.size());
+  r.median_error_pct = median(all);
+  r.median_error_taut_pct = median(taut);
+  if (set.tips.size() == truth.tip_positions.size()) {
+    for (std::size_t k = 0; k < set.tips.size(); ++k)
+      r.max_tip_offset_mm =
+          std::max(r.max_tip_offset_mm, (set.tips[k].position - truth.tip_positions[k]).norm());
+  } else {
+    r.max_tip_offset_mm = std::numeric_limits<double>::quiet_NaN();
+  }
+  return r;
+}
+
+}  // namespace chordfit::cli
