@@ -199,14 +199,22 @@ TEST(CaseImport, AnErrorNamesTheInputAndTheLandmarksAtFault) {
   EXPECT_EQ(importValveCase(V, F, good, {}, "closed").error_input, ImportInput::kMesh);
 }
 
-TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
-  TempDir dir;
+// The parametric valve's mesh and landmarks as a user's files in `dir`: valve.ply and
+// landmarks.json; returns the landmarks (one per row: AL, PM, anterior).
+Eigen::MatrixXd writeImportInputs(const fs::path& dir) {
   const ValveCase& truth = valve().valve_case;
   writePly(dir / "valve.ply", truth.mesh.V, truth.mesh.F);
   const ImportLandmarks l = landmarksOf(truth.mesh);
   Eigen::MatrixXd points(3, 3);
   points << l.anterolateral.transpose(), l.posteromedial.transpose(), l.anterior.transpose();
   writePointList(dir / "landmarks.json", points);
+  return points;
+}
+
+TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
+  TempDir dir;
+  const ValveCase& truth = valve().valve_case;
+  const Eigen::MatrixXd points = writeImportInputs(dir.path());
   writePointList(dir / "closed.json", truth.annulus_closed, true);
 
   // Tracings in their own folder, one of them in a curve file beside them.
@@ -252,18 +260,6 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("missing.ply"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "other"));
-}
-
-// The parametric valve's mesh and landmarks as a user's files in `dir`: valve.ply and
-// landmarks.json; returns the landmarks (one per row: AL, PM, anterior).
-Eigen::MatrixXd writeImportInputs(const fs::path& dir) {
-  const ValveCase& truth = valve().valve_case;
-  writePly(dir / "valve.ply", truth.mesh.V, truth.mesh.F);
-  const ImportLandmarks l = landmarksOf(truth.mesh);
-  Eigen::MatrixXd points(3, 3);
-  points << l.anterolateral.transpose(), l.posteromedial.transpose(), l.anterior.transpose();
-  writePointList(dir / "landmarks.json", points);
-  return points;
 }
 
 // import-mesh used to refuse any directory that was not empty, its own earlier output too.
