@@ -51,7 +51,8 @@ run_fit() {
   echo "      scale bounds: $bounds; outputs: $out"
   # At most 1000 forward runs with warm-started finite differences; Ceres stops on its own
   # tolerance after ~280 (about 4 s on 2 idle cores, docs/fitting.md "Measured results").
-  "$exe" fit "$case_dir" --params scales --optimizer ceres --threads "$jobs" --fd-warm \
+  # fit takes at most 64 threads.
+  "$exe" fit "$case_dir" --params scales --optimizer ceres --threads "$((jobs < 64 ? jobs : 64))" --fd-warm \
     --max-sims "${CHORDFIT_MAX_SIMS:-1000}" --scale-bounds "$bounds" --out "$out"
   say "seed vs fit (Table 1 layout; the truth's own deviation, the noise floor, for reference)"
   sed -n '/^| Case/,/^$/p' "$out/report.md"

@@ -222,6 +222,11 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
   }
   const json* points = fields.member(entry, where, "points", false);
   const json* file = fields.member(entry, where, "file", false);
+  if (points != nullptr && file != nullptr) {
+    // Which one did the user mean? Reading one would ignore the other without a word.
+    fields.error(where, "give \"points\" or \"file\", not both");
+    return false;
+  }
   if (points != nullptr) {
     ok &= fields.points(*points, fieldPath(where, "points"), tracing.points);
   } else if (file != nullptr) {

@@ -55,9 +55,9 @@ bool readCordPoint(const json& value, const std::string& where, JsonFields& fiel
 // exit 3, without naming the cord. Chordae are 10-40 mm long on valves spanning 30-60 mm, and
 // make-case models a ruptured cord as ten times its length (truth/cords.json of the flail
 // cases: up to ~300 mm), so a rest length above 1000 mm is a typo or a unit slip. A real
-// chord (E ~50 MPa, 0.5 mm², 20 mm) has a compliance near 1 mm/N and the bundled cases use 0
-// or 0.05; at 10 mm/N a systolic load of ~1 N would stretch a cord by a centimetre.
-constexpr double kMaxComplianceMmPerN = 10.0;
+// chord (E ~50 MPa, 0.5 mm², 20 mm: L / EA = 0.8 mm/N) has a compliance near 1 mm/N and the
+// bundled cases use 0 (inextensible); at 10 mm/N (kMaxCordComplianceMmPerN) a systolic load of
+// ~1 N would stretch a cord by a centimetre.
 constexpr const char* kRestLengthWhy =
     "chordae are 10-40 mm long, a ruptured one in make-case ten times that";
 
@@ -150,7 +150,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       fields.error(fieldPath(where, "compliance_mm_per_N"), "compliance must be >= 0");
       ok = false;
     }
-    ok = ok && atMost(cord.compliance, kMaxComplianceMmPerN, "mm/N",
+    ok = ok && atMost(cord.compliance, kMaxCordComplianceMmPerN, "mm/N",
                       "a real chord is near 1 mm/N; 0 is inextensible",
                       fieldPath(where, "compliance_mm_per_N"), fields);
   }

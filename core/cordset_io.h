@@ -21,6 +21,8 @@ constexpr int kCordSetFormatVersion = 1;
 // The longest rest length a cord set may hold, mm (cordset_io.cpp says why: chordae are
 // 10-40 mm, make-case's ruptured cords ten times that).
 constexpr double kMaxCordRestLengthMm = 1000.0;
+// The largest cord compliance a cord set may hold, mm/N (cordset_io.cpp says why).
+constexpr double kMaxCordComplianceMmPerN = 10.0;
 
 // Reads a cord set file. Tip references are checked against the file's own tips; vertex
 // references need the mesh and are checked by checkCordVertices. Never throws on bad input.

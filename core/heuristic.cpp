@@ -220,7 +220,9 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
     } else {
       subset = splitBySide(mesh, frame, vertices);
     }
-    compliance.assign(attachments.size(), 0.0);
+    for (const CordAttachment& a : attachments)
+      compliance.push_back(a.kind == CordKind::kSecondary ? options.secondary_compliance_mm_per_n
+                                                          : options.primary_compliance_mm_per_n);
   }
 
   std::vector<Eigen::Vector3d> insertions;

@@ -24,6 +24,10 @@ struct HeuristicOptions {
   double secondary_depth_mm = 7.0;    // secondary cords this far (edge path) from the free edge
   // No cord where the leaflet is shorter than this from annulus to the vertex (commissures).
   double min_annulus_distance_mm = 4.0;
+  // Elastic cords per kind (issue 3's "elastic option per cord kind"), mm/N: 0 is the paper's
+  // inextensible cord. For the cords placed here; a case's own cords keep theirs.
+  double primary_compliance_mm_per_n = 0.0;
+  double secondary_compliance_mm_per_n = 0.0;
 };
 
 // The finest cord spacing the automatic placement takes, mm (the defaults are 4 and 6). Below

@@ -395,8 +395,12 @@ class VtkParser {
     return static_cast<int>(value);
   }
 
-  // Fan triangulation; polygons with fewer than 3 corners are skipped.
+  // Fan triangulation. A polygon with fewer than 3 corners is an error, as in the other
+  // formats: dropped, it would leave a hole in the leaflet without a word.
   void addPolygon(std::size_t keyword_pos, const std::vector<long long>& cell) {
+    if (cell.size() < 3)
+      fail(keyword_pos, "POLYGONS: a polygon with " + std::to_string(cell.size()) +
+                            " corner(s); a face needs at least 3");
     for (std::size_t k = 1; k + 1 < cell.size(); ++k)
       triangles_.push_back({toIndex(keyword_pos, cell[0]), toIndex(keyword_pos, cell[k]),
                             toIndex(keyword_pos, cell[k + 1])});

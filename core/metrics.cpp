@@ -290,11 +290,12 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   m.mesh_prolapse = prolapseOfMesh(valve_case, annulus, closed_V, ProlapseOptions{});
   const Eigen::MatrixXd ring = closed_V(valve_case.mesh.annulus, Eigen::all);
   // The leaflets as tissue: the mid-surface grown by half the contact thickness of the case's
-  // settings (orifice_coverage.h). Bad overrides were reported when the case was loaded; here
-  // they only fall back to the defaults.
-  Diagnostics ignored;
+  // settings (orifice_coverage.h). The commands refuse a bad block when they load the case
+  // (caseSettingsOrReport); a caller that did not check gets the default thickness for it.
+  Diagnostics problems;
+  const SimulationSettings settings = settingsFromJson(valve_case.simulation_json, problems);
   const double half_thickness =
-      0.5 * contactThicknessMm(settingsFromJson(valve_case.simulation_json, ignored));
+      0.5 * contactThicknessMm(problems.ok() ? settings : SimulationSettings{});
   m.orifice =
       orificeCoverage(ring, closed_V, valve_case.mesh.F, annulus.frame, 0.25, half_thickness);
   m.self_intersections = countSelfIntersections(closed_V, valve_case.mesh.F);

@@ -3,7 +3,8 @@
 //   alpha~ = alpha / dt^2,
 //   dlambda = (-C - alpha~ lambda) / (sum_i w_i |grad_i C|^2 + alpha~),
 //   x_i += w_i grad_i C dlambda,
-// w_i the inverse mass (0 for Dirichlet vertices). lambda is reset to 0 every time step.
+// w_i the inverse mass (0 for Dirichlet vertices). In the paper lambda is reset to 0 every
+// time step; here it is carried over unless the settings turn warm_start_lambda off (below).
 //
 // Positions are a flat array x[3 * i + d] (d = 0, 1, 2), inverse masses w[i]. Each batch
 // function projects its constraints once, in array order (Gauss-Seidel), so the result is a

@@ -165,6 +165,23 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusRunningTheOtherWayOrCollapsed) {
   expectError("annulus_closed\\.json", "points: the closed annulus is 0 mm around");
 }
 
+TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
+  writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": "posterior", "points": [[1, 0, -2], [2, 0, -2]],
+                              "file": "tracing.csv"}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json", "tracings\\[0\\]: give \"points\" or \"file\", not both");
+}
+
+// A case's simulation block cannot choose the phase: every command closes (simulate --phase
+// open opens after), so an accepted "phase" was ignored.
+TEST_F(ValidateCommand, ReportsAPhaseInTheSimulationBlock) {
+  editCaseJson([](nlohmann::json& j) { j["simulation"] = {{"phase", "open"}}; });
+  expectError(".*case\\.json", "simulation\\.phase: a case's settings cannot choose the phase");
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
   writeText(dir_ / "tracings.json",
             R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},

@@ -124,6 +124,22 @@ TEST(ChordfitCli, MetricsOfTheExampleCaseMatchItsTracings) {
   EXPECT_NE(r.out.find("| Yes |"), std::string::npos) << r.out;
 }
 
+// The metrics take the leaflets' thickness from the case's settings: a bad block is refused
+// as by the commands that simulate (it gave "leaflets ± 0 mm" and exit 0).
+TEST(ChordfitCli, MetricsRefuseABadSimulationBlock) {
+  TempDir dir;
+  const std::filesystem::path example =
+      std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case";
+  std::filesystem::copy(example, dir / "case", std::filesystem::copy_options::recursive);
+  nlohmann::json j = nlohmann::json::parse(testing::readText(dir / "case" / "case.json"));
+  j["simulation"] = {{"thickness_mm", 0}};
+  testing::writeText(dir / "case" / "case.json", j.dump(2));
+  const auto r = runChordfit("metrics " + quoted(dir / "case") + " --mesh " +
+                             quoted(dir / "case" / "open.obj"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("simulation.thickness_mm"), std::string::npos) << r.err;
+}
+
 // A tracing drawn in another tool: the example case's commissural tracing as a Slicer legacy
 // .fcsv in RAS and as a plain CSV gives the same metrics as the markups JSON.
 TEST(ChordfitCli, TracingFilesInFcsvOrCsvGiveTheSameMetrics) {

@@ -121,6 +121,19 @@ TEST_F(AutomaticPlacement, PutsPrimariesOnTheFreeEdgeAndSecondariesOnTheBelly) {
   EXPECT_GT(secondaries, 4);
 }
 
+// Issue 3's elastic option per cord kind: the placed cords take their kind's compliance; a
+// case's own cords keep theirs.
+TEST_F(AutomaticPlacement, GivesEachPlacedCordItsKindsCompliance) {
+  options_.primary_compliance_mm_per_n = 0.5;
+  options_.secondary_compliance_mm_per_n = 1.5;
+  const CordSet set = heuristicCordSet(valve_.valve_case, options_);
+  ASSERT_FALSE(set.cords.empty());
+  for (const Cord& cord : set.cords)
+    EXPECT_EQ(cord.compliance, cord.kind == CordKind::kPrimary ? 0.5 : 1.5);
+  const CordSet own = heuristicCordSet(coneWithUserCords(), options_);
+  for (const Cord& cord : own.cords) EXPECT_EQ(cord.compliance, 0.0);
+}
+
 TEST_F(AutomaticPlacement, SpacesPrimariesAsAskedAlongTheFreeEdge) {
   const ValveMesh& mesh = valve_.valve_case.mesh;
   double free_edge_length = 0.0;

@@ -447,9 +447,8 @@ const char* kVtkClassic =
     "1 4\n"
     "LINES 1 3\n"
     "2 0 4\n"
-    "POLYGONS 2 8\n"
+    "POLYGONS 1 5\n"
     "4 0 1 2 3\n"
-    "2 0 4\n"
     "POINT_DATA 5\n"
     "SCALARS s float 1\n"
     "LOOKUP_TABLE default\n"
@@ -461,7 +460,16 @@ TEST_F(MeshIoTest, AsciiClassicVtkReadsPolygonsAndSkipsEverythingElse) {
   readOk(write("classic.vtk", kVtkClassic), V, F);
   ASSERT_EQ(V.rows(), 5);
   EXPECT_EQ(V.topRows(4), quadVertices());
-  EXPECT_EQ(F, squareFaces());  // the 2-corner polygon is skipped
+  EXPECT_EQ(F, squareFaces());
+}
+
+// As in PLY and OBJ: a face of two corners would leave a hole in the leaflet.
+TEST_F(MeshIoTest, AVtkPolygonWithFewerThanThreeCornersIsAnError) {
+  std::string text = kVtkClassic;
+  text.replace(text.find("POLYGONS 1 5\n"), std::string("POLYGONS 1 5\n").size(),
+               "POLYGONS 2 8\n2 0 4\n");
+  const Problem p = readFails(write("two_corners.vtk", text));
+  EXPECT_NE(p.what.find("a polygon with 2 corner(s)"), std::string::npos) << p.what;
 }
 
 TEST_F(MeshIoTest, AsciiVtk51OffsetsAndConnectivityAreRead) {

@@ -113,6 +113,12 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   Diagnostics diagnostics;
   const SimulationSettings own =
       settingsFromJson(valve_case.simulation_json, diagnostics, {}, case_file);
+  // The library reads "phase" (a closure's direction), but a case's block has no say in it:
+  // every command closes, and simulate --phase open opens after. Accepted, it was ignored.
+  if (!valve_case.simulation_json.empty() &&
+      nlohmann::json::parse(valve_case.simulation_json, nullptr, false).contains("phase"))
+    diagnostics.error(case_file, "simulation.phase",
+                      "a case's settings cannot choose the phase (simulate --phase open does)");
   SimulationSettings settings = own;
   const std::string overrides_source = std::string(command) + ": --set";
   if (!overrides.empty() && diagnostics.ok()) {

@@ -39,6 +39,8 @@ struct HeuristicCommandOptions {
   double primary_spacing_mm = 4.0;
   double secondary_spacing_mm = 6.0;
   double secondary_depth_mm = 7.0;
+  double primary_compliance = 0.0;    // mm/N, HeuristicOptions::primary_compliance_mm_per_n
+  double secondary_compliance = 0.0;  // mm/N
 };
 int runHeuristic(const HeuristicCommandOptions& options);
 

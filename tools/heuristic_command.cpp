@@ -56,12 +56,28 @@ int runHeuristic(const HeuristicCommandOptions& options) {
       return kExitBadInput;
     }
   }
+  for (const auto& [option, compliance] :
+       {std::pair{"--primary-compliance", options.primary_compliance},
+        std::pair{"--secondary-compliance", options.secondary_compliance}}) {
+    if (!(compliance >= 0.0 && compliance <= kMaxCordComplianceMmPerN)) {
+      std::cerr << "error: heuristic: " << option << ": must be in [0, " << kMaxCordComplianceMmPerN
+                << "] mm/N, got " << compliance << "\n";
+      return kExitBadInput;
+    }
+  }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
+  if ((options.primary_compliance > 0.0 || options.secondary_compliance > 0.0) &&
+      valve_case->cords && !valve_case->cords->cords.empty())
+    std::fprintf(stderr,
+                 "note: heuristic: the case's own cords keep their compliance; "
+                 "--primary-compliance and --secondary-compliance apply to placed cords\n");
   HeuristicOptions heuristic;
   heuristic.primary_spacing_mm = options.primary_spacing_mm;
   heuristic.secondary_spacing_mm = options.secondary_spacing_mm;
   heuristic.secondary_depth_mm = options.secondary_depth_mm;
+  heuristic.primary_compliance_mm_per_n = options.primary_compliance;
+  heuristic.secondary_compliance_mm_per_n = options.secondary_compliance;
   const CordSet set = heuristicCordSet(*valve_case, heuristic);
   if (set.cords.empty()) {
     std::cerr << "error: " << options.case_dir

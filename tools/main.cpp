@@ -66,6 +66,13 @@ void addHeuristic(CLI::App& app, HeuristicCommandOptions& o) {
   cmd->add_option("--secondary-depth", o.secondary_depth_mm,
                   "Distance of secondary cords from the free edge, mm")
       ->capture_default_str();
+  cmd->add_option("--primary-compliance", o.primary_compliance,
+                  "Elastic primary cords: compliance in mm/N (0: inextensible, the paper's); "
+                  "for the cords placed, a case's own cords keep theirs")
+      ->capture_default_str();
+  cmd->add_option("--secondary-compliance", o.secondary_compliance,
+                  "Elastic secondary cords: compliance in mm/N")
+      ->capture_default_str();
 }
 
 void addMetrics(CLI::App& app, MetricsOptions& o) {

@@ -12,8 +12,11 @@
 namespace chordfit::cli {
 
 int runMetrics(const MetricsOptions& options) {
-  const auto valve_case = loadCaseOrReport(options.case_dir);
+  auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
+  // The settings give the leaflets' thickness for the orifice coverage: a bad block is refused
+  // here as by the commands that simulate.
+  if (!caseSettingsOrReport(*valve_case, options.case_dir, "metrics")) return kExitBadInput;
   Diagnostics diagnostics;
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
