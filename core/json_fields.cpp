@@ -104,30 +104,31 @@ std::string indexPath(const std::string& parent, std::size_t index) {
   return parent + "[" + std::to_string(index) + "]";
 }
 
+std::string typoSuggestion(const std::string& key, const std::vector<std::string>& known) {
+  // Two edits catch a dropped or doubled letter and a swap in a word; in a key of four
+  // letters or fewer two edits pair unrelated words ("id" -> "tip"), so one there.
+  const std::size_t max_typo_edits = key.size() <= 4 ? 1 : 2;
+  std::string nearest;
+  std::size_t nearest_edits = max_typo_edits + 1;
+  for (const std::string& name : known) {
+    const std::size_t edits = editDistance(key, name);
+    if (edits < nearest_edits) {
+      nearest_edits = edits;
+      nearest = name;
+    }
+  }
+  return nearest.empty() ? "" : "; did you mean \"" + nearest + "\"?";
+}
+
 bool JsonFields::knownKeys(const nlohmann::json& object, const std::string& where,
                            std::initializer_list<const char*> known) {
   if (!object.is_object()) return true;  // the type is reported where the object is read
+  const std::vector<std::string> names(known.begin(), known.end());
   bool ok = true;
   for (const auto& item : object.items()) {
     const std::string& key = item.key();
-    // Two edits catch a dropped or doubled letter and a swap in a word; in a key of four
-    // letters or fewer two edits pair unrelated words ("id" -> "tip"), so one there.
-    const std::size_t max_typo_edits = key.size() <= 4 ? 1 : 2;
-    std::string nearest;
-    std::size_t nearest_edits = max_typo_edits + 1;
-    bool is_known = false;
-    for (const char* name : known) {
-      is_known |= key == name;
-      const std::size_t edits = editDistance(key, name);
-      if (edits < nearest_edits) {
-        nearest_edits = edits;
-        nearest = name;
-      }
-    }
-    if (is_known) continue;
-    std::string what = "unknown key";
-    if (!nearest.empty()) what += "; did you mean \"" + nearest + "\"?";
-    error(fieldPath(where, key), what);
+    if (std::find(names.begin(), names.end(), key) != names.end()) continue;
+    error(fieldPath(where, key), "unknown key" + typoSuggestion(key, names));
     ok = false;
   }
   return ok;

@@ -8,6 +8,7 @@
 #include <initializer_list>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 #include <nlohmann/json.hpp>
@@ -27,6 +28,10 @@ std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
 
 // "object", "array", "string", "number", "boolean", "null".
 std::string jsonTypeName(const nlohmann::json& value);
+
+// "; did you mean \"<name>\"?" for the name in `known` a typo of `key` explains (one or two
+// edits), or "" when none does: the tail of an "unknown key" message.
+std::string typoSuggestion(const std::string& key, const std::vector<std::string>& known);
 
 class JsonFields {
  public:

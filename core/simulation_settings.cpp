@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 #include <nlohmann/json.hpp>
 
@@ -188,7 +189,13 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
           fields.error(where, "expected \"close\" or \"open\", got \"" + out + "\"");
       }
     }
-    if (!known) fields.error(where, "unknown simulation setting");
+    if (!known) {
+      std::vector<std::string> names = {"contact", "edge_contact", "warm_start_lambda",
+                                        "kinetic_damping"};
+      for (const auto& nk : numbers) names.emplace_back(nk.key);
+      for (const auto& ik : integers) names.emplace_back(ik.key);
+      fields.error(where, "unknown simulation setting" + typoSuggestion(key, names));
+    }
   }
   for (const SettingsProblem& problem : settingsProblems(s))
     fields.error("simulation." + problem.key, problem.what);

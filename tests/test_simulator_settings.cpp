@@ -49,6 +49,17 @@ TEST(SimulatorSettingsRanges, ZeroNegativeAndAbsurdValuesAreRejected) {
   EXPECT_EQ(problems.size(), 7u);
 }
 
+// As for every other object's keys: a typo is named with the setting it may have meant.
+TEST(SimulatorSettingsRanges, AnUnknownSettingSuggestsTheNearestKnownOne) {
+  Diagnostics diagnostics;
+  settingsFromJson(R"({"presure_mmhg": 90, "qqq": 1})", diagnostics, {}, "case.json");
+  ASSERT_EQ(diagnostics.problems().size(), 2u);
+  EXPECT_EQ(diagnostics.problems()[0].where, "simulation.presure_mmhg");
+  EXPECT_EQ(diagnostics.problems()[0].what,
+            "unknown simulation setting; did you mean \"pressure_mmhg\"?");
+  EXPECT_EQ(diagnostics.problems()[1].what, "unknown simulation setting");
+}
+
 TEST(SimulatorSettingsRanges, AreaFloorIsReadFromJsonAndZeroDisablesIt) {
   Diagnostics diagnostics;
   const SimulationSettings s =
