@@ -5,7 +5,6 @@
 #include <array>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
@@ -544,16 +543,24 @@ void appendInt32(std::string& out, int value) {
   appendLittleEndian(out, static_cast<std::uint32_t>(value), 4);
 }
 
-// Shortest text that reads back to the same value; NaN without a sign, as ParaView expects.
-template <typename Real>
-void appendText(std::string& out, Real value) {
-  if (std::isnan(value)) {
-    out += "nan";
-    return;
+// Big-endian bytes: the byte order of binary legacy VTK files (VTK file formats, "Binary
+// Files").
+void appendBigEndian(std::string& out, std::uint64_t bits, int size) {
+  for (int i = size - 1; i >= 0; --i) out += static_cast<char>((bits >> (8 * i)) & 0xff);
+}
+
+template <typename T>
+void appendBigEndianValue(std::string& out, T value) {
+  static_assert(sizeof(T) == 4 || sizeof(T) == 8);
+  if constexpr (sizeof(T) == 8) {
+    std::uint64_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    appendBigEndian(out, bits, 8);
+  } else {
+    std::uint32_t bits;
+    std::memcpy(&bits, &value, sizeof bits);
+    appendBigEndian(out, bits, 4);
   }
-  char buffer[64];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  out.append(buffer, result.ptr);
 }
 
 }  // namespace
@@ -612,32 +619,30 @@ void writePly(const fs::path& path, const Eigen::MatrixXd& V, const Eigen::Matri
   writeFileAtomically(path, out);
 }
 
-// Also throws std::invalid_argument like writePly.
+// Also throws std::invalid_argument like writePly. Binary legacy VTK: the scalars hold NaN
+// (distance_to_tracing_mm away from the tracing planes), and VTK 9.1's ASCII legacy reader
+// (Debian bookworm's ParaView and python3-vtk9) cannot parse "nan": it misread every value
+// after the first one, silently. Binary floats carry NaN as NaN.
 void writeVtk(const fs::path& path, const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
               const std::vector<VertexScalarField>& scalars) {
   requireExtension(path, ".vtk");
   requireShapes(path, V, F, scalars);
-  std::string out = "# vtk DataFile Version 3.0\nchordfit mesh\nASCII\nDATASET POLYDATA\n";
+  std::string out = "# vtk DataFile Version 3.0\nchordfit mesh\nBINARY\nDATASET POLYDATA\n";
   out += "POINTS " + std::to_string(V.rows()) + " double\n";
-  for (Eigen::Index i = 0; i < V.rows(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      if (k > 0) out += ' ';
-      appendText(out, V(i, k));
-    }
-    out += '\n';
-  }
-  out += "POLYGONS " + std::to_string(F.rows()) + " " + std::to_string(4 * F.rows()) + "\n";
+  for (Eigen::Index i = 0; i < V.rows(); ++i)
+    for (int k = 0; k < 3; ++k) appendBigEndianValue(out, V(i, k));
+  out += "\nPOLYGONS " + std::to_string(F.rows()) + " " + std::to_string(4 * F.rows()) + "\n";
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    out += "3 " + std::to_string(F(f, 0)) + " " + std::to_string(F(f, 1)) + " " +
-           std::to_string(F(f, 2)) + "\n";
+    appendBigEndianValue(out, std::int32_t{3});
+    for (int k = 0; k < 3; ++k) appendBigEndianValue(out, static_cast<std::int32_t>(F(f, k)));
   }
+  out += "\n";
   if (!scalars.empty()) out += "POINT_DATA " + std::to_string(V.rows()) + "\n";
   for (std::size_t s = 0; s < scalars.size(); ++s) {
     out += "SCALARS " + sanitizedName(scalars[s].name, s) + " float 1\nLOOKUP_TABLE default\n";
-    for (Eigen::Index i = 0; i < V.rows(); ++i) {
-      appendText(out, static_cast<float>(scalars[s].values(i)));
-      out += '\n';
-    }
+    for (Eigen::Index i = 0; i < V.rows(); ++i)
+      appendBigEndianValue(out, static_cast<float>(scalars[s].values(i)));
+    out += "\n";
   }
   writeFileAtomically(path, out);
 }

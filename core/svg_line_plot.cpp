@@ -180,7 +180,16 @@ std::vector<double> logTicks(double lo_exponent, double hi_exponent, int max_tic
       }
       if (!ticks.empty() && std::log10(ticks.back()) >= hi_exponent - 1e-9) break;
     }
-    if (static_cast<int>(ticks.size()) <= max_ticks || mantissas.size() == 1) return ticks;
+    if (static_cast<int>(ticks.size()) <= max_ticks) return ticks;
+    if (mantissas.size() == 1) {
+      // Decades, every k-th, so that a range of hundreds of decades keeps a readable axis.
+      const std::size_t k = (ticks.size() + max_ticks - 1) / max_ticks;
+      std::vector<double> thinned;
+      for (std::size_t i = 0; i < ticks.size(); i += k) thinned.push_back(ticks[i]);
+      if (std::log10(thinned.back()) < hi_exponent - 1e-9)
+        thinned.push_back(thinned.back() * std::pow(10.0, static_cast<double>(k)));
+      return thinned;
+    }
   }
   return {};
 }

@@ -35,8 +35,8 @@ std::string svgLinePlots(const std::vector<PlotPanel>& panels, int columns = 1,
 std::vector<double> niceTicks(double lo, double hi, int target = 6);
 
 // Tick values (not exponents) for a log axis over [10^lo_exponent, 10^hi_exponent]: 1, 2, 5
-// x 10^k, or the decades alone when those would be more than `max_ticks`; the first at or
-// below the range, the last at or above it.
+// x 10^k, or the decades alone when those would be more than `max_ticks` (every k-th decade
+// when even those would be); the first at or below the range, the last at or above it.
 std::vector<double> logTicks(double lo_exponent, double hi_exponent, int max_ticks = 9);
 
 }  // namespace chordfit

@@ -1,5 +1,6 @@
 #include "inverse/ceres_driver.h"
 
+#include <cfloat>
 #include <cmath>
 #include <mutex>
 #include <vector>
@@ -76,8 +77,11 @@ class ProgressAndBudget : public ceres::IterationCallback {
     const auto at = summary.step_is_successful
                         ? objective_.cached(toVector(x_.data(), static_cast<int>(x_.size())))
                         : objective_.latest();
-    objective_.recordIteration("ceres", summary.iteration, summary.cost,
-                               at ? at->mean_deviation_mm : NAN);
+    // A trial whose closure failed has no AvgD, and Ceres gives it the cost DBL_MAX: NaN for
+    // both (a gap in the history, not a 0 mm AvgD or a 1e308 cost on the plot's axis).
+    const bool failed = !at || !at->ok() || !(summary.cost < 0.5 * DBL_MAX);
+    objective_.recordIteration("ceres", summary.iteration, failed ? NAN : summary.cost,
+                               failed ? NAN : at->mean_deviation_mm);
     // Go on while a trial step fits: it needs one closure and uses the Jacobian at x, already
     // computed. When an accepted trial's own Jacobian no longer fits, jacobian() refuses it
     // and the solve ends there, the trial kept as the best point seen. (Stopping as soon as
@@ -101,7 +105,10 @@ class ProgressAndBudget : public ceres::IterationCallback {
 void quietCeresLogging() {
   static std::once_flag once;
   std::call_once(once, [] {
-    FLAGS_minloglevel = google::GLOG_ERROR;
+    // Ceres logs at ERROR what the driver reports itself: "Terminating: Residual and Jacobian
+    // evaluation failed" is the budget refusing a Jacobian (the termination says so), and a
+    // new user read the glog line on stderr as a failure. Only fatal ones pass.
+    FLAGS_minloglevel = google::GLOG_FATAL;
     FLAGS_logtostderr = true;
     if (!google::IsGoogleLoggingInitialized()) google::InitGoogleLogging("chordfit");
   });
@@ -166,6 +173,13 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
+  // An accepted trial whose Jacobian the budget refused ends the solve inside Ceres, before
+  // the iteration callback: record it, or the history would credit the next stage (the slack
+  // release) with its drop.
+  if (objective.refusedJacobianSims() > 0 && objective.best() &&
+      (objective.history().empty() || objective.history().back().cost != objective.best()->cost))
+    objective.recordIteration("ceres", static_cast<int>(summary.iterations.size()),
+                              objective.best()->cost, objective.best()->mean_deviation_mm);
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
     return "budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +

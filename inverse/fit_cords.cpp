@@ -136,6 +136,10 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     objective.remember(start_evaluation);
   }
   outcome.termination = optimizer->minimize(objective, options.optimizer_settings);
+  // The drivers count against the optimiser's share; say where the rest of --max-sims went.
+  if (release_slack && outcome.termination.rfind("budget of", 0) == 0)
+    outcome.termination += "; 1 more of --max-sims " + std::to_string(options.max_sims) +
+                           " kept for the slack release";
   for (const IterationRecord& r : objective.history()) outcome.history.push_back(r);
   outcome.forward_sims = objective.forwardSims();
   outcome.parameter_names = parameters.names();

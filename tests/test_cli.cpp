@@ -226,6 +226,41 @@ TEST(ChordfitCli, MakeValveOverAnEarlierCaseRemovesWhatTheNewCaseLacksAndKeepsTh
   EXPECT_NE(r.out.find("parametric-mitral"), std::string::npos) << r.out;
 }
 
+// A file the user wrote over a name a staged run had published (heuristic --out cords.json
+// in a make-case directory) is the user's now: a later make-valve there keeps it.
+TEST(ChordfitCli, MakeValveKeepsACordSetTheUserWroteOverTheCasesOwn) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  auto r = runChordfit("make-case --preset normal-1 --edge 3.0 --planes 2 --quiet --out " +
+                       quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runChordfit("heuristic " + quoted(case_dir) + " --primary-spacing 5 --out " +
+                  quoted(case_dir / "cords.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string users = testing::readText(case_dir / "cords.json");
+  r = runChordfit("make-valve --edge 3.0 --out " + quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("removed tracings.json, cords.json,"), std::string::npos) << r.out;
+  ASSERT_TRUE(std::filesystem::exists(case_dir / "cords.json"));
+  EXPECT_EQ(testing::readText(case_dir / "cords.json"), users);
+  EXPECT_FALSE(std::filesystem::exists(case_dir / "tracings.json")) << "the earlier case's";
+}
+
+// A dangling link where make-case's truth/ goes: refused before any work, the directory as
+// it was (it failed after the case's files had been replaced).
+TEST(ChordfitCli, MakeCaseRefusesADanglingLinkWhereTheTruthGoes) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  std::filesystem::create_directories(case_dir);
+  testing::writeText(case_dir / "case.json", "the user's");
+  std::filesystem::create_symlink(dir / "nowhere", case_dir / "truth");
+  const auto r = runChordfit("make-case --preset normal-1 --edge 5 --planes 2 --quiet --out " +
+                             quoted(case_dir));
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find("in the way of an output directory"), std::string::npos) << r.err;
+  EXPECT_EQ(testing::readText(case_dir / "case.json"), "the user's");
+}
+
 TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
   TempDir dir;
   const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --edge -1");

@@ -75,15 +75,32 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
 
   const auto rows = csvRows(readText(out / "compare.csv"));
   ASSERT_EQ(rows.size(), 3u);
-  EXPECT_EQ(rows[0], (std::vector<std::string>{
-                         "label", "cords_file", "area_mm2", "min_mm", "median_mm", "max_mm",
-                         "mean_mm", "sd_mm", "prolapse_reconstructed", "section_prolapse_segments",
-                         "prolapse_segments", "tracing_prolapse_segments", "converged", "steps",
-                         "recovery_median_pct", "recovery_median_pct_taut", "max_tip_offset_mm"}));
+  EXPECT_EQ(rows[0], (std::vector<std::string>{"label",
+                                               "cords_file",
+                                               "area_mm2",
+                                               "min_mm",
+                                               "median_mm",
+                                               "max_mm",
+                                               "mean_mm",
+                                               "sd_mm",
+                                               "prolapse_reconstructed",
+                                               "section_prolapse_segments",
+                                               "prolapse_segments",
+                                               "tracing_prolapse_segments",
+                                               "converged",
+                                               "steps",
+                                               "recovery_median_pct",
+                                               "recovery_median_pct_taut",
+                                               "max_tip_offset_mm",
+                                               "orifice_coverage",
+                                               "open_orifice_area_mm2",
+                                               "self_intersections"}));
   for (std::size_t r = 1; r < rows.size(); ++r) {
     ASSERT_EQ(rows[r].size(), rows[0].size()) << "row " << r;
     EXPECT_TRUE(rows[r][8] == "yes" || rows[r][8] == "no") << rows[r][8];
     EXPECT_GT(std::stoi(rows[r][13]), 0) << "steps";
+    EXPECT_GT(std::stod(rows[r][17]), 0.5) << "orifice coverage";
+    EXPECT_EQ(rows[r][19], "0") << "self-intersections";
     EXPECT_LE(std::stod(rows[r][3]), std::stod(rows[r][4]));  // min <= median
     EXPECT_LE(std::stod(rows[r][4]), std::stod(rows[r][5]));  // median <= max
   }
@@ -123,11 +140,13 @@ TEST_F(CompareCommand, MeasuresEachCordSetAgainstTheCasesTruth) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto rows = csvRows(readText(out / "compare.csv"));
   ASSERT_EQ(rows.size(), 3u);
-  ASSERT_EQ(rows[0].size(), 17u);
+  ASSERT_EQ(rows[0].size(), 20u);
   EXPECT_EQ(rows[2][14], "0.000") << "the truth's lengths";
   EXPECT_EQ(rows[2][16], "0.000") << "the truth's tips";
   EXPECT_GT(std::stod(rows[1][14]), 5.0) << "the heuristic is the lengths' upper bound";
-  EXPECT_NE(r.out.find("rest lengths against the truth:  0.0 %"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("against the truth (truth/truth.json), median |rest / true - 1|: 0.0 %"),
+            std::string::npos)
+      << r.out;
   EXPECT_NE(readText(out / "compare.md").find("Against the case's truth"), std::string::npos);
 }
 

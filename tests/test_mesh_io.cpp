@@ -560,12 +560,25 @@ TEST_F(MeshIoTest, WriteVtkReadsBackExactlyAndNamesItsScalars) {
   EXPECT_TRUE(V.cwiseEqual(squareVertices()).all()) << V;
   EXPECT_EQ(F, squareFaces());
   const std::string text = read(path);
-  EXPECT_EQ(text.rfind("# vtk DataFile Version 3.0\n", 0), 0u);
+  EXPECT_EQ(text.rfind("# vtk DataFile Version 3.0\nchordfit mesh\nBINARY\n", 0), 0u);
   const std::string point_data = text.substr(text.find("POINT_DATA 4\n"));
-  EXPECT_NE(point_data.find("SCALARS deviation_mm float 1\nLOOKUP_TABLE default\n"),
-            std::string::npos);
+  const std::string header = "SCALARS deviation_mm float 1\nLOOKUP_TABLE default\n";
+  const std::size_t at = point_data.find(header);
+  ASSERT_NE(at, std::string::npos);
   EXPECT_NE(point_data.find("SCALARS leaflet float 1\n"), std::string::npos);
-  EXPECT_NE(point_data.find("\nnan\n"), std::string::npos);
+  // Big-endian floats: 0.5, NaN (binary, since VTK 9.1's ASCII reader cannot read "nan"),
+  // -1.25, 3.
+  float values[4];
+  for (int i = 0; i < 4; ++i) {
+    std::uint32_t bits = 0;
+    for (int b = 0; b < 4; ++b)
+      bits = (bits << 8) | static_cast<unsigned char>(point_data[at + header.size() + 4 * i + b]);
+    std::memcpy(&values[i], &bits, sizeof bits);
+  }
+  EXPECT_EQ(values[0], 0.5f);
+  EXPECT_TRUE(std::isnan(values[1]));
+  EXPECT_EQ(values[2], -1.25f);
+  EXPECT_EQ(values[3], 3.0f);
 }
 
 TEST_F(MeshIoTest, MalformedVtkIsReportedWithALine) {

@@ -16,6 +16,20 @@ TEST(NiceTicks, UseOneTwoFiveSteps) {
   EXPECT_GE(ticks.back(), 1.05 - 1e-12);
 }
 
+// Log-axis ticks are values of 1, 2, 5 x 10^k that cover the range (the convergence plot's
+// cost axis): 158, 251, 398 were the ticks of equal exponent steps before.
+TEST(LogTicks, UseOneTwoFiveValuesCoveringTheRangeAndThinLongRanges) {
+  const std::vector<double> ticks = logTicks(2.0, std::log10(1201.0));
+  ASSERT_EQ(ticks.size(), 5u);
+  const double expected[] = {100, 200, 500, 1000, 2000};
+  for (std::size_t i = 0; i < ticks.size(); ++i) EXPECT_NEAR(ticks[i], expected[i], 1e-9);
+  // A cost of 1e308 (a failed closure) on the axis gave ~309 gridlines.
+  const std::vector<double> decades = logTicks(0.0, 300.0);
+  EXPECT_LE(decades.size(), 10u);
+  EXPECT_LE(decades.front(), 1.0);
+  EXPECT_GE(std::log10(decades.back()), 300.0 - 1e-9);
+}
+
 TEST(SvgLinePlots, WritesOnePathPerSeriesAndEscapesLabels) {
   PlotPanel panel{"cost <history>", "iteration", "cost", {}, true};
   panel.series.push_back({"ceres & co", {0, 1, 2}, {10, 1, 0.1}, true, true});

@@ -234,8 +234,11 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
     // A name in a subdirectory (make-case's truth/): a file where the directory goes.
     for (std::filesystem::path sub = std::filesystem::path(name).parent_path(); !sub.empty();
          sub = sub.parent_path()) {
-      const auto status = std::filesystem::status(std::filesystem::path(directory) / sub, ec);
-      if (std::filesystem::exists(status) && !std::filesystem::is_directory(status))
+      // Anything there that is not a directory, following links: a file, or a link to a file
+      // or to nothing (a dangling link failed only at publish, after the first renames).
+      const std::filesystem::path place = std::filesystem::path(directory) / sub;
+      if (std::filesystem::exists(std::filesystem::symlink_status(place, ec)) &&
+          !std::filesystem::is_directory(std::filesystem::status(place, ec)))
         return reportOutputProblem(command, (std::filesystem::path(directory) / sub).string(),
                                    "a file of that name is in the way of an output directory");
     }

@@ -145,7 +145,8 @@ std::string compareCsv(const std::vector<ComparedSet>& sets) {
   std::string csv =
       "label,cords_file,area_mm2,min_mm,median_mm,max_mm,mean_mm,sd_mm,prolapse_reconstructed,"
       "section_prolapse_segments,prolapse_segments,tracing_prolapse_segments,converged,steps,"
-      "recovery_median_pct,recovery_median_pct_taut,max_tip_offset_mm\n";
+      "recovery_median_pct,recovery_median_pct_taut,max_tip_offset_mm,orifice_coverage,"
+      "open_orifice_area_mm2,self_intersections\n";
   for (const ComparedSet& s : sets) {
     const ValveMetrics& m = s.metrics;
     const DeviationStats& d = m.deviation;
@@ -158,9 +159,19 @@ std::string compareCsv(const std::vector<ComparedSet>& sets) {
            segmentCell(m.mesh_prolapse.segments) + "," +
            (t ? segmentCell(m.tracing_prolapse.segments) : "") + "," +
            (s.converged ? "yes" : "no") + "," + std::to_string(s.steps) + "," +
-           recoveryCsvCells(s.recovery) + "\n";
+           recoveryCsvCells(s.recovery) + "," + finiteCell(m.orifice.coverage(), "%.4f") + "," +
+           csvNumber(m.orifice.open_area_mm2, "%.1f") + "," + std::to_string(m.self_intersections) +
+           "\n";
   }
   return csv;
+}
+
+// "97.9 % (12)": the closed valve's orifice coverage seen en face and its open area.
+std::string coverageCell(const OrificeCoverage& orifice) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.1f %% (%.0f)", 100.0 * orifice.coverage(),
+                orifice.open_area_mm2);
+  return text;
 }
 
 std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& sets,
@@ -176,15 +187,16 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
   for (const ComparedSet& s : sets) md += table1Row(s.label, s.metrics);
   md +=
       "\n| Cord set | File | Prolapse (tracings) | Prolapse (mesh, tracing planes) | Prolapse "
-      "(mesh tissue) | Converged (steps) |\n|---|---|---|---|---|---|\n";
+      "(mesh tissue) | Orifice covered (open mm²) | Converged (steps) |\n"
+      "|---|---|---|---|---|---|---|\n";
   for (const ComparedSet& s : sets) {
     const ValveMetrics& m = s.metrics;
     const std::string none = "– (no tracings)";
     md += "| " + s.label + " | `" + s.file + "` | " +
           (m.has_tracings ? joinSegments(m.tracing_prolapse.segments) : none) + " | " +
           (m.has_tracings ? joinSegments(m.section_prolapse.segments) : none) + " | " +
-          joinSegments(m.mesh_prolapse.segments) + " | " + (s.converged ? "yes" : "no") + " (" +
-          std::to_string(s.steps) + ") |\n";
+          joinSegments(m.mesh_prolapse.segments) + " | " + coverageCell(m.orifice) + " | " +
+          (s.converged ? "yes" : "no") + " (" + std::to_string(s.steps) + ") |\n";
   }
   if (sets.front().recovery) {
     md +=
@@ -314,7 +326,8 @@ int runCompare(const CompareOptions& options) {
     std::cout << s.label << (s.converged ? "" : "  [closure NOT converged]") << ":\n"
               << closedValveSummary(s.metrics, "  ");
     if (s.recovery)
-      std::cout << "  rest lengths against the truth:  " << recoveryText(*s.recovery) << "\n";
+      std::cout << "  against the truth (truth/truth.json), median |rest / true - 1|: "
+                << recoveryText(*s.recovery) << "\n";
   }
   if (!options.out_dir.empty()) {
     StagedOutput staged(options.out_dir, compareOutputFiles(options),

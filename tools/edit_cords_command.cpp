@@ -17,6 +17,7 @@
 #include "core/metrics.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -263,6 +264,7 @@ int runEditCords(const EditCordsOptions& options) {
   }
 
   writeCordSet(options.out_file, set, &mesh);
+  forgetPublished(options.out_file);  // now the user's file (staged_output.h)
 
   const auto locked_in_all = std::count_if(set.cords.begin(), set.cords.end(),
                                            [](const Cord& cord) { return cord.locked; });

@@ -7,6 +7,7 @@
 #include "core/heuristic.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -85,6 +86,7 @@ int runHeuristic(const HeuristicCommandOptions& options) {
     return kExitBadInput;
   }
   writeCordSet(options.out_file, set, &valve_case->mesh);
+  forgetPublished(options.out_file);  // now the user's file (staged_output.h)
   std::cout << "heuristic cord set: " << set.cords.size() << " cords on " << set.tips.size()
             << " PM tips -> " << options.out_file << "\n";
   printCordSummary(set, valve_case->mesh);

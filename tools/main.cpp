@@ -1,11 +1,13 @@
 // chordfit: command-line entry. The only translation unit that includes CLI11 (slow headers);
 // it fills the option structs of commands.h and dispatches.
+#include <csignal>
 #include <exception>
 #include <filesystem>
 #include <iostream>
 #include <string>
 #include <vector>
 
+#include <unistd.h>
 #include <CLI/CLI.hpp>
 
 #include "tools/command_support.h"
@@ -295,7 +297,25 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
 
 }  // namespace
 
+namespace {
+
+// Ctrl-C or a kill mid-run used to end without a word. Say so, then die of the signal as
+// before (exit status 128 + signal: 130, 143), which scripts and shells recognise. Every
+// command writes its results only when it finishes (staged, then renamed in), so an
+// interrupted run leaves no half-written output; only async-signal-safe calls here.
+extern "C" void reportInterruption(int signal_number) {
+  static const char message[] =
+      "\nchordfit: interrupted; outputs are written only when a command finishes\n";
+  [[maybe_unused]] const ssize_t written = ::write(STDERR_FILENO, message, sizeof message - 1);
+  std::signal(signal_number, SIG_DFL);
+  std::raise(signal_number);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
+  std::signal(SIGINT, reportInterruption);
+  std::signal(SIGTERM, reportInterruption);
   CLI::App app{"chordfit: chordae tendineae fitting for mitral valve closure simulation"};
   app.require_subcommand(1);
   app.set_version_flag("--version", "chordfit 0.1.0");

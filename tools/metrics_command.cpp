@@ -8,6 +8,7 @@
 #include "core/metrics_json.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -43,6 +44,7 @@ int runMetrics(const MetricsOptions& options) {
             << " mm\n";
   if (!options.out_file.empty()) {
     writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");
+    forgetPublished(options.out_file);  // now the user's file (staged_output.h)
     std::cout << "wrote " << options.out_file << "\n";
   }
   return kExitOk;

@@ -56,7 +56,25 @@ std::vector<std::string> stagedFiles(const fs::path& staging) {
     files.push_back(entry.path().lexically_relative(staging).generic_string());
   }
   std::sort(files.begin(), files.end());
+  // A case's case.json last, the truth's before the case's own (as writeCase, core/case_io.h):
+  // a new case directory holds no loadable case until every file is in place. Over an earlier
+  // case a short window remains in which its case.json names new files.
+  // Key: other files first (in name order), then the case.json files, deeper paths first.
+  const auto key = [](const std::string& name) {
+    const bool is_case = fs::path(name).filename() == "case.json";
+    return std::pair<int, long>{is_case ? 1 : 0, is_case ? -static_cast<long>(name.size()) : 0};
+  };
+  std::stable_sort(files.begin(), files.end(),
+                   [&](const std::string& a, const std::string& b) { return key(a) < key(b); });
   return files;
+}
+
+// Whether something is at `path` that is not a directory (following links): a file, or a
+// link to a file or to nothing (a dangling link passed fs::status and made the directory's
+// creation fail after the first renames).
+bool somethingNotADirectory(const fs::path& path) {
+  std::error_code ec;
+  return fs::exists(fs::symlink_status(path, ec)) && !fs::is_directory(fs::status(path, ec));
 }
 
 // Throws when something in `out` is in the way of the staged file `name`: a directory where
@@ -71,8 +89,7 @@ void checkNothingInTheWay(const fs::path& out, const std::string& name) {
                              ": a directory of that name is in the way of the output file "
                              "(nothing was written)");
   for (fs::path dir = fs::path(name).parent_path(); !dir.empty(); dir = dir.parent_path()) {
-    const fs::file_status status = fs::status(out / dir, ec);
-    if (fs::exists(status) && !fs::is_directory(status))
+    if (somethingNotADirectory(out / dir))
       throw std::runtime_error((out / dir).string() +
                                ": a file of that name is in the way of an output directory "
                                "(nothing was written)");
@@ -112,7 +129,8 @@ void updateRecord(const fs::path& out, const std::string& dir,
     std::error_code ec;
     if (recorded.empty() && !fs::exists(place / kOutputRecordName, ec)) return;  // not ours
     fs::remove(place / kOutputRecordName, ec);
-    fs::remove(place, ec);  // only when empty
+    // Only a real, empty directory: a link to one (the user's shared truth/) stays a link.
+    if (fs::is_directory(fs::symlink_status(place, ec))) fs::remove(place, ec);
     return;
   }
   std::string text;
@@ -126,6 +144,17 @@ bool publishedByChordfit(const fs::path& file) {
   return contains(recordedOutputs(file.parent_path()), file.filename().string());
 }
 
+void forgetPublished(const fs::path& file) {
+  const fs::path dir = file.parent_path();
+  std::vector<std::string> names = recordedOutputs(dir);
+  const auto it = std::find(names.begin(), names.end(), file.filename().string());
+  if (it == names.end()) return;
+  names.erase(it);
+  std::string text;
+  for (const std::string& name : names) text += name + "\n";
+  writeFileAtomically(dir / kOutputRecordName, text);
+}
+
 StagedOutput::Published StagedOutput::publish() {
   const std::vector<std::string> files = stagedFiles(staging_);
   for (const std::string& name : files) {
@@ -135,10 +164,9 @@ StagedOutput::Published StagedOutput::publish() {
                              "files (nothing was published)");
   }
   for (const std::string& name : files) checkNothingInTheWay(out_, name);
-  for (const std::string& name : files) {
-    fs::create_directories((out_ / name).parent_path());
-    fs::rename(staging_ / name, out_ / name);
-  }
+  // Every directory first: a failure to create one then changes no file of the output.
+  for (const std::string& name : files) fs::create_directories((out_ / name).parent_path());
+  for (const std::string& name : files) fs::rename(staging_ / name, out_ / name);
 
   Published published;
   std::vector<std::string> stale;

@@ -61,6 +61,12 @@ inline constexpr const char* kOutputRecordName = ".chordfit-outputs";
 // Whether a chordfit run published `file`: its directory's record lists it.
 bool publishedByChordfit(const std::filesystem::path& file);
 
+// Drops `file`'s name from its directory's record: a command that writes one file of the
+// user's choosing (heuristic, edit-cords, metrics --out) has replaced what a staged run
+// published there, and a later staged run must not take the user's file for its own stale
+// output (make-valve removed a cords.json the user had written with heuristic).
+void forgetPublished(const std::filesystem::path& file);
+
 // "wrote DIR/first, second, ...[; removed x, y (an earlier run's)]": the line a command prints
 // after publishing.
 std::string wroteLine(const std::filesystem::path& out_dir, const StagedOutput::Published& files);

@@ -49,7 +49,11 @@ std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
           file, "cords[" + std::to_string(i) + "].true_rest_length_mm: expected a positive number");
     TrueCord cord;
     cord.rest_length_mm = c["true_rest_length_mm"].get<double>();
+    if (c.contains("ruptured") && !c["ruptured"].is_boolean())
+      return ignoreTruth(file, "cords[" + std::to_string(i) + "].ruptured: expected true or false");
     cord.ruptured = c.value("ruptured", false);
+    if (c.contains("case_vertex") && c["case_vertex"].is_number_integer())
+      cord.case_vertex = c["case_vertex"].get<int>();
     cord.taut = number(c, "true_closed_tension_n") && c["true_closed_tension_n"].get<double>() > 0;
     result.cords.push_back(cord);
   }
@@ -71,6 +75,17 @@ TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth) {
     r.problem = std::to_string(set.cords.size()) + " cords against the truth's " +
                 std::to_string(truth.cords.size());
     return r;
+  }
+  // Cords pair with the truth's by index: a set of the same count in another order (or for
+  // another mesh) would be compared cord against the wrong cord.
+  for (std::size_t i = 0; i < set.cords.size(); ++i) {
+    const int expected = truth.cords[i].case_vertex;
+    if (expected >= 0 && set.cords[i].vertex != expected) {
+      r.problem = "cord " + std::to_string(i) + " attaches at vertex " +
+                  std::to_string(set.cords[i].vertex) + ", the truth's at " +
+                  std::to_string(expected) + " (not the case's cords in the case's order)";
+      return r;
+    }
   }
   std::vector<double> all, taut;
   for (std::size_t i = 0; i < set.cords.size(); ++i) {

@@ -20,6 +20,7 @@ struct TrueCord {
   double rest_length_mm = 0.0;
   bool ruptured = false;  // no true length: the truth lengthens it tenfold
   bool taut = false;      // under tension in the true closed valve
+  int case_vertex = -1;   // its insertion's vertex on the case mesh (-1: not given)
 };
 
 struct CaseTruth {
