@@ -304,6 +304,30 @@ TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   const auto summary = nlohmann::json::parse(testing::readText(dir / "one" / "sweep.json"));
   EXPECT_GT(summary["vertex_height"]["change_over_0.5_percent"].get<double>(), 0.0);
   EXPECT_TRUE(std::filesystem::exists(dir / "one" / "sweep.svg"));
+  // The verdict, in sweep.json and on the printed line: this taut cord moves the map.
+  const auto& height = summary["vertex_height"];
+  EXPECT_FALSE(height["flat"].get<bool>());
+  EXPECT_EQ(height["smooth"].get<bool>(), height["signal_to_noise"].get<double>() >= 10.0);
+  EXPECT_NE(one.out.find(height["smooth"].get<bool>() ? "| smooth" : "| NOT smooth"),
+            std::string::npos)
+      << one.out;
+}
+
+// A cord slack over the whole range moves nothing: "flat", not a signal/noise read as noisy.
+TEST(SweepCordCommand, CallsTheMapOfACordSlackThroughoutFlat) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  auto cords = nlohmann::json::parse(testing::readText(small / "cords.json"));
+  cords["cords"][0]["rest_length_mm"] = 2.0 * cords["cords"][0]["rest_length_mm"].get<double>();
+  testing::writeText(dir / "slack.json", cords.dump());
+  const auto r =
+      runChordfit("sweep-cord " + quoted(small) + " --cords " + quoted(dir / "slack.json") +
+                  " --cord 0 --range 0.01 --step 0.004 --window 2 --out " + quoted(dir / "sweep"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto summary = nlohmann::json::parse(testing::readText(dir / "sweep" / "sweep.json"));
+  EXPECT_TRUE(summary["vertex_height"]["flat"].get<bool>());
+  EXPECT_FALSE(summary["vertex_height"]["smooth"].get<bool>());
+  EXPECT_NE(r.out.find("flat: it does not move over the range"), std::string::npos) << r.out;
 }
 
 // --set changes the closures of the sweep (another CSV than the case's settings give) and is
