@@ -58,7 +58,7 @@ options:
                      options (e.g. the bundled build/cases) instead of generating it
   --edge MM          case mesh edge length (default 2.5; the truth mesh is half of it).
                      Case ids do not name the edge: use separate --work and --results
-  --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 16)
+  --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 80)
   --scale-bounds LO,HI  scale bounds of every fit (fit --scale-bounds; default the fit's
                      [0.7, 1.5]); use separate --work and --results
   --methods LIST     only jobs whose method starts with one of these comma-separated
