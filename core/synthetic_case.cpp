@@ -439,6 +439,10 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   const fs::path truth = directory / "truth";
   writeCase(truth / "case", s.truth_case);
   writeCordSet(truth / "cords.json", *s.truth_case.cords, &s.truth_case.mesh);
+  // The same true cords on the case mesh, for `compare` and `sweep-cord` on the case (the
+  // truth's own cords.json attaches on the finer truth mesh).
+  writeCordSet(truth / "case_cords.json",
+               trueCordsOnCaseMesh(*s.valve_case.cords, *s.truth_case.cords), &s.valve_case.mesh);
 
   const Eigen::MatrixXd& V = s.truth_result.V;
   const ClosedAnnulus closed = closedAnnulus(s.truth_case);
@@ -468,8 +472,8 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
 
 std::vector<std::string> syntheticCaseFileNames() {
   std::vector<std::string> files = caseFileNames();
-  for (const char* name : {"cords.json", "closed.ply", "closed.vtk", "metrics.json", "truth.json",
-                           "cross_sections.svg", "enface.svg"})
+  for (const char* name : {"cords.json", "case_cords.json", "closed.ply", "closed.vtk",
+                           "metrics.json", "truth.json", "cross_sections.svg", "enface.svg"})
     files.push_back(std::string("truth/") + name);
   for (const std::string& name : caseFileNames()) files.push_back("truth/case/" + name);
   return files;

@@ -20,6 +20,7 @@
 #include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/cord_attachments.h"
+#include "core/cordset_io.h"
 #include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "core/parametric_valve.h"
@@ -335,9 +336,19 @@ TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
   }
   // Lesion tissue (none in prolapse-P2) would be in the truth case only.
   EXPECT_EQ(c->tissue_stiffness.size(), 0);
-  for (const char* name : {"cords.json", "closed.ply", "closed.vtk", "metrics.json", "truth.json",
-                           "cross_sections.svg", "enface.svg"}) {
+  for (const char* name : {"cords.json", "case_cords.json", "closed.ply", "closed.vtk",
+                           "metrics.json", "truth.json", "cross_sections.svg", "enface.svg"}) {
     EXPECT_TRUE(fs::exists(caseDir() / "truth" / name)) << name;
+  }
+  // The true cords on the case mesh: the case's attachments, the truth's lengths and tips.
+  CordSet on_case;
+  Diagnostics problems;
+  ASSERT_TRUE(
+      readCordSet(caseDir() / "truth" / "case_cords.json", "case_cords.json", on_case, problems));
+  ASSERT_EQ(on_case.cords.size(), c->cords->cords.size());
+  for (std::size_t i = 0; i < on_case.cords.size(); ++i) {
+    EXPECT_EQ(on_case.cords[i].vertex, c->cords->cords[i].vertex);
+    EXPECT_EQ(on_case.cords[i].rest_length, truth->cords->cords[i].rest_length);
   }
   // Each cord's tension at the true closed state: some taut, none negative (a cord only pulls).
   const auto truth_json =
