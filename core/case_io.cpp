@@ -448,6 +448,16 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
                       fs::exists(directory) ? "not a directory" : "case directory not found");
     return std::nullopt;
   }
+  // A directory without case.json is not a case at all: say what a case is and how one is
+  // made, rather than "case.json: file not found".
+  std::error_code ec;
+  if (!fs::exists(directory / kCaseFile, ec)) {
+    diagnostics.error((directory / kCaseFile).string(), "",
+                      "not found: a case directory holds case.json and the files it names "
+                      "(docs/case-format.md; make one with chordfit make-valve, import-mesh or "
+                      "make-case)");
+    return std::nullopt;
+  }
   const auto document = loadJsonFile(directory / kCaseFile, kCaseFile, diagnostics);
   if (!document) return std::nullopt;
   JsonFields fields(kCaseFile, diagnostics);

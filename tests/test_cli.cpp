@@ -261,6 +261,18 @@ TEST(ChordfitCli, MakeCaseRefusesADanglingLinkWhereTheTruthGoes) {
   EXPECT_EQ(testing::readText(case_dir / "case.json"), "the user's");
 }
 
+// A directory that is not a case: what a case is and how to make one, not "file not found".
+TEST(ChordfitCli, ValidateOfADirectoryWithoutCaseJsonSaysWhatACaseIs) {
+  TempDir dir;
+  const auto r = runChordfit("validate " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(
+      r.err.find((dir / "case.json").string() + ": not found: a case directory holds case.json"),
+      std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("make-valve, import-mesh or make-case"), std::string::npos) << r.err;
+}
+
 TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
   TempDir dir;
   const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --edge -1");
