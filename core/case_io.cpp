@@ -169,12 +169,23 @@ bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, Js
     farthest = std::max(farthest, distance);
   }
   if (off == 0) return true;
-  char what[200];
+  // Points exported in RAS and read as LPS (a curve file without its coordinate system) lie
+  // on the plane once x and y are negated: say so, it is the common slip.
+  bool on_plane_in_ras = true;
+  for (Eigen::Index k = 0; k < tracing.points.rows() && on_plane_in_ras; ++k) {
+    const Eigen::Vector3d ras(-tracing.points(k, 0), -tracing.points(k, 1), tracing.points(k, 2));
+    on_plane_in_ras =
+        std::abs(tracing.plane_normal.dot(ras - tracing.plane_origin)) <= kTracingPlaneToleranceMm;
+  }
+  char what[320];
   std::snprintf(what, sizeof what,
                 "%d of %d points lie off the tracing's plane (first: point %ld; farthest %.3g mm; "
-                "at most %g mm): the plane or the points are wrong",
+                "at most %g mm): %s",
                 off, static_cast<int>(tracing.points.rows()), static_cast<long>(first), farthest,
-                kTracingPlaneToleranceMm);
+                kTracingPlaneToleranceMm,
+                on_plane_in_ras ? "with x and y negated they lie on it: are they in RAS? (say "
+                                  "\"coordinateSystem\": \"RAS\" in the points' file)"
+                                : "the plane or the points are wrong");
   fields.error(where, what);
   return false;
 }

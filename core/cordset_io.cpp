@@ -219,6 +219,10 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
   const std::optional<json> document = loadJsonFile(path, file, diagnostics);
   if (!document) return false;
   JsonFields fields(file, diagnostics);
+  if (!document->is_object()) {  // once, not once per key looked up
+    fields.typeError("(top level)", "an object", *document);
+    return false;
+  }
   bool ok = true;
   if (const json* format = fields.member(*document, "", "format", false)) {
     std::string text;

@@ -211,6 +211,17 @@ TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
               "point 1; farthest 5 mm");
 }
 
+// Points in RAS read as LPS (x and y negated): off the plane y = 3, on it once negated back.
+TEST_F(ValidateCommand, ATracingOffItsPlaneThatRasWouldPutOnItSaysSo) {
+  writeText(dir_ / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0,3,0], "normal": [0,1,0]},
+                              "points": [[1, -3, -2], [2, -3, -2]]}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  expectError("tracings\\.json",
+              "2 of 2 points lie off the tracing's plane .*with x and y negated they lie on it: "
+              "are they in RAS\\?");
+}
+
 // [1e308, 1, 0] has finite components but an infinite length: it used to normalise to a zero
 // vector, on whose "plane" every point lies, and validate.
 TEST_F(ValidateCommand, ReportsATracingNormalWhoseLengthOverflows) {

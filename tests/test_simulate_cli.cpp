@@ -239,6 +239,17 @@ TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "closed.ply"));
 }
 
+// A cord file that is not an object: said once (it was said once per key looked up).
+TEST_F(SimulateCommand, RejectsACordFileThatIsNotAnObjectInOneLine) {
+  testing::writeText(dir_ / "array.json", "[1, 2, 3]");
+  const auto r = runChordfit("simulate " + quoted(case_dir_) + " --cords " +
+                             quoted(dir_ / "array.json") + " --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2);
+  const std::string line = "(top level): expected an object, got array";
+  ASSERT_NE(r.err.find(line), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find(line), r.err.rfind(line)) << r.err;
+}
+
 TEST_F(SimulateCommand, RejectsAMissingCordsFile) {
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --cords " +
                              quoted(dir_ / "none.json") + " --out " + quoted(dir_ / "sim"));
