@@ -523,43 +523,24 @@ std::string sanitizedName(const std::string& name, std::size_t index) {
   return out;
 }
 
-void appendLittleEndian(std::string& out, std::uint64_t bits, int size) {
-  for (int i = 0; i < size; ++i) out += static_cast<char>((bits >> (8 * i)) & 0xff);
-}
-
-void appendDouble(std::string& out, double value) {
-  std::uint64_t bits;
-  std::memcpy(&bits, &value, sizeof bits);
-  appendLittleEndian(out, bits, 8);
-}
-
-void appendFloat(std::string& out, float value) {
-  std::uint32_t bits;
-  std::memcpy(&bits, &value, sizeof bits);
-  appendLittleEndian(out, bits, 4);
-}
-
-void appendInt32(std::string& out, int value) {
-  appendLittleEndian(out, static_cast<std::uint32_t>(value), 4);
-}
-
-// Big-endian bytes: the byte order of binary legacy VTK files (VTK file formats, "Binary
-// Files").
-void appendBigEndian(std::string& out, std::uint64_t bits, int size) {
-  for (int i = size - 1; i >= 0; --i) out += static_cast<char>((bits >> (8 * i)) & 0xff);
-}
+// The bytes of a 4- or 8-byte number in the given order: binary PLY is little-endian,
+// binary legacy VTK big-endian (VTK file formats, "Binary Files").
+enum class ByteOrder { kLittle, kBig };
 
 template <typename T>
-void appendBigEndianValue(std::string& out, T value) {
+void appendBinary(std::string& out, T value, ByteOrder order) {
   static_assert(sizeof(T) == 4 || sizeof(T) == 8);
+  std::uint64_t bits = 0;
   if constexpr (sizeof(T) == 8) {
-    std::uint64_t bits;
-    std::memcpy(&bits, &value, sizeof bits);
-    appendBigEndian(out, bits, 8);
+    std::memcpy(&bits, &value, sizeof value);
   } else {
-    std::uint32_t bits;
-    std::memcpy(&bits, &value, sizeof bits);
-    appendBigEndian(out, bits, 4);
+    std::uint32_t narrow;
+    std::memcpy(&narrow, &value, sizeof value);
+    bits = narrow;
+  }
+  for (std::size_t i = 0; i < sizeof(T); ++i) {
+    const std::size_t byte = order == ByteOrder::kLittle ? i : sizeof(T) - 1 - i;
+    out += static_cast<char>((bits >> (8 * byte)) & 0xff);
   }
 }
 
@@ -609,12 +590,14 @@ void writePly(const fs::path& path, const Eigen::MatrixXd& V, const Eigen::Matri
   out += "element face " + std::to_string(F.rows()) + "\n";
   out += "property list uchar int vertex_indices\nend_header\n";
   for (Eigen::Index i = 0; i < V.rows(); ++i) {
-    for (int k = 0; k < 3; ++k) appendDouble(out, V(i, k));
-    for (const VertexScalarField& s : scalars) appendFloat(out, static_cast<float>(s.values(i)));
+    for (int k = 0; k < 3; ++k) appendBinary(out, V(i, k), ByteOrder::kLittle);
+    for (const VertexScalarField& s : scalars)
+      appendBinary(out, static_cast<float>(s.values(i)), ByteOrder::kLittle);
   }
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
     out += static_cast<char>(3);
-    for (int k = 0; k < 3; ++k) appendInt32(out, F(f, k));
+    for (int k = 0; k < 3; ++k)
+      appendBinary(out, static_cast<std::int32_t>(F(f, k)), ByteOrder::kLittle);
   }
   writeFileAtomically(path, out);
 }
@@ -630,18 +613,19 @@ void writeVtk(const fs::path& path, const Eigen::MatrixXd& V, const Eigen::Matri
   std::string out = "# vtk DataFile Version 3.0\nchordfit mesh\nBINARY\nDATASET POLYDATA\n";
   out += "POINTS " + std::to_string(V.rows()) + " double\n";
   for (Eigen::Index i = 0; i < V.rows(); ++i)
-    for (int k = 0; k < 3; ++k) appendBigEndianValue(out, V(i, k));
+    for (int k = 0; k < 3; ++k) appendBinary(out, V(i, k), ByteOrder::kBig);
   out += "\nPOLYGONS " + std::to_string(F.rows()) + " " + std::to_string(4 * F.rows()) + "\n";
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    appendBigEndianValue(out, std::int32_t{3});
-    for (int k = 0; k < 3; ++k) appendBigEndianValue(out, static_cast<std::int32_t>(F(f, k)));
+    appendBinary(out, std::int32_t{3}, ByteOrder::kBig);
+    for (int k = 0; k < 3; ++k)
+      appendBinary(out, static_cast<std::int32_t>(F(f, k)), ByteOrder::kBig);
   }
   out += "\n";
   if (!scalars.empty()) out += "POINT_DATA " + std::to_string(V.rows()) + "\n";
   for (std::size_t s = 0; s < scalars.size(); ++s) {
     out += "SCALARS " + sanitizedName(scalars[s].name, s) + " float 1\nLOOKUP_TABLE default\n";
     for (Eigen::Index i = 0; i < V.rows(); ++i)
-      appendBigEndianValue(out, static_cast<float>(scalars[s].values(i)));
+      appendBinary(out, static_cast<float>(scalars[s].values(i)), ByteOrder::kBig);
     out += "\n";
   }
   writeFileAtomically(path, out);

@@ -60,6 +60,13 @@ Eigen::VectorXd pointToOwnLeafletDistances(const Eigen::MatrixXd& V, const Eigen
   return d;
 }
 
+double median(std::vector<double> values) {
+  if (values.empty()) return kNaN;
+  std::sort(values.begin(), values.end());
+  const std::size_t n = values.size();
+  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
+}
+
 DeviationStats summarizeDeviation(const Eigen::VectorXd& distances) {
   DeviationStats s;
   s.count = static_cast<int>(distances.size());
@@ -71,8 +78,7 @@ DeviationStats summarizeDeviation(const Eigen::VectorXd& distances) {
   std::sort(sorted.begin(), sorted.end());
   s.min = sorted.front();
   s.max = sorted.back();
-  const std::size_t mid = sorted.size() / 2;
-  s.median = sorted.size() % 2 ? sorted[mid] : 0.5 * (sorted[mid - 1] + sorted[mid]);
+  s.median = median(sorted);
   s.mean = distances.mean();
   s.sd = s.count > 1 ? std::sqrt((distances.array() - s.mean).square().sum() / (s.count - 1)) : 0.0;
   return s;

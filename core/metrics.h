@@ -41,6 +41,9 @@ Eigen::VectorXd pointToOwnLeafletDistances(const Eigen::MatrixXd& V, const Eigen
                                            const Eigen::VectorXi& point_leaflet);
 DeviationStats summarizeDeviation(const Eigen::VectorXd& distances);
 
+// Median of `values` (the mean of the middle two for an even count); NaN when empty.
+double median(std::vector<double> values);
+
 // Sum of triangle areas, mm^2.
 double surfaceArea(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F);
 

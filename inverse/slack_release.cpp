@@ -8,17 +8,6 @@
 
 namespace chordfit::inverse {
 
-namespace {
-
-// Median of a non-empty list (the mean of the middle two for an even count).
-double median(std::vector<double> values) {
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
-
-}  // namespace
-
 std::vector<int> atypicalSegments(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                                   std::vector<int> rescaled) {
   const std::vector<std::string> prolapsing = prolapseOfMesh(valve_case, closed_V).segments;

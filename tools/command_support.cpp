@@ -22,6 +22,7 @@
 #include "core/metrics.h"
 #include "core/synthetic_case.h"
 #include "tools/commands.h"
+#include "tools/staged_output.h"
 
 namespace chordfit::cli {
 
@@ -225,23 +226,8 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
   if (reportEmptyOutput(command, directory)) return false;
   if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
   for (const std::string& name : files) {
-    const std::filesystem::path file = std::filesystem::path(directory) / name;
-    std::error_code ec;
-    // symlink_status: a link to a directory is replaced by the rename, not in the way.
-    if (std::filesystem::is_directory(std::filesystem::symlink_status(file, ec)))
-      return reportOutputProblem(command, file.string(),
-                                 "a directory of that name is in the way of an output file");
-    // A name in a subdirectory (make-case's truth/): a file where the directory goes.
-    for (std::filesystem::path sub = std::filesystem::path(name).parent_path(); !sub.empty();
-         sub = sub.parent_path()) {
-      // Anything there that is not a directory, following links: a file, or a link to a file
-      // or to nothing (a dangling link failed only at publish, after the first renames).
-      const std::filesystem::path place = std::filesystem::path(directory) / sub;
-      if (std::filesystem::exists(std::filesystem::symlink_status(place, ec)) &&
-          !std::filesystem::is_directory(std::filesystem::status(place, ec)))
-        return reportOutputProblem(command, (std::filesystem::path(directory) / sub).string(),
-                                   "a file of that name is in the way of an output directory");
-    }
+    if (const auto problem = whatIsInTheWay(directory, name))
+      return reportOutputProblem(command, problem->path.string(), problem->what);
   }
   return true;
 }

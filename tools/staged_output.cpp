@@ -46,6 +46,13 @@ std::vector<std::string> recordedOutputs(const fs::path& dir) {
   return names;
 }
 
+// Writes the record of `dir`: one name per line.
+void writeRecord(const fs::path& dir, const std::vector<std::string>& names) {
+  std::string text;
+  for (const std::string& name : names) text += name + "\n";
+  writeFileAtomically(dir / kOutputRecordName, text);
+}
+
 // The files written into `staging`, as paths relative to it ("a.txt", "truth/case/case.json"),
 // sorted: the same order of renames on every file system. A nested run's record (fit's closure
 // publishes into fit's staging directory) is not one of them; ours follow.
@@ -69,32 +76,25 @@ std::vector<std::string> stagedFiles(const fs::path& staging) {
   return files;
 }
 
-// Whether something is at `path` that is not a directory (following links): a file, or a
-// link to a file or to nothing (a dangling link passed fs::status and made the directory's
-// creation fail after the first renames).
-bool somethingNotADirectory(const fs::path& path) {
-  std::error_code ec;
-  return fs::exists(fs::symlink_status(path, ec)) && !fs::is_directory(fs::status(path, ec));
-}
+}  // namespace
 
-// Throws when something in `out` is in the way of the staged file `name`: a directory where
-// the file goes (a rename onto it fails), or a file where one of its directories goes. Found
-// before the first move, it leaves the output directory as it was instead of half old, half
-// new.
-void checkNothingInTheWay(const fs::path& out, const std::string& name) {
+std::optional<InTheWay> whatIsInTheWay(const fs::path& out, const std::string& name) {
   std::error_code ec;
   // symlink_status: a link to a directory is replaced by the rename, not in the way.
   if (fs::is_directory(fs::symlink_status(out / name, ec)))
-    throw std::runtime_error((out / name).string() +
-                             ": a directory of that name is in the way of the output file "
-                             "(nothing was written)");
+    return InTheWay{out / name, "a directory of that name is in the way of an output file"};
   for (fs::path dir = fs::path(name).parent_path(); !dir.empty(); dir = dir.parent_path()) {
-    if (somethingNotADirectory(out / dir))
-      throw std::runtime_error((out / dir).string() +
-                               ": a file of that name is in the way of an output directory "
-                               "(nothing was written)");
+    // Anything there that is not a directory, following links: a file, or a link to a file
+    // or to nothing (a dangling link made the directory's creation fail after the first
+    // renames).
+    const fs::path place = out / dir;
+    if (fs::exists(fs::symlink_status(place, ec)) && !fs::is_directory(fs::status(place, ec)))
+      return InTheWay{place, "a file of that name is in the way of an output directory"};
   }
+  return std::nullopt;
 }
+
+namespace {
 
 // The directories (relative to the output directory, "" for itself) that hold any of `names`,
 // with every directory above them; deepest first, so a directory is tidied after those in it.
@@ -133,9 +133,7 @@ void updateRecord(const fs::path& out, const std::string& dir,
     if (fs::is_directory(fs::symlink_status(place, ec))) fs::remove(place, ec);
     return;
   }
-  std::string text;
-  for (const std::string& name : kept) text += name + "\n";
-  writeFileAtomically(place / kOutputRecordName, text);
+  writeRecord(place, kept);
 }
 
 }  // namespace
@@ -150,9 +148,7 @@ void forgetPublished(const fs::path& file) {
   const auto it = std::find(names.begin(), names.end(), file.filename().string());
   if (it == names.end()) return;
   names.erase(it);
-  std::string text;
-  for (const std::string& name : names) text += name + "\n";
-  writeFileAtomically(dir / kOutputRecordName, text);
+  writeRecord(dir, names);
 }
 
 StagedOutput::Published StagedOutput::publish() {
@@ -163,7 +159,13 @@ StagedOutput::Published StagedOutput::publish() {
                              " was written but is not among the command's declared output "
                              "files (nothing was published)");
   }
-  for (const std::string& name : files) checkNothingInTheWay(out_, name);
+  // Found before the first move, a problem leaves the output directory as it was instead of
+  // half old, half new.
+  for (const std::string& name : files) {
+    if (const auto problem = whatIsInTheWay(out_, name))
+      throw std::runtime_error(problem->path.string() + ": " + problem->what +
+                               " (nothing was written)");
+  }
   // Every directory first: a failure to create one then changes no file of the output.
   for (const std::string& name : files) fs::create_directories((out_ / name).parent_path());
   for (const std::string& name : files) fs::rename(staging_ / name, out_ / name);

@@ -19,6 +19,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -57,6 +58,16 @@ class StagedOutput {
 
 // The record of the files chordfit runs published in a directory (one name per line).
 inline constexpr const char* kOutputRecordName = ".chordfit-outputs";
+
+// What stands in `out` where the output file `name` (a relative path) would go, or nullopt:
+// a directory where the file goes (a rename onto it fails), or something not a directory
+// (a file, a link to a file or to nothing) where one of its directories goes. Shared by the
+// commands' check before any work and by publish().
+struct InTheWay {
+  std::filesystem::path path;
+  std::string what;
+};
+std::optional<InTheWay> whatIsInTheWay(const std::filesystem::path& out, const std::string& name);
 
 // Whether a chordfit run published `file`: its directory's record lists it.
 bool publishedByChordfit(const std::filesystem::path& file);

@@ -8,17 +8,11 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/metrics.h"
 
 namespace chordfit::cli {
 
 namespace {
-
-double median(std::vector<double> values) {
-  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
-}
 
 // A warning, not an error: the comparison itself does not need the truth.
 std::nullopt_t ignoreTruth(const std::filesystem::path& file, const std::string& what) {
