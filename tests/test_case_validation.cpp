@@ -39,6 +39,12 @@ class ValidateCommand : public ::testing::Test {
     EXPECT_EQ(r.err.find("terminate"), std::string::npos) << r.err;
   }
 
+  // Writes `text` as the case's tracings.json and names it in case.json.
+  void useTracings(const std::string& text) {
+    writeText(dir_ / "tracings.json", text);
+    editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
+  }
+
   void editCaseJson(const std::function<void(nlohmann::json&)>& edit) {
     nlohmann::json j = nlohmann::json::parse(testing::readText(dir_ / "case.json"));
     edit(j);
@@ -167,11 +173,9 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusRunningTheOtherWayOrCollapsed) {
 
 TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
   writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflet": "posterior", "points": [[1, 0, -2], [2, 0, -2]],
                               "file": "tracing.csv"}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json", "tracings\\[0\\]: give \"points\" or \"file\", not both");
 }
 
@@ -183,29 +187,23 @@ TEST_F(ValidateCommand, ReportsAPhaseInTheSimulationBlock) {
 }
 
 TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflet": "posterior", "points": [[1, 0, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json", "tracings\\[0\\]\\.points: a tracing needs at least 2 points");
 }
 
 // Finite but absurd coordinates pass the format checks and then break the computation (a
 // figure's axis looping, a resampling allocating without bound): case_extent.h.
 TEST_F(ValidateCommand, ReportsATracingPointFarFromTheValve) {
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflet": "posterior", "points": [[1e10, 0, -2], [1, 0, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json", "tracings\\[0\\]\\.points\\[0\\]: .* from the valve mesh");
 }
 
 TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
   // Near the valve, but 5 mm off the plane y = 0 it claims to be drawn on.
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "points": [[1, 0, -2], [2, 5, -2], [3, 5, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json",
               "tracings\\[0\\]\\.points: 2 of 3 points lie off the tracing's plane \\(first: "
               "point 1; farthest 5 mm");
@@ -213,10 +211,8 @@ TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
 
 // Points in RAS read as LPS (x and y negated): off the plane y = 3, on it once negated back.
 TEST_F(ValidateCommand, ATracingOffItsPlaneThatRasWouldPutOnItSaysSo) {
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,3,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,3,0], "normal": [0,1,0]},
                               "points": [[1, -3, -2], [2, -3, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json",
               "2 of 2 points lie off the tracing's plane .*with x and y negated they lie on it: "
               "are they in RAS\\?");
@@ -225,10 +221,8 @@ TEST_F(ValidateCommand, ATracingOffItsPlaneThatRasWouldPutOnItSaysSo) {
 // [1e308, 1, 0] has finite components but an infinite length: it used to normalise to a zero
 // vector, on whose "plane" every point lies, and validate.
 TEST_F(ValidateCommand, ReportsATracingNormalWhoseLengthOverflows) {
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [1e308, 1, 0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [1e308, 1, 0]},
                               "points": [[1, 0, -2], [2, 5, -2], [3, 5, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json",
               "tracings\\[0\\]\\.plane\\.normal: plane normal is too long to normalise");
 }
@@ -328,10 +322,8 @@ TEST_F(ValidateCommand, ReportsAnUnknownTipKeySuggestingTheNearestKnownOne) {
 
 // A misspelt "leaflet" used to leave the tracing unlabelled (measured to the whole mesh).
 TEST_F(ValidateCommand, ReportsAnUnknownTracingKeySuggestingTheNearestKnownOne) {
-  writeText(dir_ / "tracings.json",
-            R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflett": "posterior", "points": [[1, 0, -2], [2, 0, -2]]}]})");
-  editCaseJson([](nlohmann::json& j) { j["tracings"] = "tracings.json"; });
   expectError("tracings\\.json",
               "tracings\\[0\\]\\.leaflett: unknown key; did you mean \"leaflet\"\\?");
   writeText(dir_ / "tracings.json",
