@@ -43,7 +43,11 @@ class Merger {
  public:
   Merger(const ExperimentPlan& plan, const ExperimentConfig& config, const fs::path& results,
          const MergeOptions& options)
-      : plan_(plan), config_(config), results_(results), timing_(!options.no_timing) {
+      : plan_(plan),
+        config_(config),
+        results_(results),
+        timing_(!options.no_timing),
+        plan_options_(options.plan_options) {
     for (const JobSpec& job : plan.jobs) {
       std::string text;
       if (readWholeFile(results / "jobs" / (job.id + ".json"), text)) {
@@ -438,6 +442,7 @@ class Merger {
                      std::to_string(plan_.cases.size()) +
                      " cases. See experiments/README.md, "
                      "\"Benchmark experiments\".\n\n";
+    if (!plan_options_.empty()) md += kPlanOptionsLine + ("`" + plan_options_ + "`\n\n");
     md += "Revision(s) of the chordfit that made the results: " + recordedValues("revision", "");
     // Wall times compare only within one machine (docs/performance.md); results made before
     // jobs recorded their machine have none.
@@ -457,6 +462,7 @@ class Merger {
   const ExperimentConfig& config_;
   fs::path results_;
   bool timing_;
+  std::string plan_options_;
   std::map<std::string, json> results_by_job_;
   MergeSummary summary_;
 };

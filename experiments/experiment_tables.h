@@ -24,7 +24,13 @@ struct MergeOptions {
   // Leave out wall-time columns (the only part of the results that differs between runs),
   // so that two runs can be compared with diff.
   bool no_timing = false;
+  // The run_experiments options that chose the plan (e.g. "--plan smoke --methods fit"),
+  // recorded in index.md so that `check` can tell results of another plan from missing rows.
+  std::string plan_options;
 };
+
+// index.md's line recording MergeOptions::plan_options.
+constexpr const char* kPlanOptionsLine = "Plan options: ";
 
 struct MergeSummary {
   int jobs_found = 0;

@@ -305,8 +305,38 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
   return failures.empty() ? kExitOk : kExitJobsFailed;
 }
 
+// The options that choose the plan's cases and jobs, as given on the command line (the
+// budget, edge and bounds change the numbers, not which rows exist).
+std::string planOptions(const Arguments& a) {
+  std::string text = "--plan " + a.plan;
+  auto list = [&](const char* option, const std::vector<std::string>& items) {
+    if (items.empty()) return;
+    text += std::string(" ") + option + " ";
+    for (std::size_t i = 0; i < items.size(); ++i) text += (i ? "," : "") + items[i];
+  };
+  list("--methods", a.methods);
+  std::vector<std::string> seeds;
+  for (int seed : a.seeds) seeds.push_back(std::to_string(seed));
+  list("--seeds", seeds);
+  list("--presets", a.presets);
+  list("--cases", a.cases);
+  return text;
+}
+
+// The plan options index.md records (merge of this or a later revision), or "".
+std::string recordedPlanOptions(const fs::path& results) {
+  std::ifstream in(results / "index.md");
+  std::string line;
+  const std::string prefix = kPlanOptionsLine;
+  while (std::getline(in, line)) {
+    if (line.rfind(prefix + "`", 0) == 0 && line.size() > prefix.size() + 1 && line.back() == '`')
+      return line.substr(prefix.size() + 1, line.size() - prefix.size() - 2);
+  }
+  return "";
+}
+
 int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
-  const MergeSummary s = mergeResults(plan, config, a.results, {a.no_timing});
+  const MergeSummary s = mergeResults(plan, config, a.results, {a.no_timing, planOptions(a)});
   std::printf("merged %d of %zu job results into %s:", s.jobs_found, plan.jobs.size(),
               a.results.string().c_str());
   for (const std::string& f : s.written_files) std::printf(" %s", f.c_str());
@@ -329,6 +359,17 @@ std::vector<std::vector<std::string>> readCsv(const fs::path& path) {
 // row per planned Table 1 job (plus a noise-floor row per truth job) with an AvgD.
 int check(const ExperimentPlan& plan, const Arguments& a) {
   std::vector<std::string> problems;
+  // Results of another plan (the smoke run's, checked against the full plan) would list every
+  // job of this plan as missing: say so once instead.
+  if (const std::string made_with = recordedPlanOptions(a.results);
+      !made_with.empty() && made_with != planOptions(a)) {
+    std::fprintf(stderr,
+                 "check: %s was merged with `%s`; this check is of `%s`: give check the same "
+                 "options\n",
+                 a.results.string().c_str(), made_with.c_str(), planOptions(a).c_str());
+    std::printf("check: FAILED (%s)\n", a.results.string().c_str());
+    return kExitJobsFailed;
+  }
   auto header = [](const std::string& h) { return h.substr(0, h.size() - 1); };
   struct Table {
     const char* file;
@@ -373,6 +414,8 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
   }
   // One row per table-1 job of the preset x seed cases (with a mean deviation).
   const auto rows = readCsv(a.results / "table1.csv");
+  std::vector<std::string> without_row;
+  int table1_jobs = 0;
   for (const JobSpec& job : plan.jobs) {
     if (job.method == Method::kFit && job.optimizer != "ceres") continue;
     const std::string tag = methodTag(job);
@@ -381,12 +424,24 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
       base_case |= c.id == job.case_id && c.id == c.preset + "_s" + std::to_string(c.seed);
     }
     if (!base_case) continue;
+    ++table1_jobs;
     bool found = false;
     for (std::size_t r = 1; r < rows.size(); ++r) {
       found |= rows[r].size() > 9 && rows[r][0] == job.case_id && rows[r][3] == tag &&
                !rows[r][9].empty();
     }
-    if (!found) problems.push_back("table1.csv: no row with an AvgD for job " + job.id);
+    if (!found) without_row.push_back(job.id);
+  }
+  constexpr std::size_t kListedAtMost = 8;
+  if (without_row.size() <= kListedAtMost) {
+    for (const std::string& id : without_row)
+      problems.push_back("table1.csv: no row with an AvgD for job " + id);
+  } else {
+    std::string examples;
+    for (std::size_t i = 0; i < 3; ++i) examples += (i ? ", " : "") + without_row[i];
+    problems.push_back("table1.csv: no row with an AvgD for " + std::to_string(without_row.size()) +
+                       " of the plan's " + std::to_string(table1_jobs) + " Table 1 jobs (" +
+                       examples + ", ...; `run_experiments list` prints the plan)");
   }
   for (const std::string& p : problems) std::fprintf(stderr, "check: %s\n", p.c_str());
   std::printf("check: %s (%s)\n", problems.empty() ? "ok" : "FAILED", a.results.string().c_str());

@@ -114,21 +114,23 @@ void quietCeresLogging() {
   });
 }
 
-std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
+Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
   quietCeresLogging();
   const ForwardResidual& residual = objective.residual();
   const FitParameterization& parameters = residual.parameters();
   const int n = parameters.size();
-  if (n == 0) return "nothing to fit (every cord is locked)";
+  if (n == 0) return {"nothing to fit (every cord is locked)"};
   std::vector<double> x(parameters.initial().data(), parameters.initial().data() + n);
   const bool start_known = objective.cached(parameters.initial()) != nullptr;
   // The start's closure, its Jacobian and one trial step: less cannot move x.
   const int first_step_sims =
       (start_known ? 0 : 1) + objective.jacobianSims(parameters.initial()) + 1;
   if (!objective.budgetAllows(first_step_sims)) {
-    return "budget of " + std::to_string(objective.maxSims()) +
-           " forward runs is below one Jacobian and a step (" + std::to_string(first_step_sims) +
-           " runs, " + std::to_string(objective.maxSims() - objective.forwardSims()) + " left)";
+    return {"budget of " + std::to_string(objective.maxSims()) +
+                " forward runs is below one Jacobian and a step (" +
+                std::to_string(first_step_sims) + " runs, " +
+                std::to_string(objective.maxSims() - objective.forwardSims()) + " left)",
+            true};
   }
 
   ceres::Problem problem;
@@ -182,17 +184,18 @@ std::string CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
                               objective.best()->cost, objective.best()->mean_deviation_mm);
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
-    return "budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
-           (refused > 0
-                ? " (the Jacobian at the last accepted step needs " + std::to_string(refused) +
-                      " runs, " + std::to_string(objective.maxSims() - objective.forwardSims()) +
-                      " were left)"
-                : std::string());
+    return {"budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
+                (refused > 0 ? " (the Jacobian at the last accepted step needs " +
+                                   std::to_string(refused) + " runs, " +
+                                   std::to_string(objective.maxSims() - objective.forwardSims()) +
+                                   " were left)"
+                             : std::string()),
+            true};
   }
-  return std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
-                     : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "
-                                                                         : "stopped: ") +
-         summary.message;
+  return {std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
+                      : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "
+                                                                          : "stopped: ") +
+          summary.message};
 }
 
 }  // namespace chordfit::inverse

@@ -9,8 +9,9 @@
 // (num_threads = 1); the parallelism is over the finite-difference closures.
 //
 // Budget: a Levenberg-Marquardt iteration costs one closure for the trial point plus 2P for
-// the Jacobian when the step is accepted, so the iteration callback stops the solve when
-// fewer than 1 + 2P runs remain. The run never exceeds the budget.
+// the Jacobian when the step is accepted. The solve goes on while one trial closure fits (the
+// iteration callback stops it when none is left); an accepted trial whose Jacobian the budget
+// refuses ends it and is kept as the best point. The run never exceeds the budget.
 #pragma once
 
 #include "inverse/optimizer.h"
@@ -20,7 +21,7 @@ namespace chordfit::inverse {
 class CeresDriver : public Optimizer {
  public:
   std::string name() const override { return "ceres"; }
-  std::string minimize(FitObjective& objective, const OptimizerSettings& settings) override;
+  Termination minimize(FitObjective& objective, const OptimizerSettings& settings) override;
 };
 
 // Silences glog (Ceres' logger) once per process: only errors reach stderr.

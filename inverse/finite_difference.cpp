@@ -1,26 +1,9 @@
 #include "inverse/finite_difference.h"
 
 #include <algorithm>
-#include <atomic>
-#include <thread>
 #include <vector>
 
 namespace chordfit::inverse {
-
-void parallelFor(int count, int threads, const std::function<void(int)>& task) {
-  const int workers = std::max(1, std::min(threads, count));
-  if (workers == 1) {
-    for (int i = 0; i < count; ++i) task(i);
-    return;
-  }
-  std::atomic<int> next{0};
-  auto work = [&] {
-    for (int i = next++; i < count; i = next++) task(i);
-  };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < workers; ++t) pool.emplace_back(work);
-  for (std::thread& t : pool) t.join();
-}
 
 namespace {
 

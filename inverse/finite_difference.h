@@ -23,12 +23,12 @@
 // (25 of 33 at the end of the quick-start fit), so this is most of a Jacobian's cost.
 #pragma once
 
-#include <functional>
 #include <string>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "core/parallel_for.h"
 #include "inverse/forward_residual.h"
 
 namespace chordfit::inverse {
@@ -72,9 +72,5 @@ std::vector<bool> slackParameters(const FitParameterization& parameters,
                                   const std::vector<CordInsertionWeights>& insertions,
                                   const Eigen::VectorXd& x, const Eigen::MatrixXd& base_closed,
                                   const FiniteDifferenceOptions& options);
-
-// Runs task(i) for i in [0, count) on `threads` threads (work stealing by an atomic counter).
-// The tasks must write only to their own slots.
-void parallelFor(int count, int threads, const std::function<void(int)>& task);
 
 }  // namespace chordfit::inverse

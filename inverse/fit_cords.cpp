@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 
 #include "core/metrics.h"
 
@@ -37,8 +38,14 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   auto record = [&](const std::string& stage, int iteration, const ForwardEvaluation& e,
                     double best_cost) {
-    IterationRecord r{
-        stage, iteration, e.cost, best_cost, e.mean_deviation_mm, outcome.forward_sims, seconds()};
+    // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
+    IterationRecord r{stage,
+                      iteration,
+                      e.ok() ? e.cost : NAN,
+                      best_cost,
+                      e.ok() ? e.mean_deviation_mm : NAN,
+                      outcome.forward_sims,
+                      seconds()};
     outcome.history.push_back(r);
     if (options.on_iteration) options.on_iteration(r);
   };
@@ -69,7 +76,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   const bool prefit_has_cords = skip_reason.empty();
   if ((options.prefit.enabled || options.segment_prefit.enabled) && seed_parameters.size() > 0)
     outcome.prefit_skipped = skip_reason;
-  const int common_sims = options.prefit.points + options.prefit.refine_points;
+  const int common_sims = commonStageMaxClosures(options.prefit, options.bounds);
   if (options.prefit.enabled && prefit_has_cords && seed_parameters.size() > 0 &&
       budget_allows(common_sims)) {
     PrefitOptions prefit = options.prefit;
@@ -135,9 +142,10 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     start_evaluation.cost = residual.cost(start_evaluation.data, start_evaluation.regularisation);
     objective.remember(start_evaluation);
   }
-  outcome.termination = optimizer->minimize(objective, options.optimizer_settings);
+  const Termination termination = optimizer->minimize(objective, options.optimizer_settings);
+  outcome.termination = termination.message;
   // The drivers count against the optimiser's share; say where the rest of --max-sims went.
-  if (release_slack && outcome.termination.rfind("budget of", 0) == 0)
+  if (release_slack && termination.budget_spent)
     outcome.termination += "; 1 more of --max-sims " + std::to_string(options.max_sims) +
                            " kept for the slack release";
   for (const IterationRecord& r : objective.history()) outcome.history.push_back(r);

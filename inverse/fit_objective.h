@@ -2,8 +2,9 @@
 // (issue 5 item 3). It
 //   - runs full closures from the open state (evaluate) and caches them by exact x, so a
 //     driver asking twice for one point pays once;
-//   - computes the data Jacobian at an evaluated point by parallel central differences
-//     warm-started from that point's closed state (finite_difference.h);
+//   - computes the data Jacobian at an evaluated point by parallel central differences, full
+//     closures by default or warm-started from that point's closed state (--fd-warm;
+//     finite_difference.h);
 //   - counts forward simulations against a budget (max_sims) and the wall time;
 //   - keeps the best full-closure evaluation seen: what a fit reports always comes from a
 //     full closure, never from a warm-started perturbation, and never from a worse point an

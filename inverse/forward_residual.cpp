@@ -1,6 +1,7 @@
 #include "inverse/forward_residual.h"
 
 #include <algorithm>
+#include <cmath>
 #include <map>
 #include <tuple>
 
@@ -29,9 +30,22 @@ std::vector<std::pair<int, int>> neighbouringCords(const ValveCase& valve_case,
     chains[{groups[c], static_cast<int>(cord.kind)}].push_back({angle, static_cast<int>(c)});
   }
   for (auto& [key, chain] : chains) {
-    // A group lies on one side of the annulus (one tip), so it never straddles the angle
-    // cut of atan2 at +-pi in the mitral layout; sorting by angle orders it along the annulus.
+    // Along the annulus: sorted by angle, then opened at the widest angular gap, so that a
+    // group across atan2's cut at +-pi (the cut is at mid-P2; with a case's own tips a
+    // posterior group can cross it) is ordered too. A group spans well under pi, so for one that
+    // does not cross the cut the widest gap is the wrap-around one and the order is the sort's.
     std::sort(chain.begin(), chain.end());
+    std::size_t first = 0;
+    double widest = -1.0;
+    for (std::size_t i = 0; i < chain.size(); ++i) {
+      const double gap = i == 0 ? chain.front().first + 2.0 * M_PI - chain.back().first
+                                : chain[i].first - chain[i - 1].first;
+      if (gap > widest) {
+        widest = gap;
+        first = i;
+      }
+    }
+    std::rotate(chain.begin(), chain.begin() + static_cast<std::ptrdiff_t>(first), chain.end());
     for (std::size_t i = 1; i < chain.size(); ++i) {
       pairs.push_back({chain[i - 1].second, chain[i].second});
     }

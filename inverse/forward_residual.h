@@ -20,8 +20,8 @@
 // showed P1, P2 and P3 where the tracings show P2 (docs/fitting.md, "Section term").
 //
 // Regularisation residuals (linear in x, r = A x - b, no loss):
-//   seed       w_seed * (s_c - s0_c) per scale parameter: toward the starting (seed or manual)
-//              value;
+//   seed       w_seed * (s_c - s0_c) per scale parameter: toward the starting value (seed or
+//              manual, after the pre-fits: the parameterisation's initial point);
 //   neighbour  w_neighbour * ((s_c - s0_c) - (s_d - s0_d)) for neighbouring cords c, d: same
 //              group (leaflet x tip), same kind, adjacent in annulus angle; the correction to
 //              the prior should vary smoothly along the annulus;

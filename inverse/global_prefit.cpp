@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "core/closure_model.h"
-#include "inverse/finite_difference.h"
+#include "core/parallel_for.h"
 
 namespace chordfit::inverse {
 
@@ -70,6 +70,32 @@ std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
   return out;
 }
 
+namespace {
+
+double gridSpacing(const PrefitOptions& options, const ParameterBounds& bounds) {
+  return (bounds.scale_upper - bounds.scale_lower) / (std::max(2, options.points) - 1);
+}
+
+// The common stage's grid over the scale bounds, ends included, without the factor 1 (the
+// seed, already closed).
+std::vector<double> commonGrid(const PrefitOptions& options, const ParameterBounds& bounds) {
+  std::vector<double> grid;
+  for (int i = 0; i < std::max(2, options.points); ++i) {
+    const double factor = bounds.scale_lower + i * gridSpacing(options, bounds);
+    if (std::abs(factor - 1.0) > 1e-9) grid.push_back(factor);
+  }
+  return grid;
+}
+
+// Refinement factors on each side of the best grid point.
+int refineHalf(const PrefitOptions& options) { return std::max(1, options.refine_points / 2); }
+
+}  // namespace
+
+int commonStageMaxClosures(const PrefitOptions& options, const ParameterBounds& bounds) {
+  return static_cast<int>(commonGrid(options, bounds).size()) + 2 * refineHalf(options);
+}
+
 PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                                const ForwardEvaluation& seed_evaluation,
                                const ParameterBounds& bounds, const ForwardResidual& residual,
@@ -112,16 +138,10 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
     result.factor = result.primary_factor;
   };
 
-  const int points = std::max(2, options.points);
-  const double spacing = (bounds.scale_upper - bounds.scale_lower) / (points - 1);
-  std::vector<double> grid;
-  for (int i = 0; i < points; ++i) {
-    const double factor = bounds.scale_lower + i * spacing;
-    if (std::abs(factor - 1.0) > 1e-9) grid.push_back(factor);  // 1 = the seed, already run
-  }
-  consider(grid);
+  const double spacing = gridSpacing(options, bounds);
+  consider(commonGrid(options, bounds));
   std::vector<double> refine;
-  const int half = std::max(1, options.refine_points / 2);
+  const int half = refineHalf(options);
   for (int k = 1; k <= half; ++k) {
     const double offset = spacing * k / (half + 1);
     for (double factor : {result.factor - offset, result.factor + offset}) {

@@ -52,6 +52,10 @@ struct PrefitResult {
   std::string error;
 };
 
+// The most closures the common stage (grid and refinement) runs; the kind stage adds at most
+// 2 * kind_points.
+int commonStageMaxClosures(const PrefitOptions& options, const ParameterBounds& bounds);
+
 // seed_evaluation: the seed's closure (factor 1), already run; it is not run again.
 PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                                const ForwardEvaluation& seed_evaluation,

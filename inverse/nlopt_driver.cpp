@@ -37,17 +37,18 @@ double cost(unsigned n, const double* x, double* gradient, void* data) {
   }
   const auto evaluation = state.objective->evaluate(point);
   const double value = evaluation->ok() ? evaluation->cost : state.failure_cost;
-  state.objective->recordIteration(state.stage, ++state.evaluations, value,
+  // NLopt gets the finite failure cost; the history says the closure failed (NaN).
+  state.objective->recordIteration(state.stage, ++state.evaluations, evaluation->ok() ? value : NAN,
                                    evaluation->ok() ? evaluation->mean_deviation_mm : NAN);
   return value;
 }
 
 }  // namespace
 
-std::string NloptDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
+Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
   const FitParameterization& parameters = objective.residual().parameters();
   const int n = parameters.size();
-  if (n == 0) return "nothing to fit (every cord is locked)";
+  if (n == 0) return {"nothing to fit (every cord is locked)"};
   nlopt::opt opt(algorithmOf(algorithm_), static_cast<unsigned>(n));
   auto toStd = [](const Eigen::VectorXd& v) {
     return std::vector<double>(v.data(), v.data() + v.size());
@@ -76,6 +77,7 @@ std::string NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
   std::vector<double> x = toStd(parameters.initial());
   double value = 0.0;
   std::string message;
+  bool budget_spent = false;
   try {
     const nlopt::result result = opt.optimize(x, value);
     switch (result) {
@@ -86,7 +88,10 @@ std::string NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
         message = "converged: relative step below xtol";
         break;
       case nlopt::MAXEVAL_REACHED:
-        message = "evaluation budget reached";
+        // maxeval is set from the remaining budget but also counts revisits of cached points,
+        // which cost no closure: a budget stop only when no closure is left.
+        message = "stopped: NLopt's evaluation count reached (closures left)";
+        budget_spent = !objective.budgetAllows(1);
         break;
       default:
         message = "nlopt result " + std::to_string(static_cast<int>(result));
@@ -100,10 +105,10 @@ std::string NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
   } catch (const std::exception& e) {
     message = std::string("stopped: nlopt failure: ") + e.what();
   }
-  if (state.budget_reached || objective.budgetRefused()) {
-    message = "budget of " + std::to_string(objective.maxSims()) + " forward runs reached";
+  if (budget_spent || state.budget_reached || objective.budgetRefused()) {
+    return {"budget of " + std::to_string(objective.maxSims()) + " forward runs reached", true};
   }
-  return message;
+  return {message};
 }
 
 }  // namespace chordfit::inverse

@@ -19,7 +19,7 @@ class NloptDriver : public Optimizer {
  public:
   explicit NloptDriver(std::string algorithm) : algorithm_(std::move(algorithm)) {}
   std::string name() const override { return algorithm_; }
-  std::string minimize(FitObjective& objective, const OptimizerSettings& settings) override;
+  Termination minimize(FitObjective& objective, const OptimizerSettings& settings) override;
 
  private:
   std::string algorithm_;

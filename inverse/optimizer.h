@@ -32,6 +32,13 @@ struct OptimizerSettings {
   double initial_trust_region_radius = 1.0;  // ceres (Levenberg-Marquardt: 1 / initial mu)
 };
 
+// How a driver's run ended. `budget_spent`: it stopped because --max-sims allowed no further
+// closure it needed (the caller then says where the rest of the budget went).
+struct Termination {
+  std::string message;
+  bool budget_spent = false;
+};
+
 class Optimizer {
  public:
   virtual ~Optimizer() = default;
@@ -39,7 +46,7 @@ class Optimizer {
   // Minimises objective's cost from its initial point. Returns a short termination message
   // ("converged: ...", "budget of N forward runs reached", "nlopt: roundoff limited", ...).
   // Never throws for optimiser trouble: the best point seen stays in the objective.
-  virtual std::string minimize(FitObjective& objective, const OptimizerSettings& settings) = 0;
+  virtual Termination minimize(FitObjective& objective, const OptimizerSettings& settings) = 0;
 };
 
 // nullptr for an unknown name.

@@ -5,7 +5,7 @@
 
 #include "core/carpentier.h"
 #include "core/metrics.h"
-#include "inverse/finite_difference.h"
+#include "core/parallel_for.h"
 #include "inverse/global_prefit.h"
 
 namespace chordfit::inverse {

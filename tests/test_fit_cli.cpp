@@ -341,5 +341,31 @@ TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
   EXPECT_LE(metrics["forward_sims"].get<int>(), 17);  // budget 16 + the closure written
 }
 
+// The pre-fit's budget check counts the closures its common stage runs: the seed, 8 grid
+// factors (1 is the seed's), 4 refinements and one closure left for the optimiser fit in 14.
+TEST(FitCommand, ACommonPrefitThatJustFitsTheBudgetRuns) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --max-sims 14 --threads 2 --quiet --no-uncertainty --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_NE(metrics["prefit_factor"].get<double>(), 1.0);
+  EXPECT_LE(metrics["forward_sims"].get<int>(), 15);  // budget 14 + the closure written
+}
+
+// A central difference at the lower scale bound closes lower - step; at or below zero every
+// Jacobian there would fail.
+TEST(FitCommand, RejectsAFiniteDifferenceStepNotBelowTheLowerScaleBound) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --scale-bounds 0.5,1.5 --fd-step 0.5 --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: fit: --fd-step: 0.5 is not below the lower scale bound 0.5"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 }  // namespace
 }  // namespace chordfit

@@ -228,6 +228,10 @@ TEST_F(SimulateCommand, AStepCapThatEndsDuringThePressureRampIsAnInputError) {
   EXPECT_EQ(validated.exit_code, 2) << validated.out;
   EXPECT_NE(validated.err.find("simulation.max_steps: 10 ends before"), std::string::npos)
       << validated.err;
+  // metrics runs no closure: the step cap is no reason to refuse it.
+  const auto measured =
+      runChordfit("metrics " + quoted(case_dir_) + " --mesh " + quoted(case_dir_ / "open.ply"));
+  EXPECT_EQ(measured.exit_code, 0) << measured.err;
 }
 
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {

@@ -30,8 +30,9 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
 // command line's `overrides` ("KEY=VALUE": a key of that block and a number, true or false;
 // `--set`), which are also written into valve_case.simulation_json so that everything reading
 // the case's settings later sees them; phase kClose. On unknown keys, wrong types,
-// out-of-range values or a pressure ramp longer than the step cap prints the problems, naming
-// CASE_DIR/case.json or "<command>: --set", and returns nullopt.
+// out-of-range values or a pressure ramp longer than the step cap (not checked for
+// "metrics", which runs no closure) prints the problems, naming CASE_DIR/case.json or
+// "<command>: --set", and returns nullopt.
 std::optional<SimulationSettings> caseSettingsOrReport(
     ValveCase& valve_case, const std::string& case_dir, const char* command = "",
     const std::vector<std::string>& overrides = {});

@@ -131,9 +131,14 @@ std::string recoveryCsvCells(const std::optional<TruthRecovery>& r) {
 std::string recoveryText(const TruthRecovery& r) {
   if (!r.problem.empty()) return "not compared: " + r.problem;
   char text[160];
-  std::snprintf(text, sizeof text, "%.1f %% (%d cords), taut %.1f %% (%d)", r.median_error_pct,
-                r.cords, r.median_error_taut_pct, r.taut_cords);
+  std::snprintf(text, sizeof text, "%.1f %% (%d cords)", r.median_error_pct, r.cords);
   std::string line = text;
+  if (r.taut_cords > 0) {
+    std::snprintf(text, sizeof text, ", taut %.1f %% (%d)", r.median_error_taut_pct, r.taut_cords);
+    line += text;
+  } else {
+    line += ", none taut in the truth";
+  }
   if (std::isfinite(r.max_tip_offset_mm)) {
     std::snprintf(text, sizeof text, ", tips at most %.2f mm off", r.max_tip_offset_mm);
     line += text;

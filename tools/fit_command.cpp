@@ -85,6 +85,13 @@ int runFit(const FitCommandOptions& o) {
                            {"--fd-tip-step", o.fd_tip_step_mm}},
                           "a positive number"))
     return kExitBadInput;
+  if (o.fd_scale_step >= o.scale_bounds[0]) {
+    // A central difference at the lower bound closes the scale lower - step: a rest length <= 0.
+    std::cerr << "error: fit: --fd-step: " << o.fd_scale_step
+              << " is not below the lower scale bound " << o.scale_bounds[0]
+              << " (a central difference there would close a scale <= 0)\n";
+    return kExitBadInput;
+  }
   if (o.threads > 64) {  // as simulate and sweep-cord
     std::cerr << "error: fit: --threads: at most 64, got " << o.threads << "\n";
     return kExitBadInput;
@@ -177,7 +184,10 @@ int runFit(const FitCommandOptions& o) {
   const ValveMetrics seed_metrics = computeMetrics(*valve_case, fit.seed_evaluation.closed_V);
   const ValveMetrics fit_metrics = computeMetrics(*valve_case, fit.final_evaluation.closed_V);
   std::string metrics_text;
-  readWholeFile(out / "metrics.json", metrics_text);
+  if (!readWholeFile(out / "metrics.json", metrics_text)) {
+    std::cerr << "error: fit: cannot read back " << (out / "metrics.json").string() << "\n";
+    return kExitFailure;
+  }
   nlohmann::json metrics = nlohmann::json::parse(metrics_text);
   metrics["optimizer"] = o.optimizer;
   metrics["params"] = o.params;

@@ -173,6 +173,9 @@ int identifiedCords(const inverse::FitOutcome& fit) {
   for (std::size_t c = 0; c < fit.cord_parameter.size(); ++c) {
     const int p = fit.cord_parameter[c];
     if (p < 0 || !fit.uncertainty.ok() || fit.uncertainty.at_bound[p]) continue;
+    // A cord no tracing point moves with ("prior only" in the table) is not determined by the
+    // data, however narrow the prior between determined neighbours makes its SD.
+    if (fit.uncertainty.sensitivity(p) == 0.0) continue;
     if (fit.uncertainty.sd(p) < 0.03 * fit.x(p)) ++count;
   }
   return count;

@@ -1,14 +1,12 @@
 // chordfit sweep-cord: scan one cord's rest-length scale and measure how smooth the forward
 // map (scale -> closed state) is. DESIGN §7: the map must be reproducible to far below the
 // finite-difference step, or the Jacobian is noise.
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <limits>
 #include <mutex>
 #include <sstream>
-#include <thread>
 
 #include <nlohmann/json.hpp>
 
@@ -18,6 +16,7 @@
 #include "core/closure_model.h"
 #include "core/forward_map_noise.h"
 #include "core/metrics.h"
+#include "core/parallel_for.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -181,38 +180,42 @@ int runSweepCord(const SweepCordOptions& options) {
                cord, vertex, base, count, options.threads);
 
   // Each point is an independent full closure from the open state; results go to their own
-  // slot, so the output does not depend on the thread count or the order of completion.
-  std::atomic<int> next{0}, done{0};
+  // slot, so the output does not depend on the thread count or the order of completion. The
+  // progress lines come in scale order too: a finished point is printed once every point
+  // before it is.
   std::mutex print;
-  auto worker = [&] {
-    for (int i = next++; i < count; i = next++) {
-      SweepPoint& p = points[i];
-      p.scale = 1.0 - options.range + i * options.step;
-      CordSet scaled = *cords;
-      scaled.cords[cord].rest_length = base * p.scale;
-      const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
-      p.error = r.error;
-      p.diverged = r.diverged;
-      p.converged = r.converged;
-      p.steps = r.steps;
-      if (r.ok()) {
-        p.vertex = insertionPosition(cords->cords[cord], r.V);
-        p.height = annulus.frame.plane.signedDistance(p.vertex);
-        if (tracing_points.rows() > 0) {
-          p.mean_deviation =
-              pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
-        }
-      }
-      std::lock_guard<std::mutex> lock(print);
-      std::fprintf(
-          stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n", ++done,
-          count, p.scale, p.height, p.mean_deviation,
-          r.ok() ? (r.converged ? "" : " (not converged)") : (" ERROR " + r.error).c_str());
+  std::vector<char> finished(count, 0);
+  int printed = 0;
+  auto printFinished = [&] {
+    for (; printed < count && finished[printed]; ++printed) {
+      const SweepPoint& p = points[printed];
+      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n",
+                   printed + 1, count, p.scale, p.height, p.mean_deviation,
+                   p.error.empty() ? (p.converged ? "" : " (not converged)")
+                                   : (" ERROR " + p.error).c_str());
     }
   };
-  std::vector<std::thread> pool;
-  for (int t = 0; t < std::max(1, options.threads); ++t) pool.emplace_back(worker);
-  for (std::thread& t : pool) t.join();
+  parallelFor(count, std::max(1, options.threads), [&](int i) {
+    SweepPoint& p = points[i];
+    p.scale = 1.0 - options.range + i * options.step;
+    CordSet scaled = *cords;
+    scaled.cords[cord].rest_length = base * p.scale;
+    const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
+    p.error = r.error;
+    p.diverged = r.diverged;
+    p.converged = r.converged;
+    p.steps = r.steps;
+    if (r.ok()) {
+      p.vertex = insertionPosition(cords->cords[cord], r.V);
+      p.height = annulus.frame.plane.signedDistance(p.vertex);
+      if (tracing_points.rows() > 0) {
+        p.mean_deviation = pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
+      }
+    }
+    const std::lock_guard<std::mutex> lock(print);
+    finished[i] = 1;
+    printFinished();
+  });
   for (const SweepPoint& p : points) {
     if (!p.error.empty()) {
       std::cerr << "error: " << options.case_dir << ": "
