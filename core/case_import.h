@@ -50,6 +50,8 @@ struct ImportedCase {
   double commissure_distance_mm[2] = {0.0, 0.0};  // landmark to its ring vertex (AL, PM)
   double anterior_fraction = 0.0;                 // anterior arc / ring perimeter (open state)
   double closed_shift_mm = 0.0;                   // mean ring displacement open -> closed
+  // Boundary loops besides the annulus ring and the leaflets' free edge (the orifice): holes.
+  int holes = 0;
   bool ok() const { return error.empty(); }
 };
 

@@ -157,7 +157,10 @@ bool readTracingLeaflet(const json& value, const std::string& where,
 // image slice's thickness.
 constexpr double kTracingPlaneToleranceMm = 1.0;
 
-bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, JsonFields& fields) {
+// `source`: the curve file the points came from (how it was read decides the advice), or
+// nullptr for points inline in the tracings file (LPS).
+bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, JsonFields& fields,
+                            const Curve* source) {
   int off = 0;
   double farthest = 0.0;
   Eigen::Index first = -1;
@@ -177,16 +180,23 @@ bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, Js
     on_plane_in_ras =
         std::abs(tracing.plane_normal.dot(ras - tracing.plane_origin)) <= kTracingPlaneToleranceMm;
   }
-  char what[320];
+  std::string advice = "the plane or the points are wrong";
+  if (on_plane_in_ras) {
+    advice = "with x and y negated they lie on it: ";
+    if (source == nullptr)
+      advice += "are they in RAS? (points inline in the tracings file are read as LPS)";
+    else if (source->read_as_ras)
+      advice += "the file was read as RAS; are they in LPS? (" + source->other_frame_syntax + ")";
+    else
+      advice += "are they in RAS? (" + source->other_frame_syntax + ")";
+  }
+  char what[200];
   std::snprintf(what, sizeof what,
                 "%d of %d points lie off the tracing's plane (first: point %ld; farthest %.3g mm; "
-                "at most %g mm): %s",
+                "at most %g mm): ",
                 off, static_cast<int>(tracing.points.rows()), static_cast<long>(first), farthest,
-                kTracingPlaneToleranceMm,
-                on_plane_in_ras ? "with x and y negated they lie on it: are they in RAS? (say "
-                                  "\"coordinateSystem\": \"RAS\" in the points' file)"
-                                : "the plane or the points are wrong");
-  fields.error(where, what);
+                kTracingPlaneToleranceMm);
+  fields.error(where, what + advice);
   return false;
 }
 
@@ -238,11 +248,11 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     fields.error(where, "give \"points\" or \"file\", not both");
     return false;
   }
+  Curve curve;  // the file's, when the points come from one
   if (points != nullptr) {
     ok &= fields.points(*points, fieldPath(where, "points"), tracing.points);
   } else if (file != nullptr) {
     std::string name;
-    Curve curve;
     if (fields.text(*file, fieldPath(where, "file"), name) &&
         fileFieldUsable(name, dir / name, fieldPath(where, "file"), fields) &&
         readCurve(dir / name, curve, fields.diagnostics(), name)) {
@@ -260,7 +270,9 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
                  "a tracing needs at least 2 points, got " + std::to_string(tracing.points.rows()));
     ok = false;
   }
-  if (ok) ok = checkTracingOnItsPlane(tracing, points_where, fields);
+  if (ok)
+    ok =
+        checkTracingOnItsPlane(tracing, points_where, fields, points != nullptr ? nullptr : &curve);
   return ok;
 }
 

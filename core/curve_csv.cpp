@@ -142,6 +142,14 @@ class CurveTextReader {
       return false;
     }
     curve.closed = false;
+    curve.read_as_ras = columns_.ras;
+    const char* other = columns_.ras ? "LPS" : "RAS";
+    curve.other_frame_syntax =
+        fcsv_ ? std::string("say \"# CoordinateSystem = ") + other + "\" in the file's header" +
+                    (columns_.ras && !system_line_ ? " (an .fcsv without that line is read as RAS)"
+                                                   : "")
+              : std::string("name the columns ") + (columns_.ras ? "l,p,s" : "r,a,s") +
+                    " in a header row";
     curve.points.resize(static_cast<Eigen::Index>(points_.size()), 3);
     const double flip = columns_.ras ? -1.0 : 1.0;  // RAS -> LPS: negate R and A
     for (std::size_t i = 0; i < points_.size(); ++i) {
@@ -156,6 +164,7 @@ class CurveTextReader {
  private:
   bool header(const std::string& text, int number) {
     if (const std::string system = headerValue(text, "CoordinateSystem"); !system.empty()) {
+      system_line_ = true;
       if (system == "RAS" || system == "0") {
         columns_.ras = true;
       } else if (system == "LPS" || system == "1") {
@@ -181,6 +190,7 @@ class CurveTextReader {
   std::string file_;
   Diagnostics& diagnostics_;
   bool fcsv_ = false;
+  bool system_line_ = false;  // a "# CoordinateSystem" line was read
   Columns columns_;
   bool seen_header_ = false, seen_data_ = false;
   int bad_lines_ = 0;

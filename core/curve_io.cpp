@@ -18,13 +18,16 @@ using json = nlohmann::json;
 // Slicer's own reader (vtkMRMLMarkupsJsonStorageNode) assumes LPS when the field is absent.
 constexpr const char* kDefaultCoordinateSystem = "LPS";
 
-// Reads "coordinateSystem" of `object` and converts `points` from it to LPS in place.
-bool toLps(const json& object, const std::string& where, JsonFields& fields,
-           Eigen::MatrixXd& points) {
+// Reads "coordinateSystem" of `object` and converts the curve's points from it to LPS in place.
+bool toLps(const json& object, const std::string& where, JsonFields& fields, Curve& curve) {
+  Eigen::MatrixXd& points = curve.points;
   std::string system = kDefaultCoordinateSystem;
   if (const json* value = fields.member(object, where, "coordinateSystem", false)) {
     if (!fields.text(*value, fieldPath(where, "coordinateSystem"), system)) return false;
   }
+  curve.read_as_ras = system == "RAS";
+  curve.other_frame_syntax = std::string("say \"coordinateSystem\": \"") +
+                             (curve.read_as_ras ? "LPS" : "RAS") + "\" in the file";
   if (system == "RAS") {
     points.col(0) *= -1.0;  // R -> L
     points.col(1) *= -1.0;  // A -> P
@@ -118,7 +121,7 @@ bool readMarkups(const json& document, JsonFields& fields, int markup_index, Cur
   curve.closed = type == "ClosedCurve";
   bool ok = checkUnits(markup, where, fields);
   ok = readControlPoints(markup, where, fields, curve.points) && ok;
-  ok = ok && toLps(markup, where, fields, curve.points);
+  ok = ok && toLps(markup, where, fields, curve);
   if (ok && curve.points.rows() == 0) {
     fields.error(fieldPath(where, "controlPoints"), "no placed control points");
     return false;
@@ -131,6 +134,8 @@ bool readMarkups(const json& document, JsonFields& fields, int markup_index, Cur
 bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
   if (document.is_array()) {
     curve.closed = false;
+    curve.other_frame_syntax =
+        "give the points as {\"points\": [...], \"coordinateSystem\": \"RAS\"}";
     if (!fields.points(document, "", curve.points)) return false;
     if (curve.points.rows() == 0) {
       fields.error("(top level)", "no points");
@@ -144,7 +149,7 @@ bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
   if (const json* closed = fields.member(document, "", "closed", false)) {
     if (!fields.boolean(*closed, "closed", curve.closed)) return false;
   }
-  if (!toLps(document, "", fields, curve.points)) return false;
+  if (!toLps(document, "", fields, curve)) return false;
   if (curve.points.rows() == 0) {
     fields.error("points", "no points");
     return false;

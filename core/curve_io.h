@@ -17,6 +17,11 @@ namespace chordfit {
 struct Curve {
   Eigen::MatrixXd points;  // #P by 3, mm, LPS
   bool closed = false;     // Slicer ClosedCurve (plain lists: "closed": true)
+  // How the file's coordinate system was read, for a message about points that look turned
+  // half a turn about S (RAS read as LPS, or the reverse): whether they were converted from
+  // RAS, and what to write in this file's format to have them read in the other system.
+  bool read_as_ras = false;
+  std::string other_frame_syntax;
 };
 
 // Reads one curve. For a markups file with several markups, `markup_index` picks one.

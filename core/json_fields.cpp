@@ -117,6 +117,17 @@ std::string typoSuggestion(const std::string& key, const std::vector<std::string
       nearest = name;
     }
   }
+  if (nearest.empty()) {
+    // A key without its unit ("youngs_modulus" for "youngs_modulus_mpa", "pressure" for
+    // "pressure_mmhg"): the one known key that starts with it and a '_'.
+    for (const std::string& name : known) {
+      if (key.size() >= 3 && name.size() > key.size() + 1 &&
+          name.compare(0, key.size(), key) == 0 && name[key.size()] == '_') {
+        if (!nearest.empty()) return "";  // more than one: no guess
+        nearest = name;
+      }
+    }
+  }
   return nearest.empty() ? "" : "; did you mean \"" + nearest + "\"?";
 }
 

@@ -86,6 +86,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
                                                   options.bounds, seed_residual, prefit);
     outcome.forward_sims += result.forward_sims;
+    outcome.prefit_ran = true;
     outcome.prefit_factor = result.factor;
     outcome.prefit_primary_factor = result.primary_factor;
     outcome.prefit_secondary_factor = result.secondary_factor;
@@ -100,6 +101,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     const SegmentPrefitResult result = segmentScalePrefit(valve_case, start_set, start_evaluation,
                                                           options.bounds, seed_residual, segment);
     outcome.forward_sims += result.forward_sims;
+    outcome.segment_prefit_ran = true;
     outcome.segment_prefit_changes = result.changed;
     segment_prefit_ids = result.changed_segments;
     start_set = result.start;

@@ -12,6 +12,7 @@
 #include "core/case_io.h"
 #include "core/curve_io.h"
 #include "core/mesh_io.h"
+#include "core/mesh_topology.h"
 #include "core/parametric_valve.h"
 #include "tests/test_support.h"
 
@@ -341,6 +342,112 @@ TEST(ImportMeshCli, NamesTheLandmarkPointOrTheClosedAnnulusFileAtFault) {
       << r.err;
   EXPECT_EQ(r.err.find("valve.ply"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(dir / "case"));
+}
+
+// Landmarks in another order, an anterior point on the posterior annulus, PM tips swapped:
+// each used to give a case with the wrong leaflets or muscles and exit 0 (a warning for the
+// first two, nothing for the tips); each is now refused with what to change.
+TEST(ImportMeshCli, RefusesLandmarksOrTipsInAnotherOrderSayingWhichOrderFits) {
+  TempDir dir;
+  const Eigen::MatrixXd points = writeImportInputs(dir.path());
+  const auto import = [&](const fs::path& landmarks, const std::string& more) {
+    return runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                       quoted(landmarks) + more + " --out " + quoted(dir / "case"));
+  };
+  Eigen::MatrixXd anterior_first(3, 3);
+  anterior_first << points.row(2), points.row(0), points.row(1);
+  writePointList(dir / "anterior_first.json", anterior_first);
+  auto r = import(dir / "anterior_first.json", "");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("with point 1 as the anterior point it is 3"), std::string::npos) << r.err;
+
+  // The posterior annulus vertex opposite the anterior landmark (farthest toward -x).
+  const ValveMesh& mesh = valve().valve_case.mesh;
+  Eigen::Vector3d posterior = Eigen::Vector3d::Constant(1e9);
+  for (Eigen::Index k = 0; k < mesh.annulus.size(); ++k)
+    if (mesh.leaflet(mesh.annulus(k)) == 1 && mesh.V(mesh.annulus(k), 0) < posterior.x())
+      posterior = mesh.V.row(mesh.annulus(k));
+  Eigen::MatrixXd posterior_point = points;
+  posterior_point.row(2) = posterior.transpose();
+  writePointList(dir / "posterior_point.json", posterior_point);
+  r = import(dir / "posterior_point.json", "");
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("point 3 seems to lie on the posterior annulus"), std::string::npos)
+      << r.err;
+
+  writePointList(dir / "swapped_tips.json", Eigen::MatrixXd{{2, -12, -18}, {2, 12, -18}});
+  r = import(dir / "landmarks.json", " --pm-tips " + quoted(dir / "swapped_tips.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("point 1 (the anterolateral tip) lies 23.9 mm farther to the "
+                       "posteromedial side than point 2 (the posteromedial tip): are they "
+                       "swapped?"),
+            std::string::npos)
+      << r.err;
+  writePointList(dir / "same_tips.json", Eigen::MatrixXd{{2, 12, -18}, {2, 12.5, -18}});
+  r = import(dir / "landmarks.json", " --pm-tips " + quoted(dir / "same_tips.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("points 1 and 2 are less than 1 mm apart"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "case"));
+}
+
+// A valve surface has two boundary loops, the annulus and the free edge; a third is a hole
+// (a triangle lost in the segmentation), whose edge would be simulated as free.
+TEST(CaseImport, CountsHolesBesidesTheAnnulusAndTheFreeEdge) {
+  const ValveCase& truth = valve().valve_case;
+  const ImportedCase whole = importValveCase(truth.mesh.V, truth.mesh.F, landmarksOf(truth.mesh),
+                                             Eigen::MatrixXd(), "whole");
+  ASSERT_TRUE(whole.ok()) << whole.error;
+  EXPECT_EQ(whole.holes, 0);
+  // Drop a triangle none of whose vertices is on a boundary: it leaves a hole of three edges.
+  std::vector<bool> on_boundary(truth.mesh.V.rows(), false);
+  for (const auto& loop : boundaryLoops(truth.mesh.F))
+    for (int v : loop) on_boundary[v] = true;
+  Eigen::Index dropped = -1;
+  for (Eigen::Index f = 0; f < truth.mesh.F.rows() && dropped < 0; ++f)
+    if (!on_boundary[truth.mesh.F(f, 0)] && !on_boundary[truth.mesh.F(f, 1)] &&
+        !on_boundary[truth.mesh.F(f, 2)])
+      dropped = f;
+  ASSERT_GE(dropped, 0);
+  Eigen::MatrixXi F(truth.mesh.F.rows() - 1, 3);
+  F << truth.mesh.F.topRows(dropped), truth.mesh.F.bottomRows(truth.mesh.F.rows() - dropped - 1);
+  const ImportedCase holed =
+      importValveCase(truth.mesh.V, F, landmarksOf(truth.mesh), Eigen::MatrixXd(), "holed");
+  ASSERT_TRUE(holed.ok()) << holed.error;
+  EXPECT_EQ(holed.holes, 1);
+}
+
+// Tracings whose leaflet labels disagree with the labels the landmarks gave (as when landmarks
+// in RAS are read as LPS on a valve centred at the origin, where every distance check passes)
+// get a warning; agreeing ones do not.
+TEST(ImportMeshCli, WarnsWhenTheTracingsLieNearerTheOtherLeaflet) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  const auto import = [&](const char* near_plus_x, const char* near_minus_x) {
+    testing::writeText(dir / "tracings.json", std::string(R"({"tracings": [
+      {"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]}, "leaflet": ")") +
+                                                  near_plus_x + R"(",
+       "points": [[12, 0, -3], [10, 0, -5], [8, 0, -7]]},
+      {"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]}, "leaflet": ")" +
+                                                  near_minus_x + R"(",
+       "points": [[-12, 0, -3], [-10, 0, -5], [-8, 0, -7]]}]})");
+    return runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                       quoted(dir / "landmarks.json") + " --tracings " +
+                       quoted(dir / "tracings.json") + " --out " + quoted(dir / "case"));
+  };
+  auto r = import("anterior", "posterior");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tracing points nearest to their own leaflet (open state): 100 %"),
+            std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
+  r = import("posterior", "anterior");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tracing points nearest to their own leaflet (open state): 0 %"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("warning: most tracing points are nearer the other leaflet"),
+            std::string::npos)
+      << r.out;
 }
 
 }  // namespace

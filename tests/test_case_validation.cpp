@@ -218,6 +218,23 @@ TEST_F(ValidateCommand, ATracingOffItsPlaneThatRasWouldPutOnItSaysSo) {
               "are they in RAS\\?");
 }
 
+// In a curve file the advice is the file format's own way of saying its system: an .fcsv
+// without a CoordinateSystem line is read as RAS, so LPS numbers in it need that line; a
+// plain .csv is read as LPS and names r,a,s columns for RAS.
+TEST_F(ValidateCommand, ATracingFileInTheOtherSystemGetsItsFormatsAdvice) {
+  testing::writeText(dir_ / "lps.fcsv", "# columns = id,x,y,z\n1,1,3,-2\n2,2,3,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,3,0], "normal": [0,1,0]},
+                              "file": "lps.fcsv"}]})");
+  expectError("tracings\\.json",
+              "with x and y negated they lie on it: the file was read as RAS; are they in LPS\\? "
+              "\\(say \"# CoordinateSystem = LPS\" in the file's header \\(an \\.fcsv without "
+              "that line is read as RAS\\)\\)");
+  testing::writeText(dir_ / "ras.csv", "1,-3,-2\n2,-3,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,3,0], "normal": [0,1,0]},
+                              "file": "ras.csv"}]})");
+  expectError("tracings\\.json", "are they in RAS\\? \\(name the columns r,a,s in a header row\\)");
+}
+
 // [1e308, 1, 0] has finite components but an infinite length: it used to normalise to a zero
 // vector, on whose "plane" every point lies, and validate.
 TEST_F(ValidateCommand, ReportsATracingNormalWhoseLengthOverflows) {

@@ -42,6 +42,29 @@ TEST(FitCommand, ADirectoryInTheWayOfAnOutputFileExitsWith2BeforeFitting) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+// The fitted cords.json would replace the seed the user put in --out, or, with --out the case
+// directory, the case's own cords: refused before the fit, both files left as they were.
+TEST(FitCommand, RefusesAnOutputThatWouldReplaceOneOfItsInputs) {
+  TempDir dir;
+  std::filesystem::copy(smallCase(), dir / "case", std::filesystem::copy_options::recursive);
+  std::filesystem::create_directories(dir / "fit");
+  std::filesystem::copy_file(dir / "case" / "cords.json", dir / "fit" / "cords.json");
+  const std::string seed = testing::readText(dir / "fit" / "cords.json");
+  const auto r = runChordfit("fit " + quoted(dir / "case") + " --seed-cords " +
+                             quoted(dir / "fit" / "cords.json") + " --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("cords.json: is an input of this run; fit would replace it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::readText(dir / "fit" / "cords.json"), seed);
+  const auto into_case =
+      runChordfit("fit " + quoted(dir / "case") + " --out " + quoted(dir / "case"));
+  EXPECT_EQ(into_case.exit_code, 2) << into_case.err;
+  EXPECT_NE(into_case.err.find("is an input of this run"), std::string::npos) << into_case.err;
+  EXPECT_EQ(testing::readText(dir / "case" / "cords.json"), seed);
+  EXPECT_FALSE(std::filesystem::exists(dir / "case" / "report.md"));
+}
+
 TEST(FitCommand, RejectsAnUnknownParameterModeWithExitCode2) {
   TempDir dir;
   const auto r =
@@ -145,9 +168,9 @@ TEST(FitCommand, SkipsThePrefitsWhenEveryFreeCordIsManual) {
   // cords: the seed's closure, then the one written out).
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   EXPECT_EQ(metrics["forward_sims"].get<int>(), 2);
-  EXPECT_NE(
-      testing::readText(dir / "fit" / "report.md").find("(skipped: every free cord is manual"),
-      std::string::npos);
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
+                .find("- global pre-fit: skipped: every free cord is manual"),
+            std::string::npos);
 }
 
 TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
@@ -339,6 +362,32 @@ TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
   EXPECT_EQ(metrics["prefit_primary_factor"].get<double>(), common);
   EXPECT_EQ(metrics["prefit_secondary_factor"].get<double>(), common);
   EXPECT_LE(metrics["forward_sims"].get<int>(), 17);  // budget 16 + the closure written
+}
+
+// Options that only move PM tips, given to a fit that does not: a note, and the fit runs; the
+// report says why a pre-fit did not run (it said "segment pre-fit: no change").
+TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --params groups --tip-box 3 --max-sims 20 --quiet --no-uncertainty"
+                             " --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: fit: --tip-box acts only with --params scales+tips (this fit: "
+                       "--params groups)"),
+            std::string::npos)
+      << r.out;
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("- segment pre-fit: not run with --params groups"), std::string::npos)
+      << report;
+  const auto off = runChordfit("fit " + quoted(smallCase()) +
+                               " --no-prefit --max-sims 20 --quiet --no-uncertainty --out " +
+                               quoted(dir / "off"));
+  ASSERT_EQ(off.exit_code, 0) << off.err;
+  const std::string off_report = testing::readText(dir / "off" / "report.md");
+  EXPECT_NE(off_report.find("- global pre-fit: disabled (--no-prefit)"), std::string::npos)
+      << off_report;
+  EXPECT_NE(off_report.find("- segment pre-fit: disabled (--no-prefit)"), std::string::npos);
 }
 
 // The pre-fit's budget check counts the closures its common stage runs: the seed, 8 grid

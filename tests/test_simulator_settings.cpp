@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "core/simulator.h"
 
 namespace chordfit {
@@ -58,6 +60,23 @@ TEST(SimulatorSettingsRanges, AnUnknownSettingSuggestsTheNearestKnownOne) {
   EXPECT_EQ(diagnostics.problems()[0].what,
             "unknown simulation setting; did you mean \"pressure_mmhg\"?");
   EXPECT_EQ(diagnostics.problems()[1].what, "unknown simulation setting");
+}
+
+// A key without its unit is more than two edits from the key; the key it starts is the guess,
+// unless several start with it ("contact" -> contact_thickness_mm, contact_margin_mm, ...).
+TEST(SimulatorSettingsRanges, AKeyWithoutItsUnitSuggestsTheKeyWithIt) {
+  Diagnostics diagnostics;
+  settingsFromJson(R"({"youngs_modulus": 2, "pressure": 90, "contact_margin": 0.1})", diagnostics,
+                   {}, "case.json");
+  ASSERT_EQ(diagnostics.problems().size(), 3u);
+  std::map<std::string, std::string> what;
+  for (const auto& p : diagnostics.problems()) what[p.where] = p.what;
+  EXPECT_EQ(what["simulation.youngs_modulus"],
+            "unknown simulation setting; did you mean \"youngs_modulus_mpa\"?");
+  EXPECT_EQ(what["simulation.pressure"],
+            "unknown simulation setting; did you mean \"pressure_mmhg\"?");
+  EXPECT_EQ(what["simulation.contact_margin"],
+            "unknown simulation setting; did you mean \"contact_margin_mm\"?");
 }
 
 TEST(SimulatorSettingsRanges, AreaFloorIsReadFromJsonAndZeroDisablesIt) {

@@ -9,11 +9,13 @@
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <iostream>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "core/atomic_file.h"
 #include "core/case_extent.h"
 #include "core/case_io.h"
 #include "core/closure_model.h"
@@ -225,14 +227,47 @@ bool reportEmptyOutput(const char* command, const std::string& out) {
 }  // namespace
 
 bool outputDirectoryUsable(const char* command, const std::string& directory,
-                           const std::vector<std::string>& files) {
+                           const std::vector<std::string>& files,
+                           const std::vector<std::string>& inputs) {
   if (reportEmptyOutput(command, directory)) return false;
   if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
   for (const std::string& name : files) {
     if (const auto problem = whatIsInTheWay(directory, name))
       return reportOutputProblem(command, problem->path.string(), problem->what);
+    const std::filesystem::path output = std::filesystem::path(directory) / name;
+    for (const std::string& input : inputs) {
+      std::error_code ec;
+      if (!input.empty() && std::filesystem::equivalent(output, input, ec))
+        return reportOutputProblem(command, output.string(),
+                                   std::string("is an input of this run; ") + command +
+                                       " would replace it with its own " + name +
+                                       ": give another --out, or copy the file elsewhere first");
+    }
   }
   return true;
+}
+
+std::vector<std::string> caseInputFiles(const std::string& case_dir) {
+  if (case_dir.empty()) return {};
+  const std::filesystem::path dir(case_dir);
+  std::vector<std::string> files = {(dir / "case.json").string()};
+  std::string text;
+  if (!readWholeFile(dir / "case.json", text)) return files;
+  const nlohmann::json json = nlohmann::json::parse(text, nullptr, false);
+  // Every string of the case file that names an existing file of the case: the mesh, the
+  // annulus curves, tracings (and the curve files they name), tips, cords, tissue.
+  std::function<void(const nlohmann::json&)> collect = [&](const nlohmann::json& value) {
+    if (value.is_string()) {
+      std::error_code ec;
+      const std::filesystem::path file = dir / value.get<std::string>();
+      if (!value.get<std::string>().empty() && std::filesystem::is_regular_file(file, ec))
+        files.push_back(file.string());
+    } else if (value.is_structured()) {
+      for (const auto& item : value) collect(item);
+    }
+  };
+  if (!json.is_discarded()) collect(json);
+  return files;
 }
 
 bool outputFileUsable(const char* command, const std::string& file) {
@@ -258,6 +293,9 @@ int fitStepCapToMesh(ValveCase& valve_case) {
   if (!(dt > 0.0)) return 0;
   const double ramp_steps = std::ceil(defaults.ramp_ms / dt);
   if (!(5.0 * ramp_steps > defaults.max_steps)) return 0;
+  // A mesh so fine (or not in millimetres) that no closure could run: validation refuses it;
+  // no cap (it would overflow an int).
+  if (5.0 * ramp_steps > 1e8) return 0;
   const int cap = static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
   nlohmann::json simulation = nlohmann::json::parse(valve_case.simulation_json);
   simulation["max_steps"] = cap;

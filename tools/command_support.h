@@ -51,8 +51,15 @@ bool optionsArePositive(const char* command,
 // "error: <command>: --out: <path>: <reason>" ("--out: must not be empty" for "") and
 // returns false. Checked before the work starts, so that a fit does not run for minutes and
 // then fail to write.
+// `inputs`: the files the run reads (caseInputFiles, --cords, ...); an output that would
+// replace one of them is refused too ("is an input of this run"): `fit CASE --out CASE` would
+// replace the case's own cords.json, a seed put in --out would be lost to the fitted cords.
 bool outputDirectoryUsable(const char* command, const std::string& directory,
-                           const std::vector<std::string>& files = {});
+                           const std::vector<std::string>& files = {},
+                           const std::vector<std::string>& inputs = {});
+
+// A case's own files: case.json and every file it names that exists in the case directory.
+std::vector<std::string> caseInputFiles(const std::string& case_dir);
 
 // The same for an output file: its directory must be usable as above and the file itself must
 // not be an existing directory (the final rename would fail after the work) nor a symbolic

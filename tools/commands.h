@@ -140,6 +140,8 @@ struct CompareOptions {
 };
 int runCompare(const CompareOptions& options);
 std::vector<std::string> compareOutputFiles(const CompareOptions& options);
+// The cord and tissue files compare reads (not the case's own).
+std::vector<std::string> compareInputFiles(const CompareOptions& options);
 
 }  // namespace chordfit::cli
 

@@ -245,6 +245,14 @@ std::vector<std::string> enfaceFiguresBeyond(const std::string& out_dir, std::si
 
 }  // namespace
 
+std::vector<std::string> compareInputFiles(const CompareOptions& options) {
+  std::vector<std::string> files = options.cords_files;
+  if (!options.tissues.empty())
+    for (const std::string& tissue : splitLabels(options.tissues))
+      if (tissue != "-") files.push_back(tissue);
+  return files;
+}
+
 int runCompare(const CompareOptions& options) {
   if (options.cords_files.empty()) {
     std::cerr << "error: compare: give at least one cord set file after CASE_DIR\n";

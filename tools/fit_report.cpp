@@ -207,15 +207,25 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                       "their plane's tracings are charged)"
                                 : std::string("off"))
      << "\n";
-  md << "- global pre-fit factor: " << fit.prefit_factor
-     << (!o.prefit                     ? " (disabled)"
-         : !fit.prefit_skipped.empty() ? " (skipped: " + fit.prefit_skipped + ")"
-                                       : std::string())
-     << "; per kind: primaries " << fit.prefit_primary_factor << ", secondaries "
-     << fit.prefit_secondary_factor << "\n";
+  // Why a pre-fit did not run, or "" when it ran.
+  auto notRun = [&](bool ran, bool applies) -> std::string {
+    if (ran) return "";
+    if (!o.prefit) return "disabled (--no-prefit)";
+    if (!fit.prefit_skipped.empty()) return "skipped: " + fit.prefit_skipped;
+    if (!applies) return "not run with --params " + o.params;
+    if (fit.x.size() == 0) return "not run: no free cord";
+    return "not run: --max-sims " + std::to_string(o.max_sims) + " leaves too few closures";
+  };
+  if (const std::string why = notRun(fit.prefit_ran, true); !why.empty())
+    md << "- global pre-fit: " << why << "\n";
+  else
+    md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: primaries "
+       << fit.prefit_primary_factor << ", secondaries " << fit.prefit_secondary_factor << "\n";
+  const std::string segment_not_run = notRun(fit.segment_prefit_ran, o.params != "groups");
   md << "- segment pre-fit: "
-     << (fit.segment_prefit_changes.empty() ? std::string("no change")
-                                            : joinSegments(fit.segment_prefit_changes))
+     << (!segment_not_run.empty()             ? segment_not_run
+         : fit.segment_prefit_changes.empty() ? std::string("no change")
+                                              : joinSegments(fit.segment_prefit_changes))
      << "\n";
   if (o.tissue_prefit) {
     md << "- tissue pre-fit (stiffness factor per segment): "

@@ -1,6 +1,7 @@
 // import-mesh: a case directory from a segmented open-state valve mesh and three landmarks
 // (core/case_import.h), written to a staging directory, validated by loading it back, and only
 // then published (tools/staged_output.h), so a failure leaves the directory as it was.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
@@ -9,6 +10,8 @@
 #include <system_error>
 #include <vector>
 
+#include "core/annulus_plane.h"
+#include "core/case_extent.h"
 #include "core/case_import.h"
 #include "core/case_io.h"
 #include "core/curve_io.h"
@@ -26,6 +29,92 @@ namespace {
 // The anterior annulus is about a third of the circumference (Ranganathan et al. 1970);
 // outside this range the landmarks are probably swapped or misplaced.
 constexpr double kAnteriorFractionLow = 0.2, kAnteriorFractionHigh = 0.5;
+// Below this share of labelled tracing points nearest to their own leaflet, the landmarks'
+// labels and the tracings disagree (tracingLeafletAgreement).
+constexpr double kLeafletAgreementLow = 0.5;
+
+bool plausibleAnteriorFraction(double fraction) {
+  return fraction >= kAnteriorFractionLow && fraction <= kAnteriorFractionHigh;
+}
+
+std::string percent(double fraction) {
+  return std::to_string(static_cast<int>(std::lround(100.0 * fraction))) + " %";
+}
+
+// For an implausible anterior share: another reading of the three landmarks under which it is
+// plausible, in words, or "" (then the valve may just be unusual, and the import only warns).
+// Points are 0-based rows of `points` in the file's order (AL, PM, anterior).
+std::string landmarkOrderProblem(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
+                                 const Eigen::MatrixXd& points, double fraction) {
+  for (int anterior : {0, 1}) {
+    const int first = anterior == 0 ? 1 : 0;  // the other two, in the file's order
+    ImportLandmarks l;
+    l.anterolateral = points.row(first).transpose();
+    l.posteromedial = points.row(2).transpose();
+    l.anterior = points.row(anterior).transpose();
+    const ImportedCase other = importValveCase(V, F, l, Eigen::MatrixXd(), "probe");
+    if (other.ok() && plausibleAnteriorFraction(other.anterior_fraction)) {
+      return "with point " + std::to_string(anterior + 1) + " as the anterior point it is " +
+             percent(other.anterior_fraction) +
+             ": are the points in another order? The file's order is the anterolateral "
+             "commissure, the posteromedial commissure, a point of the anterior annulus";
+    }
+  }
+  if (plausibleAnteriorFraction(1.0 - fraction)) {
+    return "point 3 seems to lie on the posterior annulus (the arc between the commissures on "
+           "the other side is " +
+           percent(1.0 - fraction) + "): give a point of the anterior annulus";
+  }
+  return "";
+}
+
+// Two papillary-muscle tips in the file's order (anterolateral, posteromedial) against the
+// valve's lateral axis (annulus_plane.h, +l anterolateral), or "" when they agree. Swapped,
+// every cord's group would name the other muscle.
+std::string pmTipOrderProblem(const ValveMesh& mesh, const std::vector<PmTip>& tips) {
+  for (std::size_t i = 0; i < tips.size(); ++i)
+    for (std::size_t j = i + 1; j < tips.size(); ++j)
+      if ((tips[i].position - tips[j].position).norm() < 1.0)
+        return "points " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
+               " are less than 1 mm apart: each papillary muscle needs its own tip";
+  if (tips.size() != 2) return "";
+  const AnnulusFrame frame = openAnnulusFrame(mesh);
+  const double al = frame.l.dot(tips[0].position - frame.plane.centre);
+  const double pm = frame.l.dot(tips[1].position - frame.plane.centre);
+  if (al >= pm) return "";
+  char text[320];
+  std::snprintf(text, sizeof text,
+                "point 1 (the anterolateral tip) lies %.1f mm farther to the posteromedial side "
+                "than point 2 (the posteromedial tip): are they swapped? The file's order is "
+                "anterolateral, posteromedial",
+                pm - al);
+  return text;
+}
+
+// The share of the leaflet-labelled tracing points whose nearest open-state vertex has their
+// leaflet's label, or NaN without such points. Far below one half, the labels the landmarks
+// gave and the tracings disagree: the landmarks (or the tracings) are in another frame, e.g.
+// RAS read as LPS on a valve centred at the origin, where every distance check passes.
+double tracingLeafletAgreement(const ValveMesh& mesh, const std::vector<Tracing>& tracings) {
+  int agree = 0, labelled = 0;
+  for (const Tracing& t : tracings) {
+    if (t.leaflet < 0) continue;
+    for (Eigen::Index i = 0; i < t.points.rows(); ++i) {
+      Eigen::Index nearest = 0;
+      (mesh.V.rowwise() - t.points.row(i)).rowwise().squaredNorm().minCoeff(&nearest);
+      agree += mesh.leaflet(nearest) == t.leaflet ? 1 : 0;
+      ++labelled;
+    }
+  }
+  return labelled > 0 ? static_cast<double>(agree) / labelled : NAN;
+}
+
+// For a file whose points fit once x and y are negated: the question to ask.
+std::string frameHint(const Curve& curve) {
+  return std::string(" (with x and y negated the points fit: ") +
+         (curve.read_as_ras ? "the file was read as RAS; is it in LPS? " : "is the file in RAS? ") +
+         curve.other_frame_syntax + ")";
+}
 
 int fail(const std::string& file, const std::string& what) {
   std::cerr << "error: " << file << ": " << what << "\n";
@@ -122,6 +211,9 @@ int runImportMesh(const ImportMeshOptions& options) {
   if (!options.tracings_file.empty()) {
     readTracingsFile(options.tracings_file, ValveMesh{}.leaflet_names, tracings, diagnostics);
   }
+  // The mesh's units first: a mesh in metres made every landmark "130 mm from the nearest
+  // boundary loop", blaming the landmarks.
+  if (diagnostics.ok()) checkValveSpan(V, options.mesh_file, diagnostics);
   if (!diagnostics.ok()) return reportProblems(diagnostics);
   if (landmarks.points.rows() != 3) {
     return fail(options.landmarks_file,
@@ -135,7 +227,32 @@ int runImportMesh(const ImportMeshOptions& options) {
   l.anterior = landmarks.points.row(2).transpose();
   const std::string name = options.name.empty() ? out.filename().string() : options.name;
   ImportedCase imported = importValveCase(V, F, l, closed.points, name);
-  if (!imported.ok()) return failImport(options, imported);
+  if (!imported.ok()) {
+    // RAS read as LPS (or the reverse) turns a file half a turn about S: say so when the
+    // file at fault fits once its x and y are negated.
+    auto turned = [](Eigen::MatrixXd points) {
+      points.leftCols(2) *= -1.0;
+      return points;
+    };
+    if (imported.error_input == ImportInput::kLandmarks) {
+      const Eigen::MatrixXd p = turned(landmarks.points);
+      const ImportLandmarks t{p.row(0).transpose(), p.row(1).transpose(), p.row(2).transpose()};
+      if (importValveCase(V, F, t, Eigen::MatrixXd(), name).ok())
+        imported.error += frameHint(landmarks);
+    } else if (imported.error_input == ImportInput::kClosedAnnulus &&
+               importValveCase(V, F, l, turned(closed.points), name).ok()) {
+      imported.error += frameHint(closed);
+    }
+    return failImport(options, imported);
+  }
+  if (!plausibleAnteriorFraction(imported.anterior_fraction)) {
+    const std::string problem =
+        landmarkOrderProblem(V, F, landmarks.points, imported.anterior_fraction);
+    if (!problem.empty())
+      return fail(options.landmarks_file, "the anterior arc is " +
+                                              percent(imported.anterior_fraction) +
+                                              " of the annulus, usually about a third; " + problem);
+  }
   imported.valve_case.tracings = tracings;
   if (tips.points.rows() > 0) {
     std::vector<PmTip> pm_tips;
@@ -146,6 +263,9 @@ int runImportMesh(const ImportMeshOptions& options) {
       tip.position = tips.points.row(t).transpose();
       pm_tips.push_back(tip);
     }
+    if (const std::string problem = pmTipOrderProblem(imported.valve_case.mesh, pm_tips);
+        !problem.empty())
+      return fail(options.pm_tips_file, problem);
     imported.valve_case.tips = pm_tips;
   }
 
@@ -167,11 +287,30 @@ int runImportMesh(const ImportMeshOptions& options) {
       "%ld\n",
       100.0 * imported.anterior_fraction, static_cast<long>((c.mesh.leaflet.array() == 0).count()),
       static_cast<long>((c.mesh.leaflet.array() == 1).count()));
-  if (imported.anterior_fraction < kAnteriorFractionLow ||
-      imported.anterior_fraction > kAnteriorFractionHigh) {
+  if (imported.holes > 0) {
+    // A hole lets the leaflet's edge there hang free: the closure and the labels near it
+    // differ from the tissue's.
+    std::printf(
+        "warning: the mesh has %d boundary loop(s) besides the annulus and the free edge: holes "
+        "in the leaflet surface (a missing triangle?); the edge of each is simulated as free\n",
+        imported.holes);
+  }
+  if (!plausibleAnteriorFraction(imported.anterior_fraction)) {
     std::printf(
         "warning: the anterior annulus is usually about a third of the circumference; "
         "check the landmarks' order (anterolateral, posteromedial, anterior)\n");
+  }
+  if (const double agreement = tracingLeafletAgreement(c.mesh, c.tracings);
+      std::isfinite(agreement)) {
+    std::printf("  tracing points nearest to their own leaflet (open state): %.0f %%\n",
+                100.0 * agreement);
+    // 66-80 % on the synthetic cohort's cases (every preset); 35 % measured with landmarks in
+    // RAS read as LPS on a valve centred at the origin.
+    if (agreement < kLeafletAgreementLow)
+      std::printf(
+          "warning: most tracing points are nearer the other leaflet (65-80 %% lie nearest their "
+          "own on correctly labelled valves): are the landmarks and the tracings in the same "
+          "coordinate system (RAS read as LPS)? Check the leaflet vertex counts above\n");
   }
   if (options.closed_annulus_file.empty()) {
     std::printf("  closed annulus: none given, the annulus stays at its open position\n");

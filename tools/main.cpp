@@ -370,34 +370,52 @@ int main(int argc, char** argv) {
   // Before any work: an output place that cannot be written is a usage error (exit 2). A
   // directory the command writes into, or a file it writes; metrics and compare write only
   // when given --out.
-  // A directory's `files`: what the command writes there, none of which may be a directory.
+  // A directory's `files`: what the command writes there, none of which may be a directory;
+  // `inputs`: what the run reads, none of which an output may replace. (A file output may be
+  // its own input: heuristic or edit-cords rewriting a cord file in place is an edit.)
   struct OutputPlace {
     const char* command;
     std::string path;
     bool is_file;
     std::vector<std::string> files;
+    std::vector<std::string> inputs;
+  };
+  auto withCase = [](const std::string& case_dir, std::vector<std::string> inputs) {
+    for (std::string& file : caseInputFiles(case_dir)) inputs.push_back(std::move(file));
+    return inputs;
   };
   const OutputPlace places[] = {
-      {"make-valve", make_valve.out_dir, false, makeValveOutputFiles()},
-      {"import-mesh", import_mesh.out_dir, false, importMeshOutputFiles()},
-      {"heuristic", heuristic.out_file, true, {}},
-      {"edit-cords", edit_cords.out_file, true, {}},
-      {"metrics", metrics.out_file, true, {}},
-      {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate)},
-      {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles()},
-      {"make-case", make_case.out_dir, false, makeCaseOutputFiles()},
-      {"fit", fit.out_dir, false, fitOutputFiles()},
-      {"compare", compare.out_dir, false, compareOutputFiles(compare)}};
+      {"make-valve", make_valve.out_dir, false, makeValveOutputFiles(), {make_valve.annulus_file}},
+      {"import-mesh", import_mesh.out_dir, false, importMeshOutputFiles(), {}},
+      {"heuristic", heuristic.out_file, true, {}, {}},
+      {"edit-cords", edit_cords.out_file, true, {}, {}},
+      {"metrics", metrics.out_file, true, {}, {}},
+      {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate),
+       withCase(simulate.case_dir, {simulate.cords_file, simulate.tissue_file})},
+      {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles(),
+       withCase(sweep_cord.case_dir, {sweep_cord.cords_file})},
+      {"make-case", make_case.out_dir, false, makeCaseOutputFiles(), {}},
+      {"fit", fit.out_dir, false, fitOutputFiles(), withCase(fit.case_dir, {fit.seed_cords_file})},
+      {"compare", compare.out_dir, false, compareOutputFiles(compare),
+       withCase(compare.case_dir, compareInputFiles(compare))}};
   for (const OutputPlace& place : places) {
     // Whether --out was given, not whether it is empty: an empty one is refused, not skipped
     // (make-case reports a missing --out itself; --list needs none).
     if (!app.got_subcommand(place.command) ||
         app.get_subcommand(place.command)->count("--out") == 0)
       continue;
-    const bool usable = place.is_file
-                            ? outputFileUsable(place.command, place.path)
-                            : outputDirectoryUsable(place.command, place.path, place.files);
+    const bool usable =
+        place.is_file ? outputFileUsable(place.command, place.path)
+                      : outputDirectoryUsable(place.command, place.path, place.files, place.inputs);
     if (!usable) return kExitBadInput;
+  }
+  // Options that only act on PM tips, given to a fit that does not move them: say so (the run
+  // goes on; the user may have meant --params scales+tips).
+  if (app.got_subcommand("fit") && fit.params != "scales+tips") {
+    for (const char* option : {"--tip-box", "--tip-weight", "--fd-tip-step"})
+      if (app.get_subcommand("fit")->count(option) > 0)
+        std::printf("note: fit: %s acts only with --params scales+tips (this fit: --params %s)\n",
+                    option, fit.params.c_str());
   }
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);
