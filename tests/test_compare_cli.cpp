@@ -148,6 +148,8 @@ TEST_F(CompareCommand, MeasuresEachCordSetAgainstTheCasesTruth) {
             std::string::npos)
       << r.out;
   EXPECT_NE(readText(out / "compare.md").find("Against the case's truth"), std::string::npos);
+  // The case's cords keep the heuristic's tips: their offset is said to be the heuristic's.
+  EXPECT_EQ(testing::occurrences(r.out, "(the heuristic's, not moved)"), 1u) << r.out;
 }
 
 TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {

@@ -65,6 +65,10 @@ TEST_F(SimulateCommand, RemovesTheOpenedStateAnEarlierOpeningRunLeftAndKeepsOthe
       runChordfit("simulate " + quoted(case_dir_) + " --phase open --quiet --out " + quoted(out));
   ASSERT_EQ(opening.exit_code, 0) << opening.err;
   ASSERT_TRUE(std::filesystem::exists(out / "opened.ply"));
+  // The opening is measured against the closure's distance from the open state: it goes back.
+  const auto opened = nlohmann::json::parse(testing::readText(out / "metrics.json"))["open_phase"];
+  EXPECT_LT(opened["mean_distance_to_open_state_mm"].get<double>(),
+            opened["closed_mean_distance_to_open_state_mm"].get<double>());
   testing::writeText(out / "notes.txt", "the user's");
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;

@@ -140,7 +140,8 @@ std::string recoveryText(const TruthRecovery& r) {
     line += ", none taut in the truth";
   }
   if (std::isfinite(r.max_tip_offset_mm)) {
-    std::snprintf(text, sizeof text, ", tips at most %.2f mm off", r.max_tip_offset_mm);
+    std::snprintf(text, sizeof text, ", tips at most %.2f mm off%s", r.max_tip_offset_mm,
+                  r.heuristic_tips ? " (the heuristic's, not moved)" : "");
     line += text;
   }
   return line;

@@ -58,7 +58,14 @@ std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
           !p[2].is_number())
         return ignoreTruth(file, "tips: each needs a true_position [x, y, z]");
       result.tip_positions.emplace_back(p[0].get<double>(), p[1].get<double>(), p[2].get<double>());
+      const nlohmann::json h = t.value("case_heuristic_position", nlohmann::json());
+      if (h.is_array() && h.size() == 3 && h[0].is_number() && h[1].is_number() && h[2].is_number())
+        result.case_heuristic_tip_positions.emplace_back(h[0].get<double>(), h[1].get<double>(),
+                                                         h[2].get<double>());
     }
+    // All or nothing: a partial list cannot say whether a set's tips are the heuristic's.
+    if (result.case_heuristic_tip_positions.size() != result.tip_positions.size())
+      result.case_heuristic_tip_positions.clear();
   }
   return result;
 }
@@ -94,9 +101,15 @@ TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth) {
   r.median_error_pct = median(all);
   r.median_error_taut_pct = median(taut);
   if (set.tips.size() == truth.tip_positions.size()) {
-    for (std::size_t k = 0; k < set.tips.size(); ++k)
+    r.heuristic_tips = truth.case_heuristic_tip_positions.size() == set.tips.size();
+    for (std::size_t k = 0; k < set.tips.size(); ++k) {
       r.max_tip_offset_mm =
           std::max(r.max_tip_offset_mm, (set.tips[k].position - truth.tip_positions[k]).norm());
+      // cords.json keeps full precision: an unmoved tip reads back as the same numbers.
+      if (r.heuristic_tips)
+        r.heuristic_tips =
+            (set.tips[k].position - truth.case_heuristic_tip_positions[k]).norm() < 1e-9;
+    }
   } else {
     r.max_tip_offset_mm = std::numeric_limits<double>::quiet_NaN();
   }

@@ -26,6 +26,9 @@ struct TrueCord {
 struct CaseTruth {
   std::vector<TrueCord> cords;
   std::vector<Eigen::Vector3d> tip_positions;  // in the order of the case's tips
+  // Where the heuristic puts each tip on the case (what a fit starts from); empty when the
+  // truth does not say.
+  std::vector<Eigen::Vector3d> case_heuristic_tip_positions;
 };
 
 // The truth of the case in `case_dir` (its truth/truth.json), or nullopt when there is none.
@@ -40,6 +43,9 @@ struct TruthRecovery {
   double median_error_pct = 0.0;       // median |rest / true - 1| in %, over `cords`
   double median_error_taut_pct = 0.0;  // ... over `taut_cords` (NaN when none)
   double max_tip_offset_mm = 0.0;      // largest tip distance from its true position
+  // The set's tips are the case's heuristic ones, unmoved (a fit of scales only): their offset
+  // is the heuristic's, not a fitted one.
+  bool heuristic_tips = false;
 };
 
 TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth);
