@@ -20,14 +20,21 @@ std::filesystem::path smallCase() {
   return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
 }
 
-TEST(FitCommand, RejectsAnUnknownOptimizerWithExitCode2) {
+// `fit SMALL_CASE ARGUMENTS --out DIR/fit`, expected to be refused before any work: exit 2 and
+// no fit output. Returns stderr for the test's own checks of the message.
+std::string refusedFitMessage(const std::string& arguments) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) + " --optimizer newton --out " +
-                             quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--optimizer"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("newton"), std::string::npos) << r.err;
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " " + arguments + " --out " + quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+  return r.err;
+}
+
+TEST(FitCommand, RejectsAnUnknownOptimizerWithExitCode2) {
+  const std::string err = refusedFitMessage("--optimizer newton");
+  EXPECT_NE(err.find("--optimizer"), std::string::npos) << err;
+  EXPECT_NE(err.find("newton"), std::string::npos) << err;
 }
 
 TEST(FitCommand, ADirectoryInTheWayOfAnOutputFileExitsWith2BeforeFitting) {
@@ -66,27 +73,19 @@ TEST(FitCommand, RefusesAnOutputThatWouldReplaceOneOfItsInputs) {
 }
 
 TEST(FitCommand, RejectsAnUnknownParameterModeWithExitCode2) {
-  TempDir dir;
-  const auto r =
-      runChordfit("fit " + quoted(smallCase()) + " --params lengths --out " + quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--params"), std::string::npos) << r.err;
+  const std::string err = refusedFitMessage("--params lengths");
+  EXPECT_NE(err.find("--params"), std::string::npos) << err;
 }
 
 TEST(FitCommand, RejectsAMissingSeedFileWithExitCode2) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) + " --seed-cords " +
-                             quoted(dir / "nowhere.json") + " --out " + quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("nowhere.json"), std::string::npos) << r.err;
+  const std::string err = refusedFitMessage("--seed-cords " + quoted(dir / "nowhere.json"));
+  EXPECT_NE(err.find("nowhere.json"), std::string::npos) << err;
 }
 
 TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
-  TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 1.5,0.7 --out " +
-                             quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--scale-bounds"), std::string::npos) << r.err;
+  const std::string err = refusedFitMessage("--scale-bounds 1.5,0.7");
+  EXPECT_NE(err.find("--scale-bounds"), std::string::npos) << err;
 }
 
 // An upper bound that lets a cord outgrow what a cord set may hold (1000 mm) used to fail only
@@ -104,33 +103,21 @@ TEST(FitCommand, RejectsAnUpperScaleBoundNoCordSetCanHoldBeforeFitting) {
 }
 
 TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
-  TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) + " --distance nearest --out " +
-                             quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--distance"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("nearest"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+  const std::string err = refusedFitMessage("--distance nearest");
+  EXPECT_NE(err.find("--distance"), std::string::npos) << err;
+  EXPECT_NE(err.find("nearest"), std::string::npos) << err;
 }
 
 TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
-  TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) + " --section-weight -0.1 --out " +
-                             quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--section-weight"), std::string::npos) << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+  const std::string err = refusedFitMessage("--section-weight -0.1");
+  EXPECT_NE(err.find("--section-weight"), std::string::npos) << err;
 }
 
 TEST(FitCommand, RejectsANegativeTipWeightWithExitCode2) {
-  TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --params scales+tips --tip-weight -1 --out " + quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: fit: --tip-weight: must be a finite number >= 0, got -1"),
+  const std::string err = refusedFitMessage("--params scales+tips --tip-weight -1");
+  EXPECT_NE(err.find("error: fit: --tip-weight: must be a finite number >= 0, got -1"),
             std::string::npos)
-      << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+      << err;
 }
 
 // The tip prior (--tip-weight) is recorded where a reader of the results looks for it.
@@ -174,17 +161,13 @@ TEST(FitCommand, SkipsThePrefitsWhenEveryFreeCordIsManual) {
 }
 
 TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
-  TempDir dir;
   for (const std::string option :
        {"--max-sims 0", "--threads 0", "--tip-box -1", "--fd-step 0", "--fd-tip-step -0.5"}) {
-    const auto r =
-        runChordfit("fit " + quoted(smallCase()) + " " + option + " --out " + quoted(dir / "fit"));
-    EXPECT_EQ(r.exit_code, 2) << option;
+    const std::string err = refusedFitMessage(option);
     const std::string name = option.substr(0, option.find(' '));
-    EXPECT_NE(r.err.find("error: fit: " + name + ": must be a positive number"), std::string::npos)
-        << r.err;
+    EXPECT_NE(err.find("error: fit: " + name + ": must be a positive number"), std::string::npos)
+        << err;
   }
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
 // The section residuals (--section-weight) reach the fit: recorded in metrics.json and
@@ -406,14 +389,10 @@ TEST(FitCommand, ACommonPrefitThatJustFitsTheBudgetRuns) {
 // A central difference at the lower scale bound closes lower - step; at or below zero every
 // Jacobian there would fail.
 TEST(FitCommand, RejectsAFiniteDifferenceStepNotBelowTheLowerScaleBound) {
-  TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --scale-bounds 0.5,1.5 --fd-step 0.5 --out " + quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: fit: --fd-step: 0.5 is not below the lower scale bound 0.5"),
+  const std::string err = refusedFitMessage("--scale-bounds 0.5,1.5 --fd-step 0.5");
+  EXPECT_NE(err.find("error: fit: --fd-step: 0.5 is not below the lower scale bound 0.5"),
             std::string::npos)
-      << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+      << err;
 }
 
 }  // namespace
