@@ -282,7 +282,8 @@ void ContactDetector::filterCandidates(size_t e_begin, size_t e_end, const doubl
 
 ContactConstraint contactConstraint(int p, int a, int b, int c, const double* x_start,
                                     const double* x_pred, double thickness) {
-  // Side: of the start-of-step plane of the triangle (non-penetrating by induction); if the
+  // Side: of the start-of-step plane of the triangle (free of crossings unless a later projection
+  // pulled a vertex through within one step, contact.h); if the
   // vertex lies in that plane, of the predicted one.
   const CMap3 a0(x_start + 3 * a), b0(x_start + 3 * b), c0(x_start + 3 * c);
   double side = (b0 - a0).cross(c0 - a0).dot(CMap3(x_start + 3 * p) - a0);

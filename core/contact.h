@@ -1,12 +1,15 @@
 // Vertex-triangle proximity contact with thickness, for leaflet coaptation and self-contact.
 //
 // Once per time step the detector finds every (vertex p, triangle T) pair with
-// dist(p, T) < thickness + margin at the predicted positions and linearises it into a
-// ContactConstraint C = n . (x_p - q) - thickness >= 0 (xpbd_constraints.h):
-//   - q = closest point of T to p (barycentrics frozen, Ericson 2005),
+// dist(p, T) < thickness + margin at the predicted positions and makes it a ContactConstraint
+// C = n . (x_p - q) - thickness >= 0 (xpbd_constraints.h), whose closest point q and normal n
+// are recomputed at every projection (contactStateAt):
+//   - q = closest point of T to p (Ericson 2005),
 //   - n = T's unit normal, signed to the side where p was at the START of the step, when the
-//     closest point is interior to T. The start-of-step state is non-penetrating, so a
-//     vertex that crossed T during the prediction is pushed back to its own side;
+//     closest point is interior to T. A vertex that crossed T during the prediction is pushed
+//     back to its own side. (The start-of-step state is free of crossings as long as no
+//     projection after the contacts, a cord's, pulls a vertex through a sheet within one step;
+//     the closures' self-intersection count, metrics.json, would show one that did);
 //   - n = (p - q) / |p - q| when q lies on an edge or a vertex of T (no side to lose there;
 //     this makes the direction continuous across the region boundary).
 // Pairs that are close in the rest state are excluded: T containing p, and T with a vertex

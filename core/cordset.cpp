@@ -79,6 +79,11 @@ std::string cordPointProblem(const CordPoint& point, int vertex_count) {
              std::to_string(vertex_count) + " vertices)";
     }
   }
+  // A repeated vertex would enter the constraint's denominator twice (sum b_i^2 w instead of
+  // (sum b_i)^2 w): the point then moves by the wrong amount.
+  if (point.vertices[0] == point.vertices[1] || point.vertices[0] == point.vertices[2] ||
+      point.vertices[1] == point.vertices[2])
+    return "the three vertices must differ (a point at a vertex is given by \"vertex\" alone)";
   if (!point.weights.allFinite() || point.weights.minCoeff() < 0.0)
     return "weights must be finite and >= 0";
   if (std::abs(point.weights.sum() - 1.0) > 1e-9) return "weights must sum to 1";

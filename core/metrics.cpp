@@ -172,7 +172,15 @@ Eigen::VectorXd heightAboveAnnulus(const AnnulusFrame& frame, const Eigen::Matri
 
 ClosedAnnulus closedAnnulus(const ValveCase& valve_case) {
   ClosedAnnulus closed;
-  closed.ring = valve_case.annulus_closed;
+  // No closed annulus (a library caller's case; the case files require one): the annulus
+  // stays at its open position, as in the closure model.
+  if (valve_case.annulus_closed.rows() > 0) {
+    closed.ring = valve_case.annulus_closed;
+  } else {
+    closed.ring.resize(valve_case.mesh.annulus.size(), 3);
+    for (Eigen::Index k = 0; k < valve_case.mesh.annulus.size(); ++k)
+      closed.ring.row(k) = valve_case.mesh.V.row(valve_case.mesh.annulus(k));
+  }
   closed.frame =
       annulusFrameFromRing(closed.ring, valve_case.mesh, openAnnulusFrame(valve_case.mesh));
   closed.segments = buildSegmentMap(closed.ring, valve_case.mesh, closed.frame);

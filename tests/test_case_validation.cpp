@@ -117,6 +117,16 @@ TEST_F(ValidateCommand, ReportsANonManifoldEdge) {
   expectError("open\\.ply", "edge \\(1, 8\\): non-manifold edge shared by 3 triangles");
 }
 
+// A vertex no triangle uses has no mass: held where it is, it would stop any sheet that comes
+// near it, invisibly.
+TEST_F(ValidateCommand, ReportsAVertexInNoTriangle) {
+  Eigen::MatrixXd V(valve_.mesh.V.rows() + 1, 3);
+  V << valve_.mesh.V, valve_.mesh.V.colwise().mean();
+  writePly(dir_ / "open.ply", V, valve_.mesh.F);
+  expectError("open\\.ply",
+              "vertices\\[" + std::to_string(valve_.mesh.V.rows()) + "\\]: vertex in no triangle");
+}
+
 TEST_F(ValidateCommand, ReportsANaNCoordinate) {
   valve_.mesh.V(3, 1) = std::nan("");
   writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);

@@ -231,6 +231,16 @@ TEST(PointAttachments, PutACordAtTheSamePlaceOnMeshesOfAnyResolution) {
   EXPECT_GT(median(by_vertex), 0.3);  // what the points remove
 }
 
+// A repeated vertex would count twice in the constraint's denominator: refused.
+TEST(CordPointProblem, RefusesARepeatedVertex) {
+  CordPoint point;
+  point.vertices = {4, 4, 5};
+  point.weights = Eigen::Vector3d(0.3, 0.3, 0.4);
+  EXPECT_NE(cordPointProblem(point, 10).find("the three vertices must differ"), std::string::npos);
+  point.vertices = {3, 4, 5};
+  EXPECT_EQ(cordPointProblem(point, 10), "");
+}
+
 TEST(PointAttachments, LieOnTheirLeafletAwayFromTheRingWithValidWeights) {
   const TwoResolutions f;
   for (const ParametricValve* valve : {&f.fine, &f.coarse}) {

@@ -202,5 +202,22 @@ TEST(ComputeMetrics, ReportsNoTracingsHonestly) {
   EXPECT_TRUE(m.mesh_prolapse.segments.empty());  // the open cone hangs below the annulus
 }
 
+// A case without a closed annulus (allowed by the closure model: the annulus stays open)
+// used to read past an empty ring; its metrics are taken against the open ring.
+TEST(ComputeMetrics, WithoutAClosedAnnulusUsesTheOpenRing) {
+  ValveCase c = testing::tinyConeCase();
+  const ValveMetrics with_ring = [&] {
+    ValveCase open_ring = c;
+    open_ring.annulus_closed.resize(c.mesh.annulus.size(), 3);
+    for (Eigen::Index k = 0; k < c.mesh.annulus.size(); ++k)
+      open_ring.annulus_closed.row(k) = c.mesh.V.row(c.mesh.annulus(k));
+    return computeMetrics(open_ring, c.mesh.V);
+  }();
+  c.annulus_closed.resize(0, 3);
+  const ValveMetrics m = computeMetrics(c, c.mesh.V);
+  EXPECT_EQ(m.mesh_prolapse.max_height_mm, with_ring.mesh_prolapse.max_height_mm);
+  EXPECT_EQ(m.area_mm2, with_ring.area_mm2);
+}
+
 }  // namespace
 }  // namespace chordfit
