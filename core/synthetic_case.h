@@ -33,6 +33,10 @@
 
 namespace chordfit {
 
+// The case mesh edges `make-case` (and the benchmark's --edge) accept, mm: finer than 1 mm
+// gives a truth finer than 0.5 mm, which has not been seen to close (tools/make_case_command.cpp).
+constexpr double kMinCaseEdgeMm = 1.0, kMaxCaseEdgeMm = 5.0;
+
 struct SyntheticCaseOptions {
   std::string preset;
   // Used instead of the named preset when set (experiments, calibration); `preset` then only

@@ -13,11 +13,11 @@
 #include <cstdio>
 #include <vector>
 
+#include "core/closure_model.h"
 #include "core/contact.h"
 #include "core/heuristic.h"
 #include "core/mesh_topology.h"
 #include "core/parametric_valve.h"
-#include "core/closure_model.h"
 #include "core/xpbd_constraints.h"
 
 namespace chordfit {

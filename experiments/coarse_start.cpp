@@ -21,9 +21,9 @@
 
 #include <Eigen/Core>
 
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "core/xpbd_constraints.h"
 #include "experiments/tool_support.h"

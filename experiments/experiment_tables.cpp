@@ -392,8 +392,18 @@ class Merger {
       panels.push_back(avg_panel);
       panels.push_back(rec_panel);
     };
-    const CaseSpec base =
-        findCase(plan_, config_.sensitivity_preset + "_s" + std::to_string(config_.seeds.front()));
+    const std::string base_id =
+        config_.sensitivity_preset + "_s" + std::to_string(config_.seeds.front());
+    if (std::none_of(plan_.cases.begin(), plan_.cases.end(),
+                     [&](const CaseSpec& c) { return c.id == base_id; })) {
+      // A plan restricted to other cases (--presets, --cases, --seeds): no sweep to tabulate.
+      write("sensitivity.md",
+            md + "\nNo rows: the plan does not hold the sweeps' base case " + base_id + ".\n");
+      write("sensitivity.csv", csv);
+      write("sensitivity.svg", svgLinePlots({}, 2));
+      return;
+    }
+    const CaseSpec base = findCase(plan_, base_id);
     auto variant = [&](const std::string& suffix) {
       const std::string id = base.id + suffix;
       for (const CaseSpec& c : plan_.cases) {

@@ -12,9 +12,9 @@
 #include <string>
 #include <vector>
 
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "experiments/tool_support.h"
 

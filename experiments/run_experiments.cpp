@@ -10,6 +10,7 @@
 #include <fstream>
 #include <iostream>
 #include <optional>
+#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "core/csv_text.h"
+#include "core/synthetic_case.h"
 #include "experiments/acceptance_table.h"
 #include "experiments/experiment_jobs.h"
 #include "experiments/experiment_plan.h"
@@ -152,8 +154,12 @@ int parseArguments(int argc, char** argv, Arguments& a) {
     } else if (arg == "--edge") {
       char* end = nullptr;
       if (!value(text) || (a.edge_mm = std::strtod(text.c_str(), &end), *end != '\0') ||
-          !(a.edge_mm > 0.0)) {
-        return usageError("--edge: expected a positive length in mm, got \"" + text + "\"");
+          !(a.edge_mm >= chordfit::kMinCaseEdgeMm && a.edge_mm <= chordfit::kMaxCaseEdgeMm)) {
+        char range[64];
+        std::snprintf(range, sizeof range, "[%g, %g]", chordfit::kMinCaseEdgeMm,
+                      chordfit::kMaxCaseEdgeMm);
+        return usageError("--edge: expected a length in " + std::string(range) +
+                          " mm (make-case's range), got \"" + text + "\"");
       }
     } else if (arg == "--max-sims") {
       char* end = nullptr;
@@ -191,20 +197,22 @@ int parseArguments(int argc, char** argv, Arguments& a) {
   return kExitOk;
 }
 
-// The revision of the source tree the programs were built from ("unknown" outside git).
-std::string sourceRevision() {
-  const std::string command =
-      "git -C '" + std::string(CHORDFIT_SOURCE_DIR) + "' describe --always --dirty 2>/dev/null";
-  std::string revision;
+// The revision the chordfit that runs the jobs was built from, as its `--version` says
+// ("chordfit 0.1.0 (revision 433c786)"); "unknown" when it does not say. (The source tree's
+// revision at run time is not it: a copied binary, or a tree committed to since the build.)
+std::string chordfitRevision(const fs::path& chordfit) {
+  const std::string command = "'" + chordfit.string() + "' --version 2>/dev/null";
+  std::string text;
   if (FILE* pipe = popen(command.c_str(), "r")) {
-    char buffer[128];
-    while (fgets(buffer, sizeof buffer, pipe)) revision += buffer;
+    char buffer[256];
+    while (fgets(buffer, sizeof buffer, pipe)) text += buffer;
     pclose(pipe);
   }
-  while (!revision.empty() && (revision.back() == '\n' || revision.back() == ' ')) {
-    revision.pop_back();
-  }
-  return revision.empty() ? "unknown" : revision;
+  const std::string key = "(revision ";
+  const std::size_t at = text.find(key);
+  const std::size_t end = at == std::string::npos ? at : text.find(')', at);
+  if (end == std::string::npos) return "unknown";
+  return text.substr(at + key.size(), end - at - key.size());
 }
 
 // The machine the jobs run on, for reading their wall times: the CPU model of /proc/cpuinfo
@@ -228,6 +236,35 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
                             const std::vector<int>& seeds, const std::vector<std::string>& presets,
                             const std::vector<std::string>& cases) {
   if (methods.empty() && seeds.empty() && presets.empty() && cases.empty()) return plan;
+  // Every name given must name something of the plan: a typo in a list used to drop that item
+  // without a word (`--presets normal-1,nosuch` ran normal-1 alone).
+  std::set<std::string> known_presets, known_cases, known_seeds, known_methods;
+  for (const CaseSpec& c : plan.cases) {
+    known_presets.insert(c.preset);
+    known_cases.insert(c.id);
+    known_seeds.insert(std::to_string(c.seed));
+  }
+  for (const JobSpec& job : plan.jobs) known_methods.insert(methodTag(job));
+  auto refuseUnknown = [](const char* option, const std::vector<std::string>& given,
+                          const std::set<std::string>& known, bool prefix) {
+    for (const std::string& name : given) {
+      const bool found =
+          prefix ? std::any_of(known.begin(), known.end(),
+                               [&](const std::string& k) { return k.rfind(name, 0) == 0; })
+                 : known.count(name) > 0;
+      if (found) continue;
+      std::string list;
+      for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
+      throw std::invalid_argument(std::string(option) + ": \"" + name + "\" is not " +
+                                  (prefix ? "the start of " : "") + "one of the plan's: " + list);
+    }
+  };
+  std::vector<std::string> seed_names;
+  for (int seed : seeds) seed_names.push_back(std::to_string(seed));
+  refuseUnknown("--methods", methods, known_methods, true);
+  refuseUnknown("--seeds", seed_names, known_seeds, false);
+  refuseUnknown("--presets", presets, known_presets, false);
+  refuseUnknown("--cases", cases, known_cases, false);
   ExperimentPlan kept;
   for (const JobSpec& job : plan.jobs) {
     const CaseSpec& c = findCase(plan, job.case_id);
@@ -250,13 +287,14 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
   }
   if (kept.jobs.empty()) {
     throw std::invalid_argument(
-        "--methods / --seeds / --presets / --cases: no job of the plan matches");
+        "--methods / --seeds / --presets / --cases: each names part of the plan, but no job "
+        "matches all of them together");
   }
   return kept;
 }
 
 int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
-  const RunPaths paths{a.chordfit,           a.results,    a.work, sourceRevision(),
+  const RunPaths paths{a.chordfit,           a.results,    a.work, chordfitRevision(a.chordfit),
                        machineDescription(), a.case_source};
   const auto start = Clock::now();
   auto elapsed = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
@@ -275,6 +313,11 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
                "in %s\n",
                a.shard.index, a.shard.count, cases.size(), plan.cases.size(), jobs.size(),
                plan.jobs.size(), a.results.string().c_str());
+  if (jobs.empty())
+    std::fprintf(stderr,
+                 "run_experiments: note: shard %d/%d holds none of the plan's %zu job(s) (fewer "
+                 "jobs than shards); nothing to run here\n",
+                 a.shard.index, a.shard.count, plan.jobs.size());
   for (std::size_t k = 0; k < cases.size(); ++k) {
     std::fprintf(stderr, "[case %zu/%zu] %s: generating unless present...\n", k + 1, cases.size(),
                  cases[k]->id.c_str());
@@ -336,6 +379,14 @@ std::string recordedPlanOptions(const fs::path& results) {
 }
 
 int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
+  // A mistyped --results used to be created and filled with empty tables.
+  if (std::error_code ec; !fs::is_directory(a.results / "jobs", ec)) {
+    std::fprintf(stderr,
+                 "run_experiments: error: merge: %s: no such directory (the jobs' results; run "
+                 "them first with `run_experiments run`, or give the --results they went to)\n",
+                 (a.results / "jobs").string().c_str());
+    return kExitUsage;
+  }
   const MergeSummary s = mergeResults(plan, config, a.results, {a.no_timing, planOptions(a)});
   std::printf("merged %d of %zu job results into %s:", s.jobs_found, plan.jobs.size(),
               a.results.string().c_str());
@@ -344,7 +395,13 @@ int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   if (s.missing_jobs.empty()) return kExitOk;
   std::fprintf(stderr, "%s: %zu job(s) without a result (no rows for them):\n",
                a.allow_missing ? "warning" : "error", s.missing_jobs.size());
-  for (const std::string& id : s.missing_jobs) std::fprintf(stderr, "  %s\n", id.c_str());
+  // A few by name; a long list is in index.md.
+  constexpr std::size_t kListedAtMost = 10;
+  for (std::size_t i = 0; i < s.missing_jobs.size() && i < kListedAtMost; ++i)
+    std::fprintf(stderr, "  %s\n", s.missing_jobs[i].c_str());
+  if (s.missing_jobs.size() > kListedAtMost)
+    std::fprintf(stderr, "  ... and %zu more (listed in %s)\n",
+                 s.missing_jobs.size() - kListedAtMost, (a.results / "index.md").string().c_str());
   return a.allow_missing ? kExitOk : kExitJobsFailed;
 }
 
@@ -357,7 +414,13 @@ std::vector<std::vector<std::string>> readCsv(const fs::path& path) {
 
 // Every table exists, has the documented header, rows of the header's width, and one Table 1
 // row per planned Table 1 job (plus a noise-floor row per truth job) with an AvgD.
-int check(const ExperimentPlan& plan, const Arguments& a) {
+int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
+  if (std::error_code ec; !fs::is_directory(a.results, ec)) {
+    std::fprintf(stderr, "check: %s: no such directory (give the --results of the merge)\n",
+                 a.results.string().c_str());
+    std::printf("check: FAILED (%s)\n", a.results.string().c_str());
+    return kExitJobsFailed;
+  }
   std::vector<std::string> problems;
   // Results of another plan (the smoke run's, checked against the full plan) would list every
   // job of this plan as missing: say so once instead.
@@ -381,6 +444,15 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
   }();
   bool has_fits = false;
   for (const JobSpec& job : plan.jobs) has_fits |= job.method == Method::kFit;
+  const std::string sensitivity_case =
+      config.sensitivity_preset + "_s" + std::to_string(config.seeds.front());
+  bool has_sensitivity_case = false, has_optimizer_case = false;
+  for (const CaseSpec& c : plan.cases) {
+    has_sensitivity_case |= c.id == sensitivity_case;
+    for (const std::string& preset : config.optimizer_presets)
+      has_optimizer_case |=
+          has_fits && c.id == preset + "_s" + std::to_string(config.seeds.front());
+  }
   const std::vector<Table> tables = {{"table1.csv", header(table1CsvHeader(timing))},
                                      {"acceptance.csv", header(acceptanceCsvHeader(timing))},
                                      {"optimizers.csv", header(optimizersCsvHeader(timing))},
@@ -395,9 +467,10 @@ int check(const ExperimentPlan& plan, const Arguments& a) {
     std::string got;
     for (const std::string& c : rows[0]) got += (got.empty() ? "" : ",") + c;
     if (got != t.header) problems.push_back(std::string(t.file) + ": header \"" + got + "\"");
-    const bool optional =
-        (std::string(t.file) == "optimizers.csv" || std::string(t.file) == "acceptance.csv") &&
-        !has_fits;
+    // Tables of cases the plan may leave out (--presets, --cases, --seeds, --methods).
+    const bool optional = (std::string(t.file) == "acceptance.csv" && !has_fits) ||
+                          (std::string(t.file) == "optimizers.csv" && !has_optimizer_case) ||
+                          (std::string(t.file) == "sensitivity.csv" && !has_sensitivity_case);
     if (rows.size() < 2 && !optional) problems.push_back(std::string(t.file) + ": no data rows");
     for (std::size_t r = 1; r < rows.size(); ++r) {
       if (rows[r].size() != rows[0].size()) {
@@ -482,12 +555,12 @@ int main(int argc, char** argv) {
   try {
     if (a.command == "list") return list(plan, a);
     if (a.command == "merge") return merge(plan, config, a);
-    if (a.command == "check") return check(plan, a);
+    if (a.command == "check") return check(plan, config, a);
     const int ran = runShard(plan, config, a);
     if (a.command == "run") return ran;
     const int merged = merge(plan, config, a);
     if (a.smoke) {
-      const int checked = check(plan, a);
+      const int checked = check(plan, config, a);
       if (checked != kExitOk) return checked;
     }
     return ran != kExitOk && !a.allow_missing ? ran : merged;

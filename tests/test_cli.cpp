@@ -2,6 +2,7 @@
 // heuristic -> metrics), the documented example case, and usage errors.
 #include <cmath>
 #include <optional>
+#include <regex>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -20,6 +21,16 @@ using testing::runChordfit;
 using testing::TempDir;
 
 using testing::quoted;
+
+// --version names the revision the binary was built from (cmake/write_revision.cmake): the
+// benchmark records it with every job.
+TEST(Cli, VersionNamesTheSourceRevision) {
+  const auto r = testing::runChordfit("--version");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::regex_search(
+      r.out, std::regex("^chordfit 0\\.1\\.0 \\(revision ([0-9a-f]{7,}(-dirty)?|unknown)\\)\n")))
+      << r.out;
+}
 
 TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
   TempDir dir;

@@ -115,7 +115,13 @@ TEST_F(ExperimentsPipeline, ReducedPlanCoversEveryPresetAtSeedOne) {
   EXPECT_EQ(runRunner("list --plan most").exit_code, 2);
   const auto none = runRunner("list --methods nosuch");
   EXPECT_EQ(none.exit_code, 2) << "a filter matching no job is a usage error";
-  EXPECT_NE(none.err.find("no job of the plan matches"), std::string::npos) << none.err;
+  EXPECT_NE(none.err.find("--methods: \"nosuch\" is not the start of one of the plan's"),
+            std::string::npos)
+      << none.err;
+  const auto disjoint = runRunner("list --presets normal-1 --cases prolapse-P2_s1");
+  EXPECT_EQ(disjoint.exit_code, 2);
+  EXPECT_NE(disjoint.err.find("no job matches all of them together"), std::string::npos)
+      << disjoint.err;
 }
 
 TEST_F(ExperimentsPipeline, ShardsPartitionThePlan) {
@@ -145,9 +151,27 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   r = runRunner("list --methods nothing-like-this");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--methods"), std::string::npos) << r.err;
-  r = runRunner("list --edge 0");
+  for (const char* edge : {"0", "0.5", "9"}) {  // make-case's range is [1, 5] mm
+    r = runRunner(std::string("list --edge ") + edge);
+    EXPECT_EQ(r.exit_code, 2) << edge;
+    EXPECT_NE(r.err.find("--edge: expected a length in [1, 5] mm"), std::string::npos) << r.err;
+  }
+  // A typo in a list used to drop that item silently.
+  r = runRunner("list --presets normal-1,nosuch");
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("--edge: expected a positive length"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("--presets: \"nosuch\" is not one of the plan's: bileaflet, "),
+            std::string::npos)
+      << r.err;
+  r = runRunner("list --seeds 1,7");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--seeds: \"7\" is not one of the plan's: 1, 2, 3"), std::string::npos)
+      << r.err;
+  // A mistyped --results used to be created and filled with empty tables.
+  TempDir empty;
+  r = runRunner("merge --results " + quoted(empty / "nowhere"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("nowhere/jobs: no such directory"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(empty / "nowhere"));
   r = runRunner("list --plan most");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--plan: expected full, reduced or smoke"), std::string::npos) << r.err;
@@ -256,6 +280,16 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   r = runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readText(dir / "table1.csv").find("wall_seconds"), std::string::npos);
+
+  // A subset of the full plan without the sensitivity sweeps' base case (prolapse-P2_s1) and
+  // the optimiser cases: merged and checked (it stopped with "no case prolapse-P2_s1").
+  const std::string subset = " --presets normal-1 --seeds 2 --methods heuristic,truth ";
+  r = runRunner("merge --allow-missing" + subset + "--results " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(readText(dir / "sensitivity.md").find("No rows: the plan does not hold"),
+            std::string::npos);
+  r = runRunner("check" + subset + "--results " + quoted(dir.path()));
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
 }
 
 TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {

@@ -12,6 +12,7 @@
 
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/revision.h"
 
 namespace {
 
@@ -318,7 +319,10 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, reportInterruption);
   CLI::App app{"chordfit: chordae tendineae fitting for mitral valve closure simulation"};
   app.require_subcommand(1);
-  app.set_version_flag("--version", "chordfit 0.1.0");
+  // "chordfit 0.1.0 (revision 433c786)": the benchmark records the revision of the binary
+  // that ran each job from this line.
+  app.set_version_flag("--version",
+                       std::string("chordfit 0.1.0 (revision ") + sourceRevision() + ")");
   ValidateOptions validate;
   MakeValveOptions make_valve;
   ImportMeshOptions import_mesh;

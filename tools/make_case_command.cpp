@@ -75,8 +75,10 @@ int runMakeCase(const MakeCaseOptions& options) {
   // there. --edge 1 settles (truth 0.5 mm, 2,648 steps). docs/performance.md, "Fine meshes".
   // So the command's range is [1, 5] mm, stated as such: the library's [0.5, 5] named a
   // range whose lower half was then refused.
-  if (!(std::isfinite(options.edge_mm) && options.edge_mm >= 1.0 && options.edge_mm <= 5.0)) {
-    std::cerr << "error: make-case: --edge: must be in [1, 5] mm, got " << options.edge_mm;
+  if (!(std::isfinite(options.edge_mm) && options.edge_mm >= kMinCaseEdgeMm &&
+        options.edge_mm <= kMaxCaseEdgeMm)) {
+    std::cerr << "error: make-case: --edge: must be in [" << kMinCaseEdgeMm << ", "
+              << kMaxCaseEdgeMm << "] mm, got " << options.edge_mm;
     if (options.edge_mm >= 0.5 && options.edge_mm < 1.0)
       std::cerr << " (it gives a truth mesh finer than 0.5 mm, which has not been seen to "
                    "close: --edge 0.5 diverged)";
