@@ -43,6 +43,31 @@ TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndRecordsThem) {
   EXPECT_EQ(wroteLine(out, published), "wrote " + (out / "a.txt").string() + ", c.txt");
 }
 
+// The record names the command that published each file, and a run of another command that
+// replaces one says so (a compare into a fit's directory replaced the fit's sections.svg);
+// a record without commands (written before they were recorded) gives no note.
+TEST(StagedOutput, SaysWhichFilesOfAnotherCommandItReplaces) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  auto run = [&](const std::string& command, const std::vector<std::string>& names) {
+    StagedOutput staged(out, names, {}, command);
+    for (const std::string& name : names) writeText(staged.dir() / name, command);
+    return staged.publish();
+  };
+  run("fit", {"report.md", "sections.svg"});
+  EXPECT_EQ(readText(out / kOutputRecordName), "report.md\tfit\nsections.svg\tfit\n");
+  EXPECT_TRUE(run("fit", {"report.md", "sections.svg"}).replaced.empty()) << "its own files";
+  const StagedOutput::Published compared = run("compare", {"compare.md", "sections.svg"});
+  EXPECT_EQ(compared.replaced, (std::vector<std::string>{"sections.svg (fit's)"}));
+  EXPECT_EQ(wroteLine(out, compared), "wrote " + (out / "compare.md").string() +
+                                          ", sections.svg; replaced another command's "
+                                          "sections.svg (fit's)");
+  EXPECT_EQ(readText(out / kOutputRecordName),
+            "compare.md\tcompare\nreport.md\tfit\nsections.svg\tcompare\n");
+  writeText(out / kOutputRecordName, "report.md\n");  // an older record
+  EXPECT_TRUE(run("compare", {"report.md"}).replaced.empty());
+}
+
 TEST(StagedOutput, RemovesOnlyAnEarlierRunsRecordedFilesThisRunDoesNotWrite) {
   TempDir tmp;
   const fs::path out = tmp.path() / "out";

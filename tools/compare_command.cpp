@@ -345,7 +345,7 @@ int runCompare(const CompareOptions& options) {
   }
   if (!options.out_dir.empty()) {
     StagedOutput staged(options.out_dir, compareOutputFiles(options),
-                        enfaceFiguresBeyond(options.out_dir, sets.size()));
+                        enfaceFiguresBeyond(options.out_dir, sets.size()), "compare");
     const std::filesystem::path& out = staged.dir();
     writeFileAtomically(out / "compare.md",
                         compareMarkdown(*valve_case, sets, options.settings_overrides));

@@ -160,7 +160,7 @@ int runFit(const FitCommandOptions& o) {
     return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
   }
 
-  StagedOutput staged(o.out_dir, fitOutputFiles());
+  StagedOutput staged(o.out_dir, fitOutputFiles(), {}, "fit");
   const std::filesystem::path& out = staged.dir();
   writeCordSet(out / "cords.json", fit.fitted, &valve_case->mesh);
   // The tissue the cords were fitted on, when the tissue pre-fit changed it; the closure

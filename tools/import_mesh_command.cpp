@@ -170,7 +170,7 @@ std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
   const bool out_existed = fs::exists(out, ec);
   {
     const std::vector<std::string> files = importMeshOutputFiles();
-    StagedOutput staged(out, files, caseDirectoryFilesBesides(files));
+    StagedOutput staged(out, files, caseDirectoryFilesBesides(files), kCaseWriter);
     writeCase(staged.dir(), valve_case);
     Diagnostics check;
     std::optional<ValveCase> read_back = loadCase(staged.dir(), check);

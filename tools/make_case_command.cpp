@@ -109,7 +109,7 @@ int runMakeCase(const MakeCaseOptions& options) {
   }
   // Staged: all or nothing, and an earlier run's files this one does not write (a lesion
   // preset's truth/case/tissue.json, import-mesh's pm_tips.json) go.
-  StagedOutput staged(options.out_dir, makeCaseOutputFiles());
+  StagedOutput staged(options.out_dir, makeCaseOutputFiles(), {}, kCaseWriter);
   writeSyntheticCase(staged.dir(), synthetic);
   const StagedOutput::Published published = staged.publish();
 

@@ -74,7 +74,7 @@ int runMakeValve(const MakeValveOptions& options) {
   // An earlier case there (make-valve's, import-mesh's, make-case's) has files this one does
   // not, its tracings, cords, truth: they go, so that none describes another valve beside it.
   const std::vector<std::string> files = makeValveOutputFiles();
-  StagedOutput staged(options.out_dir, files, caseDirectoryFilesBesides(files));
+  StagedOutput staged(options.out_dir, files, caseDirectoryFilesBesides(files), kCaseWriter);
   writeCase(staged.dir(), valve.valve_case);
   const StagedOutput::Published published = staged.publish();
   std::cout << wroteLine(options.out_dir, published) << "\n" << caseSummary(valve.valve_case);

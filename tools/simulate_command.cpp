@@ -144,7 +144,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   // A closure alone supersedes the opened state of an earlier --phase open.
   StagedOutput staged(options.out_dir, simulateOutputFiles(options),
-                      options.phase == "open" ? std::vector<std::string>{} : openedStateFiles());
+                      options.phase == "open" ? std::vector<std::string>{} : openedStateFiles(),
+                      "simulate");
   const std::filesystem::path& out = staged.dir();
   writeState(out, "closed", *valve_case, closed.V);
   if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);

@@ -3,6 +3,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -14,11 +15,12 @@ namespace chordfit::cli {
 namespace fs = std::filesystem;
 
 StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> declared,
-                           std::vector<std::string> superseded)
+                           std::vector<std::string> superseded, std::string command)
     : out_(out_dir),
       staging_(out_dir / (".staging-" + std::to_string(::getpid()))),
       declared_(std::move(declared)),
-      superseded_(std::move(superseded)) {
+      superseded_(std::move(superseded)),
+      command_(std::move(command)) {
   fs::create_directories(out_);
   fs::remove_all(staging_);
   fs::create_directories(staging_);
@@ -35,21 +37,28 @@ bool contains(const std::vector<std::string>& names, const std::string& name) {
   return std::find(names.begin(), names.end(), name) != names.end();
 }
 
-// The names the record in `dir` lists (none when there is no record).
-std::vector<std::string> recordedOutputs(const fs::path& dir) {
-  std::vector<std::string> names;
+// What the record in `dir` lists: each file's name and the command that published it ("" in
+// records written before they named it); empty when there is no record.
+using Record = std::map<std::string, std::string>;
+Record recordedOutputs(const fs::path& dir) {
+  Record record;
   std::string text;
-  if (!readWholeFile(dir / kOutputRecordName, text)) return names;
+  if (!readWholeFile(dir / kOutputRecordName, text)) return record;
   std::istringstream lines(text);
-  for (std::string line; std::getline(lines, line);)
-    if (!line.empty()) names.push_back(line);
-  return names;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.empty()) continue;
+    const std::size_t tab = line.find('\t');
+    record[line.substr(0, tab)] = tab == std::string::npos ? "" : line.substr(tab + 1);
+  }
+  return record;
 }
 
-// Writes the record of `dir`: one name per line.
-void writeRecord(const fs::path& dir, const std::vector<std::string>& names) {
+// Writes the record of `dir`: one file per line, "name<TAB>command" (the name alone when the
+// command is not known).
+void writeRecord(const fs::path& dir, const Record& record) {
   std::string text;
-  for (const std::string& name : names) text += name + "\n";
+  for (const auto& [name, command] : record)
+    text += name + (command.empty() ? "" : "\t" + command) + "\n";
   writeFileAtomically(dir / kOutputRecordName, text);
 }
 
@@ -114,17 +123,16 @@ std::vector<std::string> directoriesOf(const std::vector<std::string>& names) {
 // record ends empty held only an earlier run's files: it loses the record, and is removed
 // itself when nothing else is left in it (a file the user put there keeps it).
 void updateRecord(const fs::path& out, const std::string& dir,
-                  const std::vector<std::string>& written_here) {
+                  const std::vector<std::string>& written_here, const std::string& command) {
   const fs::path place = out / dir;
-  const std::vector<std::string> recorded = recordedOutputs(place);
-  std::vector<std::string> kept;
-  for (const std::string& name : recorded) {
+  const Record recorded = recordedOutputs(place);
+  Record kept;
+  for (const auto& [name, by] : recorded) {
     std::error_code ec;
     if (!contains(written_here, name) && fs::exists(fs::symlink_status(place / name, ec)))
-      kept.push_back(name);
+      kept[name] = by;
   }
-  kept.insert(kept.end(), written_here.begin(), written_here.end());
-  std::sort(kept.begin(), kept.end());
+  for (const std::string& name : written_here) kept[name] = command;
   if (kept.empty() && !dir.empty()) {
     std::error_code ec;
     if (recorded.empty() && !fs::exists(place / kOutputRecordName, ec)) return;  // not ours
@@ -139,16 +147,14 @@ void updateRecord(const fs::path& out, const std::string& dir,
 }  // namespace
 
 bool publishedByChordfit(const fs::path& file) {
-  return contains(recordedOutputs(file.parent_path()), file.filename().string());
+  return recordedOutputs(file.parent_path()).count(file.filename().string()) > 0;
 }
 
 void forgetPublished(const fs::path& file) {
   const fs::path dir = file.parent_path();
-  std::vector<std::string> names = recordedOutputs(dir);
-  const auto it = std::find(names.begin(), names.end(), file.filename().string());
-  if (it == names.end()) return;
-  names.erase(it);
-  writeRecord(dir, names);
+  Record record = recordedOutputs(dir);
+  if (record.erase(file.filename().string()) == 0) return;
+  writeRecord(dir, record);
 }
 
 StagedOutput::Published StagedOutput::publish() {
@@ -166,11 +172,19 @@ StagedOutput::Published StagedOutput::publish() {
       throw std::runtime_error(problem->path.string() + ": " + problem->what +
                                " (nothing was written)");
   }
+  Published published;
+  // Another command's files this run replaces (a compare into a fit's directory replaced the
+  // fit's sections.svg, which the fit's report.md shows): said in the wrote line.
+  for (const std::string& name : files) {
+    const Record record = recordedOutputs((out_ / name).parent_path());
+    const auto by = record.find(fs::path(name).filename().string());
+    if (by != record.end() && !by->second.empty() && !command_.empty() && by->second != command_)
+      published.replaced.push_back(name + " (" + by->second + "'s)");
+  }
   // Every directory first: a failure to create one then changes no file of the output.
   for (const std::string& name : files) fs::create_directories((out_ / name).parent_path());
   for (const std::string& name : files) fs::rename(staging_ / name, out_ / name);
 
-  Published published;
   std::vector<std::string> stale;
   for (const std::string& name : declared_)
     (contains(files, name) ? published.written : stale).push_back(name);
@@ -188,7 +202,7 @@ StagedOutput::Published StagedOutput::publish() {
     for (const std::string& name : files)
       if (fs::path(name).parent_path().generic_string() == dir)
         written_here.push_back(fs::path(name).filename().string());
-    updateRecord(out_, dir, written_here);
+    updateRecord(out_, dir, written_here, command_);
   }
   return published;
 }
@@ -202,6 +216,8 @@ std::string wroteLine(const fs::path& out_dir, const StagedOutput::Published& fi
 
 std::string removedNote(const StagedOutput::Published& files) {
   std::string note;
+  for (std::size_t i = 0; i < files.replaced.size(); ++i)
+    note += (i == 0 ? "; replaced another command's " : ", ") + files.replaced[i];
   for (std::size_t i = 0; i < files.removed.size(); ++i)
     note += (i == 0 ? "; removed " : ", ") + files.removed[i];
   if (!files.removed.empty()) note += " (an earlier run's)";

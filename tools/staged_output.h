@@ -31,8 +31,10 @@ class StagedOutput {
   // file name (or relative path) the command may write there. `superseded`: names of files an
   // earlier run of the command with other options, or of another command writing the same kind
   // of directory (a case), may have left there and this run does not write.
+  // `command`: the command's name, recorded with each file it publishes, so that a run of
+  // another command that replaces one says so.
   StagedOutput(const std::filesystem::path& out_dir, std::vector<std::string> declared,
-               std::vector<std::string> superseded = {});
+               std::vector<std::string> superseded = {}, std::string command = "");
   // Removes the staging directory and whatever is still in it.
   ~StagedOutput();
   StagedOutput(const StagedOutput&) = delete;
@@ -43,6 +45,8 @@ class StagedOutput {
   struct Published {
     std::vector<std::string> written;  // in the declared order
     std::vector<std::string> removed;  // an earlier run's files this run superseded
+    // Files another command published that this run replaced: "sections.svg (fit's)".
+    std::vector<std::string> replaced;
   };
   // Moves every file written into the staging directory to the output directory, replacing
   // files of the same name, then removes the earlier run's files this run supersedes (files
@@ -54,9 +58,15 @@ class StagedOutput {
  private:
   std::filesystem::path out_, staging_;
   std::vector<std::string> declared_, superseded_;
+  std::string command_;
 };
 
-// The record of the files chordfit runs published in a directory (one name per line).
+// The command name make-valve, make-case and import-mesh record: each writes a whole case
+// and replaces the others' case files by design, which is not worth a note.
+inline constexpr const char* kCaseWriter = "case";
+
+// The record of the files chordfit runs published in a directory: one per line, its name and,
+// after a tab, the command that published it.
 inline constexpr const char* kOutputRecordName = ".chordfit-outputs";
 
 // What stands in `out` where the output file `name` (a relative path) would go, or nullopt:

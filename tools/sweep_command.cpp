@@ -263,7 +263,7 @@ int runSweepCord(const SweepCordOptions& options) {
                     {{"insertion (vertex " + std::to_string(vertex) + ")", s, height, true, true}},
                     false});
 
-  StagedOutput staged(options.out_dir, sweepCordOutputFiles());
+  StagedOutput staged(options.out_dir, sweepCordOutputFiles(), {}, "sweep-cord");
   const std::filesystem::path& out = staged.dir();
   writeFileAtomically(out / "sweep.csv", sweepCsv(points));
   writeFileAtomically(out / "sweep.svg", svgLinePlots(panels, 1, 720, 360));
