@@ -58,8 +58,8 @@ options:
   --chordfit PATH    chordfit executable           (default: the one built with this program)
   --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
                      options (e.g. the bundled build/cases) instead of generating it
-  --edge MM          case mesh edge length (default 2.5; the truth mesh is half of it).
-                     Case ids do not name the edge: use separate --work and --results
+  --edge MM          case mesh edge length in [1, 5] (default 2.5; the truth mesh is half
+                     of it). Case ids do not name the edge: use separate --work and --results
   --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 80)
   --scale-bounds LO,HI  scale bounds of every fit (fit --scale-bounds; default the fit's
                      [0.7, 1.5]); use separate --work and --results
@@ -68,6 +68,8 @@ options:
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
   --presets LIST     only the cases of these presets (comma-separated)
   --cases LIST       only these cases (comma-separated ids, e.g. prolapse-P2_s1)
+                     (a name of these four lists that is not in the plan is an error; merge
+                     and check take the same lists and tabulate or check that subset)
   --force            rerun jobs whose result exists
   --no-timing        merge: leave out wall-time columns (to diff two runs)
   --allow-missing    merge/all: exit 0 even when some jobs have no result

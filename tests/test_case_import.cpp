@@ -344,6 +344,20 @@ TEST(ImportMeshCli, NamesTheLandmarkPointOrTheClosedAnnulusFileAtFault) {
   EXPECT_FALSE(fs::exists(dir / "case"));
 }
 
+// The case's default name is its directory's, also when --out ends with a slash (it was "").
+TEST(ImportMeshCli, NamesTheCaseAfterItsDirectoryWithATrailingSlash) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  const auto r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                             quoted(dir / "landmarks.json") + " --out " +
+                             quoted(fs::path(dir.path().string() + "/mine/")));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Diagnostics diagnostics;
+  const auto loaded = loadCase(dir / "mine", diagnostics);
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded->name, "mine");
+}
+
 // Landmarks in another order, an anterior point on the posterior annulus, PM tips swapped:
 // each used to give a case with the wrong leaflets or muscles and exit 0 (a warning for the
 // first two, nothing for the tips); each is now refused with what to change.

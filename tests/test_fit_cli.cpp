@@ -60,7 +60,7 @@ TEST(FitCommand, RefusesAnOutputThatWouldReplaceOneOfItsInputs) {
   const auto r = runChordfit("fit " + quoted(dir / "case") + " --seed-cords " +
                              quoted(dir / "fit" / "cords.json") + " --out " + quoted(dir / "fit"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
-  EXPECT_NE(r.err.find("cords.json: is an input of this run; fit would replace it"),
+  EXPECT_NE(r.err.find("cords.json: is an input of this run; fit would write over it"),
             std::string::npos)
       << r.err;
   EXPECT_EQ(testing::readText(dir / "fit" / "cords.json"), seed);

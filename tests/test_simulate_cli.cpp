@@ -238,6 +238,23 @@ TEST_F(SimulateCommand, AStepCapThatEndsDuringThePressureRampIsAnInputError) {
   EXPECT_EQ(measured.exit_code, 0) << measured.err;
 }
 
+// A file output over one of the case's files (metrics --out onto the mesh it measured, a
+// heuristic cord set over case.json) used to exit 0 and leave a case that no longer loads.
+TEST_F(SimulateCommand, FileOutputsDoNotWriteOverTheCasesFiles) {
+  const std::string mesh = testing::readText(case_dir_ / "open.ply");
+  auto r = runChordfit("metrics " + quoted(case_dir_) + " --mesh " +
+                       quoted(case_dir_ / "open.ply") + " --out " + quoted(case_dir_ / "open.ply"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("open.ply: is an input of this run; metrics would write over it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::readText(case_dir_ / "open.ply"), mesh);
+  r = runChordfit("heuristic " + quoted(case_dir_) + " --out " + quoted(case_dir_ / "case.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("case.json: is an input of this run"), std::string::npos) << r.err;
+  EXPECT_EQ(runChordfit("validate " + quoted(case_dir_)).exit_code, 0);
+}
+
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {
   const auto r = runChordfit("simulate " + quoted(case_dir_) + " --phase sideways --out " +
                              quoted(dir_ / "sim"));

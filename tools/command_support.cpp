@@ -112,7 +112,8 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                                                        const std::string& case_dir,
                                                        const char* command,
                                                        const std::vector<std::string>& overrides) {
-  const std::string case_file = (std::filesystem::path(case_dir) / "case.json").string();
+  // Named inside the case, under a "case DIR: N problem(s)" line, as loadCaseOrReport does.
+  const std::string case_file = "case.json";
   Diagnostics diagnostics;
   const SimulationSettings own =
       settingsFromJson(valve_case.simulation_json, diagnostics, {}, case_file);
@@ -151,6 +152,9 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                         "simulation.max_steps", problem);
   }
   if (!diagnostics.ok()) {
+    const auto of_case = std::count_if(diagnostics.problems().begin(), diagnostics.problems().end(),
+                                       [&](const Problem& p) { return p.file == case_file; });
+    if (of_case > 0) std::cerr << "case " << case_dir << ": " << of_case << " problem(s)\n";
     reportProblems(diagnostics);
     return std::nullopt;
   }
@@ -234,20 +238,26 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
   for (const std::string& name : files) {
     if (const auto problem = whatIsInTheWay(directory, name))
       return reportOutputProblem(command, problem->path.string(), problem->what);
-    const std::filesystem::path output = std::filesystem::path(directory) / name;
-    for (const std::string& input : inputs) {
-      std::error_code ec;
-      if (!input.empty() && std::filesystem::equivalent(output, input, ec))
-        return reportOutputProblem(command, output.string(),
-                                   std::string("is an input of this run; ") + command +
-                                       " would replace it with its own " + name +
-                                       ": give another --out, or copy the file elsewhere first");
-    }
+    if (!outputSparesInputs(command, (std::filesystem::path(directory) / name).string(), inputs))
+      return false;
   }
   return true;
 }
 
-std::vector<std::string> caseInputFiles(const std::string& case_dir) {
+bool outputSparesInputs(const char* command, const std::string& output,
+                        const std::vector<std::string>& inputs) {
+  for (const std::string& input : inputs) {
+    std::error_code ec;
+    if (!input.empty() && std::filesystem::equivalent(output, input, ec))
+      return reportOutputProblem(command, output,
+                                 std::string("is an input of this run; ") + command +
+                                     " would write over it: give another --out, or copy the "
+                                     "file elsewhere first");
+  }
+  return true;
+}
+
+std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_cords) {
   if (case_dir.empty()) return {};
   const std::filesystem::path dir(case_dir);
   std::vector<std::string> files = {(dir / "case.json").string()};
@@ -266,7 +276,9 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir) {
       for (const auto& item : value) collect(item);
     }
   };
-  if (!json.is_discarded()) collect(json);
+  if (json.is_discarded() || !json.is_object()) return files;
+  for (const auto& [key, value] : json.items())
+    if (with_cords || key != "cords") collect(value);
   return files;
 }
 

@@ -58,8 +58,14 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
                            const std::vector<std::string>& files = {},
                            const std::vector<std::string>& inputs = {});
 
-// A case's own files: case.json and every file it names that exists in the case directory.
-std::vector<std::string> caseInputFiles(const std::string& case_dir);
+// A case's own files: case.json and every file it names that exists in the case directory;
+// without its cords file (the "cords" entry) when `with_cords` is false.
+std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_cords = true);
+
+// Whether `output` is one of `inputs` (the same file, through any path or link); on a problem
+// prints "error: <command>: --out: <output>: is an input of this run; ..." and returns false.
+bool outputSparesInputs(const char* command, const std::string& output,
+                        const std::vector<std::string>& inputs);
 
 // The same for an output file: its directory must be usable as above and the file itself must
 // not be an existing directory (the final rename would fail after the work) nor a symbolic

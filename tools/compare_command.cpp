@@ -316,10 +316,13 @@ int runCompare(const CompareOptions& options) {
     s.steps = closed.steps;
     s.closed_V = closed.V;
     if (!options.quiet) {
-      std::fprintf(stderr, "compare: [%zu/%zu] %s: %s after %d steps, %.1f s, AvgD %.2f mm\n",
-                   i + 1, sets.size(), s.label.c_str(),
+      char avgd[64] = "no tracings";
+      if (s.metrics.has_tracings)
+        std::snprintf(avgd, sizeof avgd, "AvgD %.2f mm", s.metrics.deviation.mean);
+      std::fprintf(stderr, "compare: [%zu/%zu] %s: %s after %d steps, %.1f s, %s\n", i + 1,
+                   sets.size(), s.label.c_str(),
                    closed.converged ? "converged" : "NOT converged (step cap)", closed.steps,
-                   closed.seconds, s.metrics.deviation.mean);
+                   closed.seconds, avgd);
     }
   }
 

@@ -225,7 +225,10 @@ int runImportMesh(const ImportMeshOptions& options) {
   l.anterolateral = landmarks.points.row(0).transpose();
   l.posteromedial = landmarks.points.row(1).transpose();
   l.anterior = landmarks.points.row(2).transpose();
-  const std::string name = options.name.empty() ? out.filename().string() : options.name;
+  // The default name: the output directory's own, also when given as "dir/" or ".".
+  fs::path named = fs::absolute(out).lexically_normal();
+  if (named.filename().empty()) named = named.parent_path();
+  const std::string name = options.name.empty() ? named.filename().string() : options.name;
   ImportedCase imported = importValveCase(V, F, l, closed.points, name);
   if (!imported.ok()) {
     // RAS read as LPS (or the reverse) turns a file half a turn about S: say so when the
@@ -304,8 +307,8 @@ int runImportMesh(const ImportMeshOptions& options) {
       std::isfinite(agreement)) {
     std::printf("  tracing points nearest to their own leaflet (open state): %.0f %%\n",
                 100.0 * agreement);
-    // 66-80 % on the synthetic cohort's cases (every preset); 35 % measured with landmarks in
-    // RAS read as LPS on a valve centred at the origin.
+    // 65-80 % on the synthetic cohort's cases (66-80 % over every preset); 35 % measured with
+    // landmarks in RAS read as LPS on a valve centred at the origin.
     if (agreement < kLeafletAgreementLow)
       std::printf(
           "warning: most tracing points are nearer the other leaflet (65-80 %% lie nearest their "

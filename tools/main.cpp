@@ -201,8 +201,10 @@ void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
       ->required();
   cmd->add_option("--closed-annulus", o.closed_annulus_file,
                   "Curve file: the closed-state (systolic) annulus as a loop (default: static)");
-  cmd->add_option("--tracings", o.tracings_file,
-                  "Tracings of the closed valve (tracings.json format; copied into the case)");
+  cmd->add_option(
+      "--tracings", o.tracings_file,
+      "Tracings of the closed valve (tracings.json format; their points are written into the "
+      "case's tracings.json)");
   cmd->add_option("--pm-tips", o.pm_tips_file,
                   "Curve file with the papillary-muscle tips, anterolateral first (default: "
                   "the heuristic places them)");
@@ -248,7 +250,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--max-sims", o.max_sims,
                   "Forward closures of the fit (budget; the written result adds one)")
       ->capture_default_str();
-  cmd->add_option("--threads", o.threads, "Parallel closures (finite differences, pre-fit)")
+  cmd->add_option("--threads", o.threads,
+                  "Parallel closures (finite differences, pre-fit), 1 to 64; the same result for "
+                  "any count")
       ->capture_default_str();
   cmd->add_option("--scale-bounds", o.scale_bounds, "Lower and upper scale bound, e.g. 0.5,1.5")
       ->expected(2)
@@ -375,8 +379,8 @@ int main(int argc, char** argv) {
   // directory the command writes into, or a file it writes; metrics and compare write only
   // when given --out.
   // A directory's `files`: what the command writes there, none of which may be a directory;
-  // `inputs`: what the run reads, none of which an output may replace. (A file output may be
-  // its own input: heuristic or edit-cords rewriting a cord file in place is an edit.)
+  // `inputs`: what the run reads, none of which an output may replace. (A cord file output
+  // may replace the cords it read: edit-cords editing a cord file in place is an edit.)
   struct OutputPlace {
     const char* command;
     std::string path;
@@ -391,9 +395,11 @@ int main(int argc, char** argv) {
   const OutputPlace places[] = {
       {"make-valve", make_valve.out_dir, false, makeValveOutputFiles(), {make_valve.annulus_file}},
       {"import-mesh", import_mesh.out_dir, false, importMeshOutputFiles(), {}},
-      {"heuristic", heuristic.out_file, true, {}, {}},
-      {"edit-cords", edit_cords.out_file, true, {}, {}},
-      {"metrics", metrics.out_file, true, {}, {}},
+      // heuristic and edit-cords may replace the case's cords file (regenerating or editing
+      // them is what they are for), none of its other files.
+      {"heuristic", heuristic.out_file, true, {}, caseInputFiles(heuristic.case_dir, false)},
+      {"edit-cords", edit_cords.out_file, true, {}, caseInputFiles(edit_cords.case_dir, false)},
+      {"metrics", metrics.out_file, true, {}, withCase(metrics.case_dir, {metrics.mesh_file})},
       {"simulate", simulate.out_dir, false, simulateOutputFiles(simulate),
        withCase(simulate.case_dir, {simulate.cords_file, simulate.tissue_file})},
       {"sweep-cord", sweep_cord.out_dir, false, sweepCordOutputFiles(),
@@ -409,7 +415,8 @@ int main(int argc, char** argv) {
         app.get_subcommand(place.command)->count("--out") == 0)
       continue;
     const bool usable =
-        place.is_file ? outputFileUsable(place.command, place.path)
+        place.is_file ? outputFileUsable(place.command, place.path) &&
+                            outputSparesInputs(place.command, place.path, place.inputs)
                       : outputDirectoryUsable(place.command, place.path, place.files, place.inputs);
     if (!usable) return kExitBadInput;
   }
