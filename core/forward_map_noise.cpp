@@ -51,4 +51,16 @@ MapNoise mapNoise(const std::vector<double>& s, const std::vector<double>& q, in
   return noise;
 }
 
+double turningScale(const std::vector<double>& s, const std::vector<double>& q, double noise) {
+  const std::size_t n = q.size(), margin = std::max<std::size_t>(2, n / 10);
+  if (n < 2 * margin + 1) return NAN;
+  const auto [lo, hi] = std::minmax_element(q.begin(), q.end());
+  for (auto it : {lo, hi}) {
+    const std::size_t i = static_cast<std::size_t>(it - q.begin());
+    const double rise = std::min(std::abs(q.front() - *it), std::abs(q.back() - *it));
+    if (i >= margin && i + margin < n && rise > 10.0 * noise) return s[i];
+  }
+  return NAN;
+}
+
 }  // namespace chordfit

@@ -21,4 +21,10 @@ struct MapNoise {
 // rms and max 0.
 MapNoise mapNoise(const std::vector<double>& s, const std::vector<double>& q, int half_window);
 
+// The s where the sampled map turns: its lowest or highest sample, at least max(2, n/10)
+// samples from either end and rising above both ends by more than 10 * `noise` (so a noisy
+// flat map has none); NaN when there is none. Near it the change over a step is small by
+// nature, and a slope taken there says nothing about the noise.
+double turningScale(const std::vector<double>& s, const std::vector<double>& q, double noise);
+
 }  // namespace chordfit

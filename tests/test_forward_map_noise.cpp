@@ -49,5 +49,21 @@ TEST(MapNoise, AWindowWiderThanTheSamplesLeavesNoInteriorSampleInsteadOfOverflow
   }
 }
 
+// A map with its minimum inside the range turns there; a monotonic one and a flat noisy one
+// do not (sweep-cord's verdict names the turning point instead of calling the map noisy).
+TEST(TurningScale, FindsAnInteriorMinimumAndNothingOnAMonotonicOrFlatMap) {
+  std::vector<double> s, bowl, line, flat;
+  for (int i = 0; i <= 40; ++i) {
+    s.push_back(0.9 + 0.005 * i);
+    bowl.push_back((s.back() - 0.97) * (s.back() - 0.97));
+    line.push_back(2.0 * s.back());
+    flat.push_back(i % 2 == 0 ? 1e-4 : -1e-4);
+  }
+  EXPECT_NEAR(turningScale(s, bowl, 1e-6), 0.97, 1e-9);
+  EXPECT_TRUE(std::isnan(turningScale(s, line, 1e-6)));
+  EXPECT_TRUE(std::isnan(turningScale(s, flat, 1e-4))) << "noise, not a turn";
+  EXPECT_TRUE(std::isnan(turningScale(s, bowl, 1.0))) << "within ten times the noise";
+}
+
 }  // namespace
 }  // namespace chordfit

@@ -360,7 +360,7 @@ std::string closedValveSummary(const ValveMetrics& m, const std::string& indent)
                : std::to_string(m.self_intersections) +
                      (m.self_intersections == 1 ? " intersecting triangle pair"
                                                 : " intersecting triangle pairs") +
-                     " (simulation.edge_contact may help)") +
+                     " (docs/performance.md, \"Self-intersections of coarse closures\")") +
           "\n";
   return text;
 }

@@ -300,9 +300,9 @@ int runEditCords(const EditCordsOptions& options) {
         left_locked, left_locked == 1 ? "" : "s");
   }
   if (!any_changed && !requests.empty() && moves.empty())
-    std::fprintf(stderr,
-                 "warning: edit-cords: nothing changed: every cord the scalings name is "
-                 "locked\n");
+    std::fprintf(stderr, "warning: edit-cords: nothing changed: %s\n",
+                 edited.empty() ? "every cord the scalings name is locked"
+                                : "the scalings leave every rest length as it was (scale 1)");
   if (outside_bounds > 0) {
     std::printf(
         "note: %d unlocked cords have a scale outside the fit's default bounds [%.1f, %.1f]; "

@@ -1,3 +1,4 @@
+#include <cstdio>
 #include <iostream>
 
 #include "core/atomic_file.h"
@@ -39,8 +40,9 @@ int runMetrics(const MetricsOptions& options) {
     return reportProblems(diagnostics);
   const ValveMetrics metrics = computeMetrics(*valve_case, V);
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
-  std::cout << closedValveSummary(metrics)
-            << "highest point above the annulus: " << metrics.mesh_prolapse.max_height_mm
+  char highest[64];
+  std::snprintf(highest, sizeof highest, "%.2f", metrics.mesh_prolapse.max_height_mm);
+  std::cout << closedValveSummary(metrics) << "highest point above the annulus: " << highest
             << " mm\n";
   if (!options.out_file.empty()) {
     writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");

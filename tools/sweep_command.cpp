@@ -1,6 +1,7 @@
 // chordfit sweep-cord: scan one cord's rest-length scale and measure how smooth the forward
 // map (scale -> closed state) is. DESIGN §7: the map must be reproducible to far below the
 // finite-difference step, or the Jacobian is noise.
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -90,24 +91,38 @@ std::string sweepCsv(const std::vector<SweepPoint>& points) {
 constexpr double kSmoothSignalToNoise = 10.0;
 constexpr double kFlatMm = 1e-9;
 
-nlohmann::json noiseJson(const MapNoise& noise) {
+nlohmann::json noiseJson(const MapNoise& noise, const std::vector<double>& s,
+                         const std::vector<double>& q) {
   const double signal = std::abs(noise.slope) * kReferenceStep;
   const double ratio = noise.max > 0 ? signal / noise.max : INFINITY;
   const bool flat = signal < kFlatMm;
-  return {{"noise_rms", noise.rms},
-          {"noise_max", noise.max},
-          {"slope_per_unit_scale", noise.slope},
-          {"change_over_0.5_percent", signal},
-          {"signal_to_noise", ratio},
-          {"flat", flat},
-          {"smooth", !flat && ratio >= kSmoothSignalToNoise}};
+  const double turns = turningScale(s, q, noise.max);
+  nlohmann::json j = {{"noise_rms", noise.rms},
+                      {"noise_max", noise.max},
+                      {"slope_per_unit_scale", noise.slope},
+                      {"change_over_0.5_percent", signal},
+                      {"signal_to_noise", ratio},
+                      {"flat", flat},
+                      {"smooth", !flat && ratio >= kSmoothSignalToNoise}};
+  j["turns_at_scale"] = std::isfinite(turns) ? nlohmann::json(turns) : nlohmann::json(nullptr);
+  return j;
 }
 
 // "smooth (...)", "NOT smooth (...)" or "flat (...)" for the printed line.
 std::string verdictText(const nlohmann::json& n) {
   if (n["flat"].get<bool>())
     return "flat: it does not move over the range (a cord slack throughout?)";
-  return n["smooth"].get<bool>() ? "smooth (signal/noise >= 10)" : "NOT smooth (signal/noise < 10)";
+  if (n["smooth"].get<bool>()) return "smooth (signal/noise >= 10)";
+  std::string text = "NOT smooth (signal/noise < 10)";
+  if (n["turns_at_scale"].is_number()) {
+    char note[160];
+    std::snprintf(note, sizeof note,
+                  "; the curve turns near scale %.4g, where a step changes it little: sweep "
+                  "away from there before reading this as noise",
+                  n["turns_at_scale"].get<double>());
+    text += note;
+  }
+  return text;
 }
 
 }  // namespace
@@ -240,15 +255,15 @@ int runSweepCord(const SweepCordOptions& options) {
       {"step", options.step},
       {"all_converged",
        std::all_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.converged; })},
-      {"vertex_height", noiseJson(mapNoise(s, height, options.window))},
-      {"vertex_x", noiseJson(mapNoise(s, x, options.window))},
-      {"vertex_y", noiseJson(mapNoise(s, y, options.window))},
-      {"vertex_z", noiseJson(mapNoise(s, z, options.window))}};
+      {"vertex_height", noiseJson(mapNoise(s, height, options.window), s, height)},
+      {"vertex_x", noiseJson(mapNoise(s, x, options.window), s, x)},
+      {"vertex_y", noiseJson(mapNoise(s, y, options.window), s, y)},
+      {"vertex_z", noiseJson(mapNoise(s, z, options.window), s, z)}};
   if (!options.settings_overrides.empty())
     summary["settings_overrides"] = options.settings_overrides;
   std::vector<PlotPanel> panels;
   if (tracing_points.rows() > 0) {
-    summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window));
+    summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window), s, deviation);
     panels.push_back({"Mean deviation to the tracings",
                       "scale of cord " + std::to_string(cord),
                       "mean deviation (mm)",
@@ -273,11 +288,12 @@ int runSweepCord(const SweepCordOptions& options) {
     if (!summary.contains(key)) continue;
     const auto& n = summary[key];
     // signal_to_noise is null in the JSON when the noise is 0 (an infinite ratio).
-    const double ratio =
-        n["signal_to_noise"].is_number() ? n["signal_to_noise"].get<double>() : INFINITY;
+    char ratio[32] = "- (no noise)";
+    if (n["signal_to_noise"].is_number())
+      std::snprintf(ratio, sizeof ratio, "%.3g", n["signal_to_noise"].get<double>());
     std::printf(
         "%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
-        "signal/noise %.3g | %s\n",
+        "signal/noise %s | %s\n",
         key, n["noise_rms"].get<double>(), n["noise_max"].get<double>(),
         n["change_over_0.5_percent"].get<double>(), ratio, verdictText(n).c_str());
   }
