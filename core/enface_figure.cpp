@@ -1,6 +1,7 @@
 #include "core/enface_figure.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <numeric>
 #include <sstream>
@@ -13,10 +14,12 @@
 namespace chordfit {
 namespace {
 
-constexpr double kMarginMm = 4.0;     // around the projected ring
-constexpr double kTitlePx = 28.0;     // title row
-constexpr double kLegendPx = 84.0;    // legend, height scale, note
-constexpr double kLightestMm = 4.0;   // heights mapped to the lightest shade and above
+constexpr double kMarginMm = 4.0;   // around the projected ring
+constexpr double kTitlePx = 28.0;   // title row
+constexpr double kLegendPx = 84.0;  // legend, height scale, note
+// Heights mapped to the lightest shade and above: the highest tissue's, rounded up to an even
+// mm, within these bounds (a fixed 4 mm drew a 7.9 mm P2 flap as light as a 3 mm saddle horn).
+constexpr double kLightestMinMm = 4.0, kLightestMaxMm = 12.0;
 constexpr double kDarkestMm = -12.0;  // ... to the darkest and below
 constexpr const char* kOpenColour = "#e0301e";
 constexpr const char* kRingColour = "#222222";
@@ -58,10 +61,28 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   if (ring_points.empty()) lo = hi = Eigen::Vector2d::Zero();
   lo -= Eigen::Vector2d::Constant(kMarginMm);
   hi += Eigen::Vector2d::Constant(kMarginMm);
-  // Wide enough for the legend's height scale (~490 px) and the title (about 7 px per
-  // character at 13 px).
-  const double width =
-      std::max({500.0, (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
+  // Each triangle's depth along the view (its centroid's signed distance from the closed
+  // annulus plane: the drawing order) and its height above the annulus as the prolapse measure
+  // has it (the hinge line, heightAboveAnnulus: the shade), and the scale's top.
+  const Eigen::Index faces = mesh.F.rows();
+  Eigen::MatrixXd centroids(faces, 3);
+  std::vector<double> depths(faces);
+  for (Eigen::Index f = 0; f < faces; ++f) {
+    centroids.row(f) =
+        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2))) /
+        3.0;
+    depths[f] = frame.plane.signedDistance(centroids.row(f).transpose());
+  }
+  const Eigen::VectorXd hinge_heights = heightAboveAnnulus(frame, annulus.ring, centroids);
+  const std::vector<double> heights(hinge_heights.data(), hinge_heights.data() + faces);
+  const double highest = faces > 0 ? *std::max_element(heights.begin(), heights.end()) : 0.0;
+  const double lightest_mm =
+      std::clamp(2.0 * std::ceil(highest / 2.0), kLightestMinMm, kLightestMaxMm);
+  const int steps = static_cast<int>((lightest_mm - kDarkestMm) / 2.0);
+  // Wide enough for the legend's height scale (240 px, 22 per swatch, the leaflet names) and
+  // the title (about 7 px per character at 13 px).
+  const double width = std::max({500.0, 240.0 + 22.0 * (steps + 1) + 60.0, (hi.x() - lo.x()) * s,
+                                 7.0 * static_cast<double>(options.title.size())});
   const double height = (hi.y() - lo.y()) * s;
   const double left = 0.5 * (width - (hi.x() - lo.x()) * s);
   auto px = [&](const Eigen::Vector2d& q) {
@@ -85,19 +106,10 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
       << kOpenColour << "\"/>\n";
 
   // Lowest first: the atrial view shows the highest tissue.
-  const Eigen::Index faces = mesh.F.rows();
-  std::vector<double> heights(faces);
-  for (Eigen::Index f = 0; f < faces; ++f) {
-    const Eigen::Vector3d centroid =
-        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2)))
-            .transpose() /
-        3.0;
-    heights[f] = frame.plane.signedDistance(centroid);
-  }
   std::vector<Eigen::Index> order(faces);
   std::iota(order.begin(), order.end(), 0);
   std::stable_sort(order.begin(), order.end(),
-                   [&](Eigen::Index x, Eigen::Index y) { return heights[x] < heights[y]; });
+                   [&](Eigen::Index x, Eigen::Index y) { return depths[x] < depths[y]; });
   // The outline grows each triangle by the tissue radius; at least half a pixel so that
   // anti-aliased seams between neighbours do not show the red beneath.
   const double outline_px = std::max(2.0 * options.tissue_radius_mm * s, 0.5);
@@ -107,7 +119,7 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
     for (int k = 0; k < 3; ++k) triangle.push_back(project(closed_V.row(mesh.F(f, k)).transpose()));
     const int leaflet = mesh.leaflet(mesh.F(f, 0));
     const std::string colour =
-        shade(leaflet, (heights[f] - kDarkestMm) / (kLightestMm - kDarkestMm));
+        shade(leaflet, (heights[f] - kDarkestMm) / (lightest_mm - kDarkestMm));
     svg << "<polygon points=\"" << points(triangle) << "\" fill=\"" << colour << "\" stroke=\""
         << colour << "\"/>\n";
   }
@@ -149,9 +161,8 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   swatch(290, y0, kOpenColour, "open orifice");
   // Height scale: one swatch per 2 mm of both leaflet shades, labelled every 4 mm.
   const double y1 = y0 + 22.0;
-  svg << "<text x=\"10\" y=\"" << y1 << "\" font-size=\"11\">height above the annulus plane, mm:"
+  svg << "<text x=\"10\" y=\"" << y1 << "\" font-size=\"11\">height above the hinge line, mm:"
       << "</text>\n";
-  const int steps = static_cast<int>((kLightestMm - kDarkestMm) / 2.0);
   for (int k = 0; k <= steps; ++k) {
     const double x = 240.0 + 22.0 * k, t = static_cast<double>(k) / steps;
     svg << "<rect x=\"" << x << "\" y=\"" << y1 - 10 << "\" width=\"20\" height=\"6\" fill=\""
@@ -169,10 +180,10 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   svg << "<text x=\"" << rows_x << "\" y=\"" << y1 - 4 << "\" font-size=\"9\">"
       << escapeXml(anterior) << "</text><text x=\"" << rows_x << "\" y=\"" << y1 + 4
       << "\" font-size=\"9\">" << escapeXml(posterior) << "</text>\n";
-  char note[160];
+  char note[240];
   std::snprintf(note, sizeof note,
                 "atrial view, anterior up, anterolateral commissure left; leaflets drawn "
-                "\xC2\xB1 %.2g mm (tissue), the highest on top",
+                "\xC2\xB1 %.2g mm (tissue), the highest on top; prolapse: over 2 mm",
                 options.tissue_radius_mm);
   svg << "<text x=\"10\" y=\"" << y1 + 30 << "\" font-size=\"11\" fill=\"#444\">" << note
       << "</text>\n</svg>\n";
@@ -180,13 +191,19 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
 }
 
 std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
-                            const std::string& subject, const OrificeCoverage& orifice) {
+                            const std::string& subject, const ValveMetrics& metrics) {
+  const OrificeCoverage& orifice = metrics.orifice;
   char coverage[120];
   std::snprintf(coverage, sizeof coverage,
                 ": closed valve from the atrium, orifice %.1f %% covered (%.0f of %.0f mm\xC2\xB2 "
                 "open)",
                 100.0 * orifice.coverage(), orifice.open_area_mm2, orifice.orifice_area_mm2);
-  return enfaceFigureSvg(valve_case, closed_V, {subject + coverage, orifice.tissue_radius_mm});
+  std::string prolapse = "; no prolapse";
+  for (std::size_t i = 0; i < metrics.mesh_prolapse.segments.size(); ++i)
+    prolapse =
+        (i == 0 ? "; prolapse (tissue): " : prolapse + ", ") + metrics.mesh_prolapse.segments[i];
+  return enfaceFigureSvg(valve_case, closed_V,
+                         {subject + coverage + prolapse, orifice.tissue_radius_mm});
 }
 
 }  // namespace chordfit

@@ -3,10 +3,13 @@
 // leaves its orifice open. Every leaflet triangle is projected onto the closed annulus plane
 // and drawn over the orifice, which is filled red; triangles are drawn from the lowest to the
 // highest (signed distance toward the atrium), so the picture shows the atrial surface, and
-// each is lighter the higher it lies. Each triangle is drawn grown by the tissue radius of the
+// each is lighter the higher it lies above the annulus as the prolapse measure has it (the
+// hinge line of heightAboveAnnulus, metrics.h). Each triangle is drawn grown by the tissue radius of the
 // orifice measure (a round-joined outline of twice that width: the projection of the
 // triangle swept by a ball of that radius), so the red left visible is what
-// orifice_coverage.h counts as open, up to its 0.25 mm sampling.
+// orifice_coverage.h counts as open, up to its 0.25 mm sampling. The height scale runs from
+// -12 mm to the highest tissue rounded up to an even mm (4 mm at least, 12 at most), so a
+// prolapsing flap stands out from the annulus' saddle horns.
 #pragma once
 
 #include <string>
@@ -14,7 +17,7 @@
 #include <Eigen/Core>
 
 #include "core/case_data.h"
-#include "core/orifice_coverage.h"
+#include "core/metrics.h"
 
 namespace chordfit {
 
@@ -28,9 +31,10 @@ struct EnfaceFigureOptions {
 std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                             const EnfaceFigureOptions& options);
 
-// The same, titled "<subject>: closed valve from the atrium, orifice N % covered (...)" and
-// drawn with the tissue radius of `orifice`, the closure's measured coverage.
+// The same, titled "<subject>: closed valve from the atrium, orifice N % covered (...);
+// prolapse (tissue): P2" (or "no prolapse") from the closure's metrics, and drawn with the
+// tissue radius of its orifice measure.
 std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
-                            const std::string& subject, const OrificeCoverage& orifice);
+                            const std::string& subject, const ValveMetrics& metrics);
 
 }  // namespace chordfit

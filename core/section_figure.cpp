@@ -14,11 +14,13 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 
-const char* const kLeafletColours[] = {"#c0392b", "#1f5fa8", "#27ae60", "#8e44ad", "#b7950b"};
+// Okabe & Ito colours, as enface.svg: anterior blue, posterior green (red is enface's open
+// orifice); then for a third leaflet and more.
+const char* const kLeafletColours[] = {"#0072b2", "#009e73", "#d55e00", "#8e44ad", "#b7950b"};
 constexpr const char* kTracingColour = "#111111";
 constexpr const char* kClosedAnnulusColour = "#e67e22";
 constexpr const char* kOpenAnnulusColour = "#f5cba7";
-constexpr const char* kThresholdColour = "#16a085";
+constexpr const char* kThresholdColour = "#cc79a7";
 
 // The hinge line of heightAboveAnnulus raised by `threshold`: in a long-axis plane the height
 // of a point is its w minus the straight line through the two closed ring crossings (sorted

@@ -465,7 +465,7 @@ void writeSyntheticCase(const fs::path& directory, const SyntheticCase& s) {
   writeFileAtomically(truth / "truth.json", syntheticTruthJson(s));
   writeFileAtomically(truth / "cross_sections.svg", s.cross_sections_svg);
   writeFileAtomically(truth / "enface.svg",
-                      enfaceFigureSvg(s.truth_case, V, s.truth_case.name, s.truth_metrics.orifice));
+                      enfaceFigureSvg(s.truth_case, V, s.truth_case.name, s.truth_metrics));
 
   writeCase(directory, s.valve_case);
 }

@@ -158,6 +158,20 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
     reportProblems(diagnostics);
     return std::nullopt;
   }
+  // The default ramp was calibrated at 100 mmHg (10 mmHg per ms). Loaded much faster, a
+  // prolapsing flap can overshoot into another equilibrium: the prolapse-P2 case with its true
+  // cords at 200 mmHg closed with P2 under the anterior leaflet with the 10 ms ramp and with a
+  // P2 flap with 20 or 40 ms (175 mmHg too; 150 mmHg the same with 10 and 40 ms).
+  constexpr double kFastestCalibratedMmHgPerMs = 15.0;
+  if (closes && settings.ramp_ms > 0.0 &&
+      settings.pressure_mmhg / settings.ramp_ms > kFastestCalibratedMmHgPerMs)
+    std::fprintf(stderr,
+                 "note: %s: %g mmHg over a %g ms ramp loads the valve at %.0f mmHg/ms, faster "
+                 "than calibrated (10 at the defaults): a prolapsing flap may land in another "
+                 "equilibrium; --set ramp_ms=%g keeps 10 mmHg/ms (docs/model.md)\n",
+                 command, settings.pressure_mmhg, settings.ramp_ms,
+                 settings.pressure_mmhg / settings.ramp_ms,
+                 std::ceil(settings.pressure_mmhg / 10.0));
   return settings;
 }
 

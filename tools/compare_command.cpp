@@ -360,7 +360,7 @@ int runCompare(const CompareOptions& options) {
       writeFileAtomically(
           out / enfaceFigureName(i + 1),
           enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
-                          sets[i].metrics.orifice));
+                          sets[i].metrics));
     }
     std::cout << wroteLine(options.out_dir, staged.publish())
               << " (enface_K.svg: the K-th cord set given)\n";

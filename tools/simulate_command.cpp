@@ -158,7 +158,7 @@ int runSimulate(const SimulateOptions& options) {
   }
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
   writeFileAtomically(out / "enface.svg",
-                      enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics.orifice));
+                      enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics));
   const StagedOutput::Published published = staged.publish();
 
   std::printf("closure: %s after %d steps, %.2f s%s%s\n",
