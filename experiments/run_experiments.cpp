@@ -551,8 +551,7 @@ int main(int argc, char** argv) {
   try {
     plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
   } catch (const std::invalid_argument& e) {  // a filter that matches nothing: usage
-    std::cerr << "run_experiments: error: " << e.what() << "\n";
-    return kExitUsage;
+    return usageError(e.what());
   }
   try {
     if (a.command == "list") return list(plan, a);

@@ -1,3 +1,4 @@
+#include <cstdio>
 #include <iostream>
 #include <stdexcept>
 #include <string>
@@ -70,6 +71,20 @@ int runMakeValve(const MakeValveOptions& options) {
     return kExitBadInput;
   }
   valve.valve_case.name = options.name;
+  // Accepted but unlike an adult mitral valve: say so, the valve is made as asked.
+  const ValveParameters& p = parameters;
+  if (p.commissural_height_mm >= p.anterior_height_mm)
+    std::printf(
+        "note: make-valve: the commissures (%g mm, --commissural-height) are as tall as "
+        "the anterior leaflet (%g mm) or taller: an unusual valve (defaults 8 and 23 "
+        "mm)\n",
+        p.commissural_height_mm, p.anterior_height_mm);
+  if (options.annulus_file.empty() &&
+      (p.ap_diameter_mm / p.cc_diameter_mm < 0.6 || p.ap_diameter_mm / p.cc_diameter_mm > 1.1))
+    std::printf(
+        "note: make-valve: --ap / --cc = %.2f; an adult mitral annulus is wider than "
+        "deep (about 0.8, the defaults 28 / 35 mm)\n",
+        p.ap_diameter_mm / p.cc_diameter_mm);
   fitStepCapToMesh(valve.valve_case);
   // An earlier case there (make-valve's, import-mesh's, make-case's) has files this one does
   // not, its tracings, cords, truth: they go, so that none describes another valve beside it.

@@ -61,14 +61,21 @@ SimulationSettings withProgress(SimulationSettings settings, const std::string& 
   const auto start = Clock::now();
   auto last = std::make_shared<Clock::time_point>(start);
   settings.progress_every = 50;
-  settings.progress = [start, last, label](const SimulationProgress& p) {
+  // With the pressure ramp's end and the quasi-static tolerance, so that a reader can tell
+  // how far the run has to go: loading until the ramp ends, then settling until the largest
+  // step stays below the tolerance (simulation_settings.h).
+  const double ramp_ms = settings.ramp_ms, tolerance_mm = settings.tolerance_mm;
+  settings.progress = [start, last, label, ramp_ms, tolerance_mm](const SimulationProgress& p) {
     const auto now = Clock::now();
     if (now - start < std::chrono::seconds(1) || now - *last < std::chrono::milliseconds(500)) {
       return;
     }
     *last = now;
-    std::fprintf(stderr, "  %s: step %6d  t = %8.2f ms  max step %.2e mm  contacts %d  (%.1f s)\n",
-                 label.c_str(), p.step, p.time_ms, p.max_displacement_mm, p.contacts,
+    std::fprintf(stderr,
+                 "  %s: step %6d  t = %8.2f ms (%s)  max step %.2e mm (settled below %.0e)  "
+                 "contacts %d  (%.1f s)\n",
+                 label.c_str(), p.step, p.time_ms, p.time_ms < ramp_ms ? "loading" : "settling",
+                 p.max_displacement_mm, tolerance_mm, p.contacts,
                  std::chrono::duration<double>(now - start).count());
   };
   return settings;
