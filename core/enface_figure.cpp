@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <numeric>
 #include <sstream>
 #include <vector>
@@ -79,10 +80,17 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   const double lightest_mm =
       std::clamp(2.0 * std::ceil(highest / 2.0), kLightestMinMm, kLightestMaxMm);
   const int steps = static_cast<int>((lightest_mm - kDarkestMm) / 2.0);
-  // Wide enough for the legend's height scale (240 px, 22 per swatch, the leaflet names) and
-  // the title (about 7 px per character at 13 px).
-  const double width = std::max({500.0, 240.0 + 22.0 * (steps + 1) + 60.0, (hi.x() - lo.x()) * s,
-                                 7.0 * static_cast<double>(options.title.size())});
+  char note[240];
+  std::snprintf(note, sizeof note,
+                "atrial view, anterior up, anterolateral commissure left; leaflets drawn "
+                "\xC2\xB1 %.2g mm (tissue), the highest on top; prolapse: over 2 mm",
+                options.tissue_radius_mm);
+  // Wide enough for the legend's height scale (240 px, 22 per swatch, the leaflet names), the
+  // note under it (about 6 px per character at 11 px) and the title (about 7 px per character
+  // at 13 px).
+  const double width =
+      std::max({500.0, 240.0 + 22.0 * (steps + 1) + 60.0, 20.0 + 6.0 * std::strlen(note),
+                (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
   const double height = (hi.y() - lo.y()) * s;
   const double left = 0.5 * (width - (hi.x() - lo.x()) * s);
   auto px = [&](const Eigen::Vector2d& q) {
@@ -180,11 +188,6 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   svg << "<text x=\"" << rows_x << "\" y=\"" << y1 - 4 << "\" font-size=\"9\">"
       << escapeXml(anterior) << "</text><text x=\"" << rows_x << "\" y=\"" << y1 + 4
       << "\" font-size=\"9\">" << escapeXml(posterior) << "</text>\n";
-  char note[240];
-  std::snprintf(note, sizeof note,
-                "atrial view, anterior up, anterolateral commissure left; leaflets drawn "
-                "\xC2\xB1 %.2g mm (tissue), the highest on top; prolapse: over 2 mm",
-                options.tissue_radius_mm);
   svg << "<text x=\"10\" y=\"" << y1 + 30 << "\" font-size=\"11\" fill=\"#444\">" << note
       << "</text>\n</svg>\n";
   return svg.str();

@@ -20,7 +20,7 @@ const char* const kLeafletColours[] = {"#0072b2", "#009e73", "#d55e00", "#8e44ad
 constexpr const char* kTracingColour = "#111111";
 constexpr const char* kClosedAnnulusColour = "#e67e22";
 constexpr const char* kOpenAnnulusColour = "#f5cba7";
-constexpr const char* kThresholdColour = "#cc79a7";
+constexpr const char* kThresholdColour = "#7f7f7f";
 
 // The hinge line of heightAboveAnnulus raised by `threshold`: in a long-axis plane the height
 // of a point is its w minus the straight line through the two closed ring crossings (sorted

@@ -39,7 +39,8 @@ const char* kUsage = R"(usage: run_experiments COMMAND [options]
 
 commands:
   all      run every case and job, then merge: the one command that regenerates
-           experiments/results/ from scratch
+           experiments/results/ (from scratch after `rm -rf experiments/work
+           experiments/results`, or with --force; else jobs with a result are kept)
   run      run the cases and jobs of one shard (--shard i/N); results go to RESULTS/jobs/
   merge    build the tables and plots from RESULTS/jobs/*.json (after all shards ran)
   check    verify that merged tables have every planned row and well-formed columns

@@ -1,5 +1,6 @@
 #include "inverse/ceres_driver.h"
 
+#include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <mutex>
@@ -175,21 +176,24 @@ Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
 
   ceres::Solver::Summary summary;
   ceres::Solve(options, &problem, &summary);
-  // An accepted trial whose Jacobian the budget refused ends the solve inside Ceres, before
-  // the iteration callback: record it, or the history would credit the next stage (the slack
-  // release) with its drop.
-  if (objective.refusedJacobianSims() > 0 && objective.best() &&
-      (objective.history().empty() || objective.history().back().cost != objective.best()->cost))
+  // The solve can end inside Ceres, before the iteration callback, on an accepted trial: one
+  // whose Jacobian the budget refused, or whose step met a tolerance. Record the point returned
+  // when no row holds it, or convergence.csv would miss the result (and the history would credit
+  // the next stage, the slack release, with its drop).
+  const std::vector<IterationRecord>& history = objective.history();
+  if (objective.best() &&
+      std::none_of(history.begin(), history.end(),
+                   [&](const IterationRecord& r) { return r.cost == objective.best()->cost; }))
     objective.recordIteration("ceres", static_cast<int>(summary.iterations.size()),
                               objective.best()->cost, objective.best()->mean_deviation_mm);
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
     return {"budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
-                (refused > 0 ? " (the Jacobian at the last accepted step needs " +
-                                   std::to_string(refused) + " runs, " +
-                                   std::to_string(objective.maxSims() - objective.forwardSims()) +
-                                   " were left)"
-                             : std::string()),
+                (refused > 0
+                     ? " (the Jacobian at the last accepted step needs " + std::to_string(refused) +
+                           " runs, " +
+                           std::to_string(objective.maxSims() - objective.forwardSims()) + " left)"
+                     : std::string()),
             true};
   }
   return {std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "

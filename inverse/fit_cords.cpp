@@ -133,6 +133,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   const bool release_slack = options.slack_release.enabled && parameters.size() > 0 &&
                              options.mode != ParameterMode::kGroups &&
                              outcome.forward_sims + 2 <= options.max_sims;
+  outcome.slack_release_ran = release_slack;
   FitObjective objective(residual, options.finite_difference,
                          options.max_sims - (release_slack ? 1 : 0), outcome.forward_sims, start,
                          options.on_iteration);

@@ -73,6 +73,7 @@ struct FitOutcome {
   // The slack release (slack_release.h): what it proposed at the optimiser's best point, and
   // whether its closure was kept (then `fitted` has it); the data costs of the two closures.
   SlackReleaseProposal slack_release;
+  bool slack_release_ran = false;  // its proposal was made (enabled, not groups, budget left)
   bool slack_release_kept = false;
   double slack_release_data_cost = 0.0, optimiser_data_cost = 0.0;
   std::string slack_release_error;  // its closure failed (then not kept)

@@ -92,6 +92,12 @@ int runFit(const FitCommandOptions& o) {
               << " (a central difference there would close a scale <= 0)\n";
     return kExitBadInput;
   }
+  if (o.fd_scale_step > 0.1)
+    std::printf(
+        "note: fit: --fd-step %g is a central difference over %g..%g of each scale: a "
+        "secant across the map's kinks, not its slope (the default 0.01 was chosen from "
+        "the map's noise, docs/fitting.md)\n",
+        o.fd_scale_step, 1.0 - o.fd_scale_step, 1.0 + o.fd_scale_step);
   if (o.threads > 64) {  // as simulate and sweep-cord
     std::cerr << "error: fit: --threads: at most 64, got " << o.threads << "\n";
     return kExitBadInput;
@@ -211,6 +217,16 @@ int runFit(const FitCommandOptions& o) {
   metrics["section_weight"] = o.section_weight;
   metrics["tip_weight"] = o.tip_weight;
   metrics["scale_bounds"] = o.scale_bounds;
+  // How the fit was run, so that two results can be told apart by their files alone.
+  metrics["options"] = {{"prefit", o.prefit},
+                        {"tissue_prefit", o.tissue_prefit},
+                        {"slack_release", o.slack_release},
+                        {"tip_box_mm", o.tip_box_mm},
+                        {"fd_step", o.fd_scale_step},
+                        {"fd_tip_step_mm", o.fd_tip_step_mm},
+                        {"fd_warm", o.fd_warm_start},
+                        {"fd_slack_closures", o.fd_slack_closures},
+                        {"uncertainty", o.uncertainty}};
   if (o.uncertainty) {
     nlohmann::json u = {{"jacobian_sims", fit.uncertainty.jacobian_sims},
                         {"seconds", fit.uncertainty_seconds}};
@@ -241,8 +257,9 @@ int runFit(const FitCommandOptions& o) {
                             o.optimizer + ", " + o.params + ")"}));
   const StagedOutput::Published published = staged.publish();
 
-  std::printf("fit: %s after %d forward runs, %.1f s (%s)\n", o.optimizer.c_str(), fit.forward_sims,
-              fit.seconds, fit.termination.c_str());
+  std::printf("fit: %s after %d forward run%s, %.1f s (%s)\n", o.optimizer.c_str(),
+              fit.forward_sims, fit.forward_sims == 1 ? "" : "s", fit.seconds,
+              fit.termination.c_str());
   if (fit.unsettled_sims > 0) {
     std::printf(
         "note: %d of the %d forward runs reached the step cap without settling (their state is "

@@ -77,8 +77,13 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
 }
 
 // What the slack release did (inverse/slack_release.h), for report.md.
-std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled) {
+std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
+                             const std::string& params) {
   if (!enabled) return "off (--no-slack-release)";
+  if (params == "groups")
+    return "not run with --params groups (a group factor moves its slack and taut cords "
+           "together)";
+  if (!fit.slack_release_ran) return "not run: --max-sims left no closure for it";
   const inverse::SlackReleaseProposal& p = fit.slack_release;
   auto reference = [&](double value) {
     // The reference leaves out the segments the segment pre-fit rescaled or the fit
@@ -174,8 +179,14 @@ int identifiedCords(const inverse::FitOutcome& fit) {
     const int p = fit.cord_parameter[c];
     if (p < 0 || !fit.uncertainty.ok() || fit.uncertainty.at_bound[p]) continue;
     // A cord no tracing point moves with ("prior only" in the table) is not determined by the
-    // data, however narrow the prior between determined neighbours makes its SD.
+    // data, however narrow the prior between determined neighbours makes its SD; nor is a cord
+    // slack in the fitted closure whose parameter others determine (a group factor,
+    // --params groups): the data bound its length from below only.
     if (fit.uncertainty.sensitivity(p) == 0.0) continue;
+    const Eigen::Index i = static_cast<Eigen::Index>(c);
+    if (i < fit.closed_spans.size() &&
+        slackAtSpan(fit.closed_spans(i), fit.fitted.cords[c].rest_length))
+      continue;
     if (fit.uncertainty.sd(p) < 0.03 * fit.x(p)) ++count;
   }
   return count;
@@ -235,7 +246,16 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                                    "tissue (tissue.json)")
        << "\n";
   }
-  md << "- slack release: " << slackReleaseLine(fit, o.slack_release) << "\n";
+  md << "- slack release: " << slackReleaseLine(fit, o.slack_release, o.params) << "\n";
+  md << "- finite differences: step " << o.fd_scale_step << " on a scale"
+     << (o.params == "scales+tips" ? ", " + formatFixed(o.fd_tip_step_mm, 2) + " mm on a tip"
+                                   : std::string())
+     << (o.fd_warm_start
+             ? ", perturbed closures warm-started from the base closed state (--fd-warm)"
+             : ", perturbed closures from the open state")
+     << (o.fd_slack_closures ? ", slack-only parameters closed too (--fd-slack-closures)"
+                             : std::string())
+     << "\n";
   if (!o.settings_overrides.empty()) {
     md << "- simulator settings over the case's (--set):";
     for (const std::string& item : o.settings_overrides) md << " `" << item << "`";
@@ -243,7 +263,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   }
   md << "- forward simulations: " << fit.forward_sims + 1 << " (" << fit.forward_sims
      << " in the fit, 1 for the closure written out; metrics.json forward_sims), fit time: "
-     << fit.seconds << " s, threads: " << o.threads << "\n";
+     << formatFixed(fit.seconds, 1) << " s, threads: " << o.threads << "\n";
   md << "- termination: " << fit.termination << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n\n";
@@ -284,8 +304,13 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
         "\"prior only\": no tracing point moves with the cord, so its length is the prior's "
         "(the seed's and its neighbours'), not a measurement. "
      << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
-     << identifiedCords(fit) << " of " << freeCords(fit)
-     << " free cords are determined to better than 3 %.\n\n"
+     << (fit.uncertainty.ok()
+             ? std::to_string(identifiedCords(fit)) + " of " + std::to_string(freeCords(fit)) +
+                   " free cords are determined to better than 3 % (taut, "
+                   "moving the data, SD below 3 %)."
+             : std::string("How well the data determine the cords was not "
+                           "computed."))
+     << "\n\n"
      << cordTable(c, fit);
   return md.str();
 }
