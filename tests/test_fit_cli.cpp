@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <regex>
 
 #include "tests/test_support.h"
 
@@ -130,9 +131,15 @@ TEST(FitCommand, TipWeightIsRecordedInMetricsAndReport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   EXPECT_EQ(metrics["tip_weight"].get<double>(), 0.5);
-  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
-                .find("PM tip offsets: box ±8 mm per axis, prior 0.5 mm of residual per mm"),
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("PM tip offsets: box ±8 mm per axis, prior 0.5 mm of residual per mm"),
             std::string::npos);
+  // The tips' offsets have their own table (SD "–" without the uncertainty), and the run's
+  // options are in metrics.json.
+  EXPECT_NE(report.find("| tip anterolateral x | 0.000 | – |"), std::string::npos) << report;
+  EXPECT_EQ(metrics["options"]["prefit"], false);
+  EXPECT_EQ(metrics["options"]["uncertainty"], false);
+  EXPECT_EQ(metrics["options"]["tip_box_mm"].get<double>(), 8.0);
 }
 
 // A seed whose free cords are all manual (edit-cords --all): the cord pre-fits would close
@@ -371,6 +378,24 @@ TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {
   EXPECT_NE(off_report.find("- global pre-fit: disabled (--no-prefit)"), std::string::npos)
       << off_report;
   EXPECT_NE(off_report.find("- segment pre-fit: disabled (--no-prefit)"), std::string::npos);
+}
+
+// With --params groups every cord shares its group's SD; a cord slack in the fit is still not
+// determined by the data (they bound it from below only). All 32 counted before.
+TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --params groups --max-sims 40 --quiet --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  ASSERT_TRUE(metrics["uncertainty"].contains("identified_cords")) << metrics["uncertainty"];
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  std::smatch slack;
+  ASSERT_TRUE(std::regex_search(report, slack, std::regex("([0-9]+) of ([0-9]+) cords are slack")));
+  const int taut = std::stoi(slack[2]) - std::stoi(slack[1]);
+  EXPECT_GT(std::stoi(slack[1]), 0) << "the heuristic's small case has slack cords";
+  EXPECT_LE(metrics["uncertainty"]["identified_cords"].get<int>(), taut);
+  EXPECT_NE(report.find("- slack release: not run with --params groups"), std::string::npos);
 }
 
 // The pre-fit's budget check counts the closures its common stage runs: the seed, 8 grid

@@ -165,6 +165,30 @@ std::string uncertaintyCsv(const inverse::FitOutcome& fit) {
   return csv.str();
 }
 
+namespace {
+
+// With --params scales+tips: each PM tip's fitted offset per axis, with its SD; "" when the fit
+// has no tip parameter.
+std::string tipTable(const inverse::FitOutcome& fit) {
+  std::ostringstream md;
+  for (std::size_t p = 0; p < fit.parameter_names.size(); ++p) {
+    if (fit.parameter_is_scale[p]) continue;
+    if (md.tellp() == 0)
+      md << "## PM tips\n\nOffset of each tip coordinate from its seed position (mm, within "
+            "--tip-box, pulled toward 0 by --tip-weight) and its SD from the Jacobian at the "
+            "fit.\n\n"
+            "| Parameter | Offset (mm) | ± SD (mm) |\n|---|---:|---:|\n";
+    const Eigen::Index i = static_cast<Eigen::Index>(p);
+    md << "| " << fit.parameter_names[p] << " | " << formatFixed(fit.x(i), 3) << " | "
+       << (fit.uncertainty.ok() ? formatFixed(fit.uncertainty.sd(i), 3) : std::string("–"))
+       << (fit.uncertainty.ok() && fit.uncertainty.at_bound[p] ? " (at bound)" : "") << " |\n";
+  }
+  if (md.tellp() > 0) md << "\n";
+  return md.str();
+}
+
+}  // namespace
+
 int slackCords(const inverse::FitOutcome& fit) {
   const Eigen::VectorXd& spans = fit.closed_spans;
   int count = 0;
@@ -289,6 +313,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   md << "![Seed (dashed) and fitted closures against the tracings, one panel per image plane]"
         "(sections.svg)\n\n";
   md << "![The fitted closed valve from the atrium, the open orifice in red](enface.svg)\n\n";
+  md << tipTable(fit);
   md << "## Cords\n\nScale = fitted length / the cord's seed_rest_length (heuristic). ± SD: the "
         "fitted length's standard deviation from the Jacobian at the fit "
         "(inverse/fit_uncertainty.h; residual SD "
