@@ -21,6 +21,16 @@ std::filesystem::path smallCase() {
   return std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
 }
 
+// `fit SMALL_CASE ARGUMENTS --out OUT`, expected to succeed: its metrics.json (an empty object,
+// with a failure recorded, when it did not).
+nlohmann::json fitSmallCase(const std::string& arguments, const std::filesystem::path& out) {
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) + " " + arguments + " --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  if (r.exit_code != 0) return nlohmann::json::object();
+  return nlohmann::json::parse(testing::readText(out / "metrics.json"));
+}
+
 // `fit SMALL_CASE ARGUMENTS --out DIR/fit`, expected to be refused before any work: exit 2 and
 // no fit output. Returns stderr for the test's own checks of the message.
 std::string refusedFitMessage(const std::string& arguments) {
@@ -124,12 +134,10 @@ TEST(FitCommand, RejectsANegativeTipWeightWithExitCode2) {
 // The tip prior (--tip-weight) is recorded where a reader of the results looks for it.
 TEST(FitCommand, TipWeightIsRecordedInMetricsAndReport) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --params scales+tips --tip-weight 0.5 --no-prefit --no-uncertainty "
-                             "--max-sims 1 --out " +
-                             quoted(dir / "fit"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const auto metrics = fitSmallCase(
+      "--params scales+tips --tip-weight 0.5 --no-prefit --no-uncertainty --max-sims 1",
+      dir / "fit");
+  ASSERT_FALSE(metrics.empty());
   EXPECT_EQ(metrics["tip_weight"].get<double>(), 0.5);
   const std::string report = testing::readText(dir / "fit" / "report.md");
   EXPECT_NE(report.find("PM tip offsets: box ±8 mm per axis, prior 0.5 mm of residual per mm"),
@@ -343,10 +351,8 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
 // factor: 8 grid + 4 refinement closures fit in 16 runs, 8 more for the kinds do not.
 TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --max-sims 16 --threads 2 --quiet --out " + quoted(dir / "fit"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const auto metrics = fitSmallCase("--max-sims 16 --threads 2 --quiet", dir / "fit");
+  ASSERT_FALSE(metrics.empty());
   const double common = metrics["prefit_factor"].get<double>();
   EXPECT_NE(common, 1.0) << "the heuristic's cords are too long: the common stage moves them";
   EXPECT_EQ(metrics["prefit_primary_factor"].get<double>(), common);
@@ -384,10 +390,8 @@ TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {
 // determined by the data (they bound it from below only). All 32 counted before.
 TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --params groups --max-sims 40 --quiet --out " + quoted(dir / "fit"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const auto metrics = fitSmallCase("--params groups --max-sims 40 --quiet", dir / "fit");
+  ASSERT_FALSE(metrics.empty());
   ASSERT_TRUE(metrics["uncertainty"].contains("identified_cords")) << metrics["uncertainty"];
   const std::string report = testing::readText(dir / "fit" / "report.md");
   std::smatch slack;
@@ -402,11 +406,9 @@ TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
 // factors (1 is the seed's), 4 refinements and one closure left for the optimiser fit in 14.
 TEST(FitCommand, ACommonPrefitThatJustFitsTheBudgetRuns) {
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --max-sims 14 --threads 2 --quiet --no-uncertainty --out " +
-                             quoted(dir / "fit"));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const auto metrics =
+      fitSmallCase("--max-sims 14 --threads 2 --quiet --no-uncertainty", dir / "fit");
+  ASSERT_FALSE(metrics.empty());
   EXPECT_NE(metrics["prefit_factor"].get<double>(), 1.0);
   EXPECT_LE(metrics["forward_sims"].get<int>(), 15);  // budget 14 + the closure written
 }
