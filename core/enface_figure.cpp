@@ -176,7 +176,7 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
     svg << "<rect x=\"" << x << "\" y=\"" << y1 - 10 << "\" width=\"20\" height=\"6\" fill=\""
         << shade(0, t) << "\"/><rect x=\"" << x << "\" y=\"" << y1 - 4
         << "\" width=\"20\" height=\"6\" fill=\"" << shade(1, t) << "\"/>\n";
-    if (k % 2 == 0) {
+    if (k % 2 == 0 || k == steps) {  // every 4 mm, and the top (6 or 10 mm with an odd count)
       // The end swatches stand for every height beyond them.
       const std::string prefix = k == 0 ? "\xE2\x89\xA4 " : k == steps ? "\xE2\x89\xA5 " : "";
       svg << "<text x=\"" << x + 10 << "\" y=\"" << y1 + 13

@@ -16,25 +16,23 @@ void parallelFor(int count, int threads, const std::function<void(int)>& task) {
     return;
   }
   // An exception escaping a std::thread calls std::terminate (the process dies without its
-  // error message, leaving its staging directory): each worker catches, the others stop taking
-  // tasks, and the exception of the lowest task index is rethrown here (the same one for any
-  // thread count, as with one thread).
-  std::atomic<int> next{0};
-  std::atomic<bool> failed{false};
+  // error message, leaving its staging directory): each worker catches, and the exception of
+  // the lowest failing task is rethrown here, the same one for any thread count, as with one
+  // thread. After a failure only tasks below it still run (one of them may fail too).
+  std::atomic<int> next{0}, lowest_failed{count};
   std::mutex mutex;
-  int failed_task = count;
   std::exception_ptr failure;
   auto work = [&] {
-    for (int i = next++; i < count && !failed; i = next++) {
+    for (int i = next++; i < count; i = next++) {
+      if (i > lowest_failed.load()) continue;
       try {
         task(i);
       } catch (...) {
         const std::lock_guard<std::mutex> lock(mutex);
-        if (i < failed_task) {
-          failed_task = i;
+        if (i < lowest_failed.load()) {
+          lowest_failed = i;
           failure = std::current_exception();
         }
-        failed = true;
       }
     }
   };

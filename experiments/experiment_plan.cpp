@@ -1,8 +1,11 @@
 #include "experiments/experiment_plan.h"
 
+#include <algorithm>
+#include <cstdint>
 #include <cstdio>
 #include <set>
 #include <stdexcept>
+#include <vector>
 
 #include "core/cohort_presets.h"
 
@@ -172,6 +175,22 @@ ExperimentPlan makePlan(const ExperimentConfig& config) {
     }
   }
   return plan;
+}
+
+std::string planId(const ExperimentPlan& plan) {
+  std::vector<std::string> ids;
+  for (const JobSpec& job : plan.jobs) ids.push_back(job.id);
+  std::sort(ids.begin(), ids.end());
+  std::uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64 bit
+  for (const std::string& id : ids) {
+    for (const char c : id + "\n") {
+      hash ^= static_cast<unsigned char>(c);
+      hash *= 1099511628211ull;
+    }
+  }
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(hash));
+  return text;
 }
 
 const CaseSpec& findCase(const ExperimentPlan& plan, const std::string& case_id) {

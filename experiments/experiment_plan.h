@@ -78,6 +78,10 @@ ExperimentPlan makePlan(const ExperimentConfig& config);
 
 const CaseSpec& findCase(const ExperimentPlan& plan, const std::string& case_id);
 
+// What identifies a plan's jobs whatever options chose them: 16 hex digits of the FNV-1a hash of
+// its sorted job ids ("--seeds 1,2,3" and no --seeds give the same plan id).
+std::string planId(const ExperimentPlan& plan);
+
 // "i/N" with 1 <= i <= N. Returns false on malformed text.
 struct Shard {
   int index = 1;  // 1-based

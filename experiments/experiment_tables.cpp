@@ -228,8 +228,13 @@ class Merger {
         double reached = kNaN;
         const json& trace = r->at("convergence");
         for (std::size_t k = 0; k < trace.at("forward_sims").size(); ++k) {
-          const double sims = trace.at("forward_sims")[k].get<double>();
-          const double avg = trace.at("mean_mm")[k].get<double>();
+          // A failed closure's row has no AvgD (NaN in convergence.csv, null in the job's JSON):
+          // a gap in the trace.
+          const json& sims_cell = trace.at("forward_sims")[k];
+          const json& avg_cell = trace.at("mean_mm")[k];
+          if (!sims_cell.is_number() || !avg_cell.is_number()) continue;
+          const double sims = sims_cell.get<double>();
+          const double avg = avg_cell.get<double>();
           series.x.push_back(sims);
           series.y.push_back(avg);
           if (!std::isfinite(reached) && avg <= (1.0 + kWithinOfBest) * best) reached = sims;
@@ -452,7 +457,8 @@ class Merger {
                      std::to_string(plan_.cases.size()) +
                      " cases. See experiments/README.md, "
                      "\"Benchmark experiments\".\n\n";
-    if (!plan_options_.empty()) md += kPlanOptionsLine + ("`" + plan_options_ + "`\n\n");
+    if (!plan_options_.empty())
+      md += kPlanOptionsLine + ("`" + plan_options_ + "`") + kPlanIdMark + planId(plan_) + "`\n\n";
     md += "Revision(s) of the chordfit that made the results: " + recordedValues("revision", "");
     // Wall times compare only within one machine (docs/performance.md); results made before
     // jobs recorded their machine have none.

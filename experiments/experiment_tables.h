@@ -25,12 +25,15 @@ struct MergeOptions {
   // so that two runs can be compared with diff.
   bool no_timing = false;
   // The run_experiments options that chose the plan (e.g. "--plan smoke --methods fit"),
-  // recorded in index.md so that `check` can tell results of another plan from missing rows.
+  // recorded in index.md with the plan's id (planId) so that `check` can tell results of
+  // another plan from missing rows.
   std::string plan_options;
 };
 
-// index.md's line recording MergeOptions::plan_options.
+// index.md's line recording MergeOptions::plan_options and the plan id:
+// "Plan options: `--plan smoke`; plan id `0123456789abcdef`".
 constexpr const char* kPlanOptionsLine = "Plan options: ";
+constexpr const char* kPlanIdMark = "; plan id `";
 
 struct MergeSummary {
   int jobs_found = 0;

@@ -369,16 +369,22 @@ std::string planOptions(const Arguments& a) {
   return text;
 }
 
-// The plan options index.md records (merge of this or a later revision), or "".
-std::string recordedPlanOptions(const fs::path& results) {
+// The plan options and plan id index.md records (merges since they were recorded), or "".
+struct RecordedPlan {
+  std::string options, id;
+};
+RecordedPlan recordedPlan(const fs::path& results) {
   std::ifstream in(results / "index.md");
-  std::string line;
-  const std::string prefix = kPlanOptionsLine;
-  while (std::getline(in, line)) {
-    if (line.rfind(prefix + "`", 0) == 0 && line.size() > prefix.size() + 1 && line.back() == '`')
-      return line.substr(prefix.size() + 1, line.size() - prefix.size() - 2);
+  const std::string prefix = std::string(kPlanOptionsLine) + "`";
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(prefix, 0) != 0) continue;
+    const std::size_t mark = line.find(kPlanIdMark);
+    if (mark == std::string::npos || line.back() != '`') return {};
+    const std::size_t id_at = mark + std::string(kPlanIdMark).size();
+    return {line.substr(prefix.size(), mark - 1 - prefix.size()),
+            line.substr(id_at, line.size() - 1 - id_at)};
   }
-  return "";
+  return {};
 }
 
 int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
@@ -427,12 +433,14 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   std::vector<std::string> problems;
   // Results of another plan (the smoke run's, checked against the full plan) would list every
   // job of this plan as missing: say so once instead.
-  if (const std::string made_with = recordedPlanOptions(a.results);
-      !made_with.empty() && made_with != planOptions(a)) {
+  // The plans are compared by their jobs, not by the options' text: "--seeds 1,2,3" is the full
+  // plan, and the order of names does not matter.
+  if (const RecordedPlan made = recordedPlan(a.results);
+      !made.id.empty() && made.id != planId(plan)) {
     std::fprintf(stderr,
-                 "check: %s was merged with `%s`; this check is of `%s`: give check the same "
-                 "options\n",
-                 a.results.string().c_str(), made_with.c_str(), planOptions(a).c_str());
+                 "check: %s was merged with `%s`, another plan than this check's `%s`: give "
+                 "check the options of the merge\n",
+                 a.results.string().c_str(), made.options.c_str(), planOptions(a).c_str());
     std::printf("check: FAILED (%s)\n", a.results.string().c_str());
     return kExitJobsFailed;
   }
@@ -445,17 +453,23 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     const auto rows = readCsv(a.results / "table1.csv");
     return !rows.empty() && !rows[0].empty() && rows[0].back() == "wall_seconds";
   }();
-  bool has_fits = false;
-  for (const JobSpec& job : plan.jobs) has_fits |= job.method == Method::kFit;
-  const std::string sensitivity_case =
-      config.sensitivity_preset + "_s" + std::to_string(config.seeds.front());
-  bool has_sensitivity_case = false, has_optimizer_case = false;
-  for (const CaseSpec& c : plan.cases) {
-    has_sensitivity_case |= c.id == sensitivity_case;
+  // Which tables the plan's jobs fill: a subset (--presets, --cases, --seeds, --methods) may
+  // hold none of a table's source jobs, and then the table has no rows by design.
+  const std::string first_seed = "_s" + std::to_string(config.seeds.front());
+  std::set<std::string> heuristic_cases, fit_cases;
+  bool fills_optimizers = false, fills_sensitivity = false, fills_recovery = false;
+  for (const JobSpec& job : plan.jobs) {
+    const std::string tag = methodTag(job);
+    if (tag == "heuristic") heuristic_cases.insert(job.case_id);
+    if (tag == "fit_scales_ceres") fit_cases.insert(job.case_id);
+    fills_recovery |= tag != "truth";
     for (const std::string& preset : config.optimizer_presets)
-      has_optimizer_case |=
-          has_fits && c.id == preset + "_s" + std::to_string(config.seeds.front());
+      fills_optimizers |= job.case_id == preset + first_seed && tag.rfind("fit_scales_", 0) == 0;
+    fills_sensitivity |= job.case_id == config.sensitivity_preset + first_seed &&
+                         (tag == "heuristic" || tag == "fit_scales_ceres" || tag == "truth");
   }
+  bool fills_acceptance = false;
+  for (const std::string& id : fit_cases) fills_acceptance |= heuristic_cases.count(id) > 0;
   const std::vector<Table> tables = {{"table1.csv", header(table1CsvHeader(timing))},
                                      {"acceptance.csv", header(acceptanceCsvHeader(timing))},
                                      {"optimizers.csv", header(optimizersCsvHeader(timing))},
@@ -470,10 +484,11 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     std::string got;
     for (const std::string& c : rows[0]) got += (got.empty() ? "" : ",") + c;
     if (got != t.header) problems.push_back(std::string(t.file) + ": header \"" + got + "\"");
-    // Tables of cases the plan may leave out (--presets, --cases, --seeds, --methods).
-    const bool optional = (std::string(t.file) == "acceptance.csv" && !has_fits) ||
-                          (std::string(t.file) == "optimizers.csv" && !has_optimizer_case) ||
-                          (std::string(t.file) == "sensitivity.csv" && !has_sensitivity_case);
+    const std::string file = t.file;
+    const bool optional = (file == "acceptance.csv" && !fills_acceptance) ||
+                          (file == "optimizers.csv" && !fills_optimizers) ||
+                          (file == "recovery.csv" && !fills_recovery) ||
+                          (file == "sensitivity.csv" && !fills_sensitivity);
     if (rows.size() < 2 && !optional) problems.push_back(std::string(t.file) + ": no data rows");
     for (std::size_t r = 1; r < rows.size(); ++r) {
       if (rows[r].size() != rows[0].size()) {

@@ -292,7 +292,17 @@ TEST(ImportMeshCli, ReplacesAnEarlierImportKeepsTheUsersFilesAndRefusesToReplace
   fs::create_directories(mine);
   fs::copy_file(dir / "valve.ply", mine / "open.ply");
   const std::string mesh_bytes = testing::readText(mine / "open.ply");
+  // The mesh itself as DIR/open.ply is an input of the run: refused before any work.
   r = runChordfit("import-mesh " + quoted(mine / "open.ply") + " --landmarks " +
+                  quoted(dir / "landmarks.json") + " --out " + quoted(mine));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: import-mesh: --out: " + (mine / "open.ply").string() +
+                       ": is an input of this run; import-mesh would write over it"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(testing::readText(mine / "open.ply"), mesh_bytes);
+  // Another file of the user's where the case goes: refused when the case is written.
+  r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
                   quoted(dir / "landmarks.json") + " --out " + quoted(mine));
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.err.find("error: import-mesh: --out: " + (mine / "open.ply").string() +
@@ -358,9 +368,9 @@ TEST(ImportMeshCli, NamesTheCaseAfterItsDirectoryWithATrailingSlash) {
   EXPECT_EQ(loaded->name, "mine");
 }
 
-// Landmarks in another order, an anterior point on the posterior annulus, PM tips swapped:
-// each used to give a case with the wrong leaflets or muscles and exit 0 (a warning for the
-// first two, nothing for the tips); each is now refused with what to change.
+// Landmarks in another order or PM tips swapped used to give a case with the wrong leaflets or
+// muscles and exit 0 (a warning, nothing for the tips): refused with what to change. An
+// anterior point on the posterior annulus gets a warning naming it.
 TEST(ImportMeshCli, RefusesLandmarksOrTipsInAnotherOrderSayingWhichOrderFits) {
   TempDir dir;
   const Eigen::MatrixXd points = writeImportInputs(dir.path());
@@ -384,10 +394,14 @@ TEST(ImportMeshCli, RefusesLandmarksOrTipsInAnotherOrderSayingWhichOrderFits) {
   Eigen::MatrixXd posterior_point = points;
   posterior_point.row(2) = posterior.transpose();
   writePointList(dir / "posterior_point.json", posterior_point);
+  // An anterior point on the posterior annulus reads as the other arc; so would a misplaced
+  // commissure: a warning that names both, not a refusal.
   r = import(dir / "posterior_point.json", "");
-  EXPECT_EQ(r.exit_code, 2) << r.out;
-  EXPECT_NE(r.err.find("point 3 seems to lie on the posterior annulus"), std::string::npos)
-      << r.err;
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("point 3 may lie on the posterior annulus, or a commissure be misplaced"),
+            std::string::npos)
+      << r.out;
+  fs::remove_all(dir / "case");
 
   writePointList(dir / "swapped_tips.json", Eigen::MatrixXd{{2, -12, -18}, {2, 12, -18}});
   r = import(dir / "landmarks.json", " --pm-tips " + quoted(dir / "swapped_tips.json"));

@@ -27,8 +27,7 @@ using testing::quoted;
 TEST(Cli, VersionNamesTheSourceRevision) {
   const auto r = testing::runChordfit("--version");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(std::regex_search(
-      r.out, std::regex("^chordfit 0\\.1\\.0 \\(revision ([0-9a-f]{7,}(-dirty)?|unknown)\\)\n")))
+  EXPECT_TRUE(std::regex_search(r.out, std::regex("^chordfit 0\\.1\\.0 \\(revision [^ )]+\\)\n")))
       << r.out;
 }
 

@@ -249,10 +249,22 @@ TEST_F(SimulateCommand, FileOutputsDoNotWriteOverTheCasesFiles) {
             std::string::npos)
       << r.err;
   EXPECT_EQ(testing::readText(case_dir_ / "open.ply"), mesh);
+  // A curve file a tracing names is the case's too (tracings.json -> "file").
+  testing::writeText(case_dir_ / "tracings.json",
+                     R"({"tracings": [{"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]},
+                                       "file": "curve.json"}]})");
+  testing::writeText(case_dir_ / "curve.json", R"({"points": [[1, 0, -2], [2, 0, -3]]})");
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
+  c["tracings"] = "tracings.json";
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  r = runChordfit("metrics " + quoted(case_dir_) + " --mesh " + quoted(case_dir_ / "open.ply") +
+                  " --out " + quoted(case_dir_ / "curve.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("curve.json: is an input of this run"), std::string::npos) << r.err;
   r = runChordfit("heuristic " + quoted(case_dir_) + " --out " + quoted(case_dir_ / "case.json"));
   EXPECT_EQ(r.exit_code, 2) << r.out;
   EXPECT_NE(r.err.find("case.json: is an input of this run"), std::string::npos) << r.err;
-  EXPECT_EQ(runChordfit("validate " + quoted(case_dir_)).exit_code, 0);
+  EXPECT_EQ(testing::readText(case_dir_ / "curve.json"), R"({"points": [[1, 0, -2], [2, 0, -3]]})");
 }
 
 TEST_F(SimulateCommand, RejectsAnUnknownPhase) {

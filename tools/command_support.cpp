@@ -163,7 +163,8 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   // cords at 200 mmHg closed with P2 under the anterior leaflet with the 10 ms ramp and with a
   // P2 flap with 20 or 40 ms (175 mmHg too; 150 mmHg the same with 10 and 40 ms).
   constexpr double kFastestCalibratedMmHgPerMs = 15.0;
-  if (closes && settings.ramp_ms > 0.0 &&
+  // Only for a command that runs closures now (validate passes no command and takes no --set).
+  if (closes && *command != '\0' && settings.ramp_ms > 0.0 &&
       settings.pressure_mmhg / settings.ramp_ms > kFastestCalibratedMmHgPerMs)
     std::fprintf(stderr,
                  "note: %s: %g mmHg over a %g ms ramp loads the valve at %.0f mmHg/ms, faster "
@@ -279,7 +280,7 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
   if (!readWholeFile(dir / "case.json", text)) return files;
   const nlohmann::json json = nlohmann::json::parse(text, nullptr, false);
   // Every string of the case file that names an existing file of the case: the mesh, the
-  // annulus curves, tracings (and the curve files they name), tips, cords, tissue.
+  // annulus curves, tracings, tips, cords, tissue.
   std::function<void(const nlohmann::json&)> collect = [&](const nlohmann::json& value) {
     if (value.is_string()) {
       std::error_code ec;
@@ -293,6 +294,23 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
   if (json.is_discarded() || !json.is_object()) return files;
   for (const auto& [key, value] : json.items())
     if (with_cords || key != "cords") collect(value);
+  // The curve files a tracings file names ({"tracings": [{"file": ...}]}), relative to it.
+  if (const auto t = json.find("tracings"); t != json.end() && t->is_string()) {
+    const std::filesystem::path tracings_file = dir / t->get<std::string>();
+    std::string tracings_text;
+    if (readWholeFile(tracings_file, tracings_text)) {
+      const nlohmann::json list = nlohmann::json::parse(tracings_text, nullptr, false);
+      if (list.is_object() && list.contains("tracings") && list["tracings"].is_array()) {
+        for (const nlohmann::json& entry : list["tracings"]) {
+          if (!entry.is_object() || !entry.contains("file") || !entry["file"].is_string()) continue;
+          const std::filesystem::path file =
+              tracings_file.parent_path() / entry["file"].get<std::string>();
+          std::error_code ec;
+          if (std::filesystem::is_regular_file(file, ec)) files.push_back(file.string());
+        }
+      }
+    }
+  }
   return files;
 }
 

@@ -49,7 +49,8 @@ const char* const kSetColours[] = {"#0072b2", "#cc79a7", "#009e73", "#56b4e9",
 std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets) {
   std::vector<SectionLayer> layers;
   for (std::size_t i = 0; i < sets.size(); ++i) {
-    // Past the seventh set the colours come round again, dashed, so no two sets look alike.
+    // Past the seventh set the colours come round again, dashed (past the fourteenth, solid
+    // again: compare more sets than that and two of them look alike).
     const std::size_t colours = std::size(kSetColours);
     layers.push_back(
         {sets[i].label, sets[i].closed_V, kSetColours[i % colours], (i / colours) % 2 == 1, 1.8});

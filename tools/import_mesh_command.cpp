@@ -41,11 +41,12 @@ std::string percent(double fraction) {
   return std::to_string(static_cast<int>(std::lround(100.0 * fraction))) + " %";
 }
 
-// For an implausible anterior share: another reading of the three landmarks under which it is
-// plausible, in words, or "" (then the valve may just be unusual, and the import only warns).
+// For an implausible anterior share: another order of the three landmarks under which it is
+// plausible, in words, or "" (then the valve may just be unusual, or a point misplaced, and the
+// import only warns).
 // Points are 0-based rows of `points` in the file's order (AL, PM, anterior).
 std::string landmarkOrderProblem(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
-                                 const Eigen::MatrixXd& points, double fraction) {
+                                 const Eigen::MatrixXd& points) {
   for (int anterior : {0, 1}) {
     const int first = anterior == 0 ? 1 : 0;  // the other two, in the file's order
     ImportLandmarks l;
@@ -59,11 +60,6 @@ std::string landmarkOrderProblem(const Eigen::MatrixXd& V, const Eigen::MatrixXi
              ": are the points in another order? The file's order is the anterolateral "
              "commissure, the posteromedial commissure, a point of the anterior annulus";
     }
-  }
-  if (plausibleAnteriorFraction(1.0 - fraction)) {
-    return "point 3 seems to lie on the posterior annulus (the arc between the commissures on "
-           "the other side is " +
-           percent(1.0 - fraction) + "): give a point of the anterior annulus";
   }
   return "";
 }
@@ -249,8 +245,7 @@ int runImportMesh(const ImportMeshOptions& options) {
     return failImport(options, imported);
   }
   if (!plausibleAnteriorFraction(imported.anterior_fraction)) {
-    const std::string problem =
-        landmarkOrderProblem(V, F, landmarks.points, imported.anterior_fraction);
+    const std::string problem = landmarkOrderProblem(V, F, landmarks.points);
     if (!problem.empty())
       return fail(options.landmarks_file, "the anterior arc is " +
                                               percent(imported.anterior_fraction) +
@@ -295,14 +290,23 @@ int runImportMesh(const ImportMeshOptions& options) {
     // differ from the tissue's.
     std::printf(
         "warning: the mesh has %d boundary loop(s) besides the annulus and the free edge: holes "
-        "in the leaflet surface (a missing triangle?); the edge of each is simulated as free\n",
+        "in the leaflet surface (a missing triangle?) or loose pieces; each such edge is "
+        "simulated as free\n",
         imported.holes);
   }
   if (!plausibleAnteriorFraction(imported.anterior_fraction)) {
+    const double other = 1.0 - imported.anterior_fraction;
     std::printf(
-        "warning: the anterior annulus is usually about a third of the circumference; "
-        "check the landmarks' order (anterolateral, posteromedial, anterior)\n");
+        "warning: the anterior annulus is usually about a third of the circumference; check "
+        "the landmarks (anterolateral, posteromedial, anterior)%s\n",
+        plausibleAnteriorFraction(other)
+            ? (": point 3 may lie on the posterior annulus, or a commissure be misplaced (the "
+               "other arc is " +
+               percent(other) + ")")
+                  .c_str()
+            : "");
   }
+
   if (const double agreement = tracingLeafletAgreement(c.mesh, c.tracings);
       std::isfinite(agreement)) {
     std::printf("  tracing points nearest to their own leaflet (open state): %.0f %%\n",

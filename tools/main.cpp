@@ -394,7 +394,12 @@ int main(int argc, char** argv) {
   };
   const OutputPlace places[] = {
       {"make-valve", make_valve.out_dir, false, makeValveOutputFiles(), {make_valve.annulus_file}},
-      {"import-mesh", import_mesh.out_dir, false, importMeshOutputFiles(), {}},
+      {"import-mesh",
+       import_mesh.out_dir,
+       false,
+       importMeshOutputFiles(),
+       {import_mesh.mesh_file, import_mesh.landmarks_file, import_mesh.closed_annulus_file,
+        import_mesh.tracings_file, import_mesh.pm_tips_file}},
       // heuristic and edit-cords may replace the case's cords file (regenerating or editing
       // them is what they are for), none of its other files.
       {"heuristic", heuristic.out_file, true, {}, caseInputFiles(heuristic.case_dir, false)},

@@ -72,7 +72,7 @@ SimulationSettings withProgress(SimulationSettings settings, const std::string& 
     }
     *last = now;
     std::fprintf(stderr,
-                 "  %s: step %6d  t = %8.2f ms (%s)  max step %.2e mm (settled below %.0e)  "
+                 "  %s: step %6d  t = %8.2f ms (%s)  max step %.2e mm (settles below %.0e)  "
                  "contacts %d  (%.1f s)\n",
                  label.c_str(), p.step, p.time_ms, p.time_ms < ramp_ms ? "loading" : "settling",
                  p.max_displacement_mm, tolerance_mm, p.contacts,
