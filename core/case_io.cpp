@@ -180,16 +180,9 @@ bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, Js
     on_plane_in_ras =
         std::abs(tracing.plane_normal.dot(ras - tracing.plane_origin)) <= kTracingPlaneToleranceMm;
   }
-  std::string advice = "the plane or the points are wrong";
-  if (on_plane_in_ras) {
-    advice = "with x and y negated they lie on it: ";
-    if (source == nullptr)
-      advice += "are they in RAS? (points inline in the tracings file are read as LPS)";
-    else if (source->read_as_ras)
-      advice += "the file was read as RAS; are they in LPS? (" + source->other_frame_syntax + ")";
-    else
-      advice += "are they in RAS? (" + source->other_frame_syntax + ")";
-  }
+  const std::string advice =
+      on_plane_in_ras ? "with x and y negated they lie on it: " + otherFrameQuestion(source)
+                      : "the plane or the points are wrong";
   char what[200];
   std::snprintf(what, sizeof what,
                 "%d of %d points lie off the tracing's plane (first: point %ld; farthest %.3g mm; "

@@ -179,6 +179,13 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
   return false;
 }
 
+std::string otherFrameQuestion(const Curve* source) {
+  if (source == nullptr) return "are they in RAS? (points inline in the file are read as LPS)";
+  if (source->read_as_ras)
+    return "the file was read as RAS; are they in LPS? (" + source->other_frame_syntax + ")";
+  return "are they in RAS? (" + source->other_frame_syntax + ")";
+}
+
 // Throws std::invalid_argument for a matrix that is not #P by 3 or holds a non-finite
 // value (JSON has no NaN), std::runtime_error on I/O failure.
 void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points, bool closed) {

@@ -29,6 +29,12 @@ struct Curve {
 bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& diagnostics,
                const std::string& display_name = "", int markup_index = 0);
 
+// For points that fit once x and y are negated (turned half a turn about S: RAS read as LPS,
+// or the reverse): the question to ask, in the words of the file they came from, e.g. "the file
+// was read as RAS; are they in LPS? (say \"# CoordinateSystem = LPS\" in the file's header)";
+// `source` nullptr: points inline in a JSON file, read as LPS.
+std::string otherFrameQuestion(const Curve* source);
+
 // Writes a plain JSON point list atomically.
 void writePointList(const std::filesystem::path& path, const Eigen::MatrixXd& points,
                     bool closed = false);

@@ -104,7 +104,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   std::set<std::string> case_options;  // as the fit jobs recorded them
   for (const std::string& preset : config.presets) {
     for (int seed : config.seeds) {
-      const std::string case_id = preset + "_s" + std::to_string(seed);
+      const std::string case_id = baseCaseId(preset, seed);
       const json* heuristic = result(case_id, "heuristic");
       const json* fit = result(case_id, kFitTag);
       const json* truth = result(case_id, "truth");

@@ -28,7 +28,7 @@ CaseSpec baseCase(const ExperimentConfig& c, const std::string& preset, int seed
   s.noise_mm = c.noise_mm;
   s.dropout = c.dropout;
   s.edge_mm = c.edge_mm;
-  s.id = preset + "_s" + std::to_string(seed);
+  s.id = baseCaseId(preset, seed);
   return s;
 }
 
@@ -175,6 +175,10 @@ ExperimentPlan makePlan(const ExperimentConfig& config) {
     }
   }
   return plan;
+}
+
+std::string baseCaseId(const std::string& preset, int seed) {
+  return preset + "_s" + std::to_string(seed);
 }
 
 std::string planId(const ExperimentPlan& plan) {

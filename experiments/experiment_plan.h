@@ -78,6 +78,10 @@ ExperimentPlan makePlan(const ExperimentConfig& config);
 
 const CaseSpec& findCase(const ExperimentPlan& plan, const std::string& case_id);
 
+// The id of a preset's case at a seed with the plan's default options ("prolapse-P2_s1"); the
+// sweep variants add a suffix to it.
+std::string baseCaseId(const std::string& preset, int seed);
+
 // What identifies a plan's jobs whatever options chose them: 16 hex digits of the FNV-1a hash of
 // its sorted job ids ("--seeds 1,2,3" and no --seeds give the same plan id).
 std::string planId(const ExperimentPlan& plan);

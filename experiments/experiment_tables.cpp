@@ -115,7 +115,7 @@ class Merger {
     std::set<std::string> cases;
     for (const std::string& preset : config_.presets) {
       for (int seed : config_.seeds) {
-        const std::string case_id = preset + "_s" + std::to_string(seed);
+        const std::string case_id = baseCaseId(preset, seed);
         cases.insert(case_id);
         for (const JobSpec& job : plan_.jobs) {
           if (job.case_id != case_id || !isTable1Method(job)) continue;
@@ -212,7 +212,7 @@ class Merger {
     std::vector<PlotPanel> panels;
     std::set<std::string> cases;
     for (const std::string& preset : config_.optimizer_presets) {
-      const std::string case_id = preset + "_s" + std::to_string(config_.seeds.front());
+      const std::string case_id = baseCaseId(preset, config_.seeds.front());
       cases.insert(case_id);
       PlotPanel panel{case_id, "forward simulations", "AvgD (mm)", {}, false};
       double best = std::numeric_limits<double>::infinity();
@@ -285,7 +285,7 @@ class Merger {
     std::map<std::string, PlotSeries> series;
     for (const std::string& preset : config_.presets) {
       for (int seed : config_.seeds) {
-        const std::string case_id = preset + "_s" + std::to_string(seed);
+        const std::string case_id = baseCaseId(preset, seed);
         cases.insert(case_id);
         for (const JobSpec& job : plan_.jobs) {
           if (job.case_id != case_id || job.method == Method::kTruth || !isTable1Method(job)) {
@@ -397,8 +397,7 @@ class Merger {
       panels.push_back(avg_panel);
       panels.push_back(rec_panel);
     };
-    const std::string base_id =
-        config_.sensitivity_preset + "_s" + std::to_string(config_.seeds.front());
+    const std::string base_id = baseCaseId(config_.sensitivity_preset, config_.seeds.front());
     if (std::none_of(plan_.cases.begin(), plan_.cases.end(),
                      [&](const CaseSpec& c) { return c.id == base_id; })) {
       // A plan restricted to other cases (--presets, --cases, --seeds): no sweep to tabulate.

@@ -34,6 +34,8 @@ using Clock = std::chrono::steady_clock;
 constexpr int kExitOk = 0;
 constexpr int kExitJobsFailed = 1;
 constexpr int kExitUsage = 2;
+// Jobs named one by one in merge's and check's messages; beyond, a count (index.md lists all).
+constexpr std::size_t kListedAtMost = 10;
 
 const char* kUsage = R"(usage: run_experiments COMMAND [options]
 
@@ -405,7 +407,6 @@ int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   std::fprintf(stderr, "%s: %zu job(s) without a result (no rows for them):\n",
                a.allow_missing ? "warning" : "error", s.missing_jobs.size());
   // A few by name; a long list is in index.md.
-  constexpr std::size_t kListedAtMost = 10;
   for (std::size_t i = 0; i < s.missing_jobs.size() && i < kListedAtMost; ++i)
     std::fprintf(stderr, "  %s\n", s.missing_jobs[i].c_str());
   if (s.missing_jobs.size() > kListedAtMost)
@@ -455,7 +456,7 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   }();
   // Which tables the plan's jobs fill: a subset (--presets, --cases, --seeds, --methods) may
   // hold none of a table's source jobs, and then the table has no rows by design.
-  const std::string first_seed = "_s" + std::to_string(config.seeds.front());
+  const int first_seed = config.seeds.front();
   std::set<std::string> heuristic_cases, fit_cases;
   bool fills_optimizers = false, fills_sensitivity = false, fills_recovery = false;
   for (const JobSpec& job : plan.jobs) {
@@ -464,8 +465,9 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     if (tag == "fit_scales_ceres") fit_cases.insert(job.case_id);
     fills_recovery |= tag != "truth";
     for (const std::string& preset : config.optimizer_presets)
-      fills_optimizers |= job.case_id == preset + first_seed && tag.rfind("fit_scales_", 0) == 0;
-    fills_sensitivity |= job.case_id == config.sensitivity_preset + first_seed &&
+      fills_optimizers |=
+          job.case_id == baseCaseId(preset, first_seed) && tag.rfind("fit_scales_", 0) == 0;
+    fills_sensitivity |= job.case_id == baseCaseId(config.sensitivity_preset, first_seed) &&
                          (tag == "heuristic" || tag == "fit_scales_ceres" || tag == "truth");
   }
   bool fills_acceptance = false;
@@ -512,7 +514,7 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     const std::string tag = methodTag(job);
     bool base_case = false;
     for (const CaseSpec& c : plan.cases) {
-      base_case |= c.id == job.case_id && c.id == c.preset + "_s" + std::to_string(c.seed);
+      base_case |= c.id == job.case_id && c.id == baseCaseId(c.preset, c.seed);
     }
     if (!base_case) continue;
     ++table1_jobs;
@@ -523,7 +525,6 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     }
     if (!found) without_row.push_back(job.id);
   }
-  constexpr std::size_t kListedAtMost = 8;
   if (without_row.size() <= kListedAtMost) {
     for (const std::string& id : without_row)
       problems.push_back("table1.csv: no row with an AvgD for job " + id);

@@ -107,9 +107,7 @@ double tracingLeafletAgreement(const ValveMesh& mesh, const std::vector<Tracing>
 
 // For a file whose points fit once x and y are negated: the question to ask.
 std::string frameHint(const Curve& curve) {
-  return std::string(" (with x and y negated the points fit: ") +
-         (curve.read_as_ras ? "the file was read as RAS; is it in LPS? " : "is the file in RAS? ") +
-         curve.other_frame_syntax + ")";
+  return " (with x and y negated the points fit: " + otherFrameQuestion(&curve) + ")";
 }
 
 int fail(const std::string& file, const std::string& what) {
