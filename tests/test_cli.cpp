@@ -22,6 +22,14 @@ using testing::TempDir;
 
 using testing::quoted;
 
+// A mistyped option is an unexpected argument to CLI11; the message names the option meant.
+TEST(Cli, AMistypedOptionSuggestsTheOptionMeant) {
+  const auto r = testing::runChordfit("simulate " + testing::quoted(testing::TempDir().path()) +
+                                      " --thread 2 --out x");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("  --thread: did you mean \"--threads\"?"), std::string::npos) << r.err;
+}
+
 // --version names the revision the binary was built from (cmake/write_revision.cmake): the
 // benchmark records it with every job.
 TEST(Cli, VersionNamesTheSourceRevision) {

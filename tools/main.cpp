@@ -1,5 +1,6 @@
 // chordfit: command-line entry. The only translation unit that includes CLI11 (slow headers);
 // it fills the option structs of commands.h and dispatches.
+#include <algorithm>
 #include <csignal>
 #include <exception>
 #include <filesystem>
@@ -10,6 +11,7 @@
 #include <unistd.h>
 #include <CLI/CLI.hpp>
 
+#include "core/json_fields.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/revision.h"
@@ -373,6 +375,19 @@ int main(int argc, char** argv) {
     const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
     std::cerr << "error: " << (command.empty() ? "" : command + ": ") << e.what() << " (chordfit "
               << (command.empty() ? "" : command + " ") << "--help)\n";
+    // A mistyped option ("--max-sim") is an unexpected argument to CLI11: name the option meant.
+    if (!command.empty() && dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr) {
+      std::vector<std::string> known;
+      for (const CLI::Option* option : app.get_subcommand(command)->get_options())
+        for (const std::string& name : option->get_lnames()) known.push_back("--" + name);
+      for (int i = 2; i < argc; ++i) {
+        const std::string arg = argv[i];
+        if (arg.rfind("--", 0) != 0 || std::find(known.begin(), known.end(), arg) != known.end())
+          continue;
+        const std::string hint = chordfit::typoSuggestion(arg, known);
+        if (!hint.empty()) std::cerr << "  " << arg << ": " << hint.substr(2) << "\n";
+      }
+    }
     return kExitBadInput;
   }
   // Before any work: an output place that cannot be written is a usage error (exit 2). A
