@@ -1,5 +1,6 @@
 // The chordfit program end to end: the foundation pipeline (make-valve -> validate ->
 // heuristic -> metrics), the documented example case, and usage errors.
+#include <algorithm>
 #include <cmath>
 #include <optional>
 #include <regex>
@@ -210,6 +211,21 @@ TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
                        quoted(dir / "annulus.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(runChordfit("validate " + quoted(dir / "case")).exit_code, 0);
+  // The valve's annulus is the given 26 x 32 mm saddle, not the default 28 x 35 mm ellipse:
+  // every ring vertex within half a millimetre of the polyline.
+  Diagnostics diagnostics;
+  const std::optional<ValveCase> made = loadCase(dir / "case", diagnostics);
+  ASSERT_TRUE(made.has_value());
+  for (Eigen::Index k = 0; k < made->mesh.annulus.size(); ++k) {
+    const Eigen::RowVector3d v = made->mesh.V.row(made->mesh.annulus(k));
+    double nearest = INFINITY;
+    for (Eigen::Index i = 0; i < ring.rows(); ++i) {
+      const Eigen::RowVector3d a = ring.row(i), b = ring.row((i + 1) % ring.rows());
+      const double t = std::clamp((v - a).dot(b - a) / (b - a).squaredNorm(), 0.0, 1.0);
+      nearest = std::min(nearest, (v - (a + t * (b - a))).norm());
+    }
+    EXPECT_LT(nearest, 0.5) << "ring vertex " << k;
+  }
 }
 
 // make-valve into a directory holding a case used to replace case.json and leave the earlier

@@ -5,9 +5,9 @@
 // the fraction.
 #include <gtest/gtest.h>
 
+#include "core/closure_model.h"
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
-#include "core/closure_model.h"
 
 namespace chordfit {
 namespace {

@@ -3,8 +3,8 @@
 // insertions at their points and spread over the insertion patch.
 #include <gtest/gtest.h>
 
-#include "core/cord_insertion.h"
 #include "core/closure_model.h"
+#include "core/cord_insertion.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

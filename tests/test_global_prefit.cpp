@@ -7,8 +7,8 @@
 #include <cmath>
 #include <filesystem>
 
-#include "core/metrics.h"
 #include "core/closure_model.h"
+#include "core/metrics.h"
 #include "inverse/global_prefit.h"
 #include "tests/test_support.h"
 

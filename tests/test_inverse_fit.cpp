@@ -187,6 +187,12 @@ TEST(InverseFit, EveryOptimizerRunsThroughTheCommonInterfaceWithinItsBudget) {
     EXPECT_GE(fit.history.size(), 2u) << name << ": no iteration recorded";
     EXPECT_LE(fit.final_evaluation.cost, fit.seed_evaluation.cost) << name;
     EXPECT_FALSE(fit.termination.empty()) << name;
+    // Every optimiser keeps the seed's locked cords bit for bit.
+    for (std::size_t c = 0; c < p.base.cords.size(); ++c) {
+      if (!p.base.cords[c].locked) continue;
+      EXPECT_EQ(fit.fitted.cords[c].rest_length, p.base.cords[c].rest_length) << name << " " << c;
+      EXPECT_TRUE(fit.fitted.cords[c].locked) << name << " " << c;
+    }
   }
 }
 

@@ -3,8 +3,8 @@
 // default drag, and leave a closure that settles earlier bit-identical.
 #include <gtest/gtest.h>
 
-#include "core/cohort_presets.h"
 #include "core/closure_model.h"
+#include "core/cohort_presets.h"
 #include "core/synthetic_case.h"
 #include "tests/test_support.h"
 

@@ -8,9 +8,9 @@
 
 #include <filesystem>
 
+#include "core/closure_model.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "core/synthetic_case.h"
 #include "tests/test_support.h"
 

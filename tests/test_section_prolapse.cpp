@@ -8,8 +8,8 @@
 #include <Eigen/Geometry>
 
 #include "core/case_io.h"
-#include "core/metrics.h"
 #include "core/closure_model.h"
+#include "core/metrics.h"
 #include "tests/test_support.h"
 
 namespace chordfit {

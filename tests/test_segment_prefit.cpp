@@ -5,9 +5,9 @@
 
 #include <filesystem>
 
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "inverse/global_prefit.h"
 #include "inverse/segment_prefit.h"
 #include "tests/test_support.h"

@@ -176,6 +176,7 @@ TEST_F(SimulateCommand, IsDeterministicByteForByteWithOneOrTwoThreads) {
             testing::readText(dir_ / "b" / "closed.vtk"));
   const auto metrics = nlohmann::json::parse(testing::readText(dir_ / "b" / "metrics.json"));
   EXPECT_EQ(metrics["threads"].get<int>(), 2);
+  EXPECT_FALSE(metrics["threads_gave_up"].get<bool>()) << "two threads that fell back to one";
 }
 
 TEST_F(SimulateCommand, RejectsAThreadCountOutOfRange) {

@@ -4,9 +4,9 @@
 // be checked against runs capped at each of the averaged steps.
 #include <gtest/gtest.h>
 
+#include "core/closure_model.h"
 #include "core/heuristic.h"
 #include "core/parametric_valve.h"
-#include "core/closure_model.h"
 
 namespace chordfit {
 namespace {

@@ -17,12 +17,12 @@
 
 #include "core/annulus_plane.h"
 #include "core/cgal_backend.h"
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/cord_attachments.h"
 #include "core/heuristic.h"
 #include "core/metrics.h"
 #include "core/parametric_valve.h"
-#include "core/closure_model.h"
 
 namespace chordfit {
 namespace {

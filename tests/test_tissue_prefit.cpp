@@ -7,9 +7,9 @@
 #include <filesystem>
 
 #include "core/case_io.h"
+#include "core/closure_model.h"
 #include "core/cohort_presets.h"
 #include "core/metrics.h"
-#include "core/closure_model.h"
 #include "inverse/global_prefit.h"
 #include "inverse/tissue_prefit.h"
 #include "tests/test_support.h"
