@@ -434,6 +434,21 @@ TEST(FitCommand, GivesTheSameFilesWithOneOrTwoThreads) {
   EXPECT_EQ(rows(one), rows(two));
 }
 
+// A seed whose closure diverges (settings inside their ranges can still break a run) is a
+// simulation failure: exit 3, nothing written.
+TEST(FitCommand, ADivergingSeedClosureExitsWith3AndWritesNothing) {
+  TempDir dir;
+  std::filesystem::copy(smallCase(), dir / "case", std::filesystem::copy_options::recursive);
+  auto c = nlohmann::json::parse(testing::readText(dir / "case" / "case.json"));
+  c["simulation"] = nlohmann::json::parse(testing::kDivergingSimulationJson);
+  testing::writeText(dir / "case" / "case.json", c.dump());
+  const auto r = runChordfit("fit " + quoted(dir / "case") + " --max-sims 20 --quiet --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("seed closure failed: simulation diverged"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
 // The pre-fit's budget check counts the closures its common stage runs: the seed, 8 grid
 // factors (1 is the seed's), 4 refinements and one closure left for the optimiser fit in 14.
 TEST(FitCommand, ACommonPrefitThatJustFitsTheBudgetRuns) {
