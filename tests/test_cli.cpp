@@ -228,6 +228,14 @@ TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
   }
 }
 
+// A make-case case (normal-1, coarse, two planes) in `case_dir`: a directory holding an earlier
+// chordfit case, its truth included.
+void makeCoarseCase(const std::filesystem::path& case_dir) {
+  const auto r = runChordfit("make-case --preset normal-1 --edge 3.0 --planes 2 --quiet --out " +
+                             quoted(case_dir));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
 // make-valve into a directory holding a case used to replace case.json and leave the earlier
 // case's tracings, cords and truth beside it, describing another valve. Now it publishes as
 // every command does: the files an earlier chordfit run wrote there and the new case lacks go,
@@ -235,12 +243,10 @@ TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
 TEST(ChordfitCli, MakeValveOverAnEarlierCaseRemovesWhatTheNewCaseLacksAndKeepsTheUsersFiles) {
   TempDir dir;
   const auto case_dir = dir / "case";
-  auto r = runChordfit("make-case --preset normal-1 --edge 3.0 --planes 2 --quiet --out " +
-                       quoted(case_dir));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_NO_FATAL_FAILURE(makeCoarseCase(case_dir));
   ASSERT_TRUE(std::filesystem::exists(case_dir / "truth" / "case" / "case.json"));
-  r = runChordfit("heuristic " + quoted(case_dir) + " --out " +
-                  quoted(case_dir / "heuristic_cords.json"));
+  auto r = runChordfit("heuristic " + quoted(case_dir) + " --out " +
+                       quoted(case_dir / "heuristic_cords.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   testing::writeText(case_dir / "notes.txt", "the user's");
 
@@ -265,11 +271,9 @@ TEST(ChordfitCli, MakeValveOverAnEarlierCaseRemovesWhatTheNewCaseLacksAndKeepsTh
 TEST(ChordfitCli, MakeValveKeepsACordSetTheUserWroteOverTheCasesOwn) {
   TempDir dir;
   const auto case_dir = dir / "case";
-  auto r = runChordfit("make-case --preset normal-1 --edge 3.0 --planes 2 --quiet --out " +
-                       quoted(case_dir));
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  r = runChordfit("heuristic " + quoted(case_dir) + " --primary-spacing 5 --out " +
-                  quoted(case_dir / "cords.json"));
+  ASSERT_NO_FATAL_FAILURE(makeCoarseCase(case_dir));
+  auto r = runChordfit("heuristic " + quoted(case_dir) + " --primary-spacing 5 --out " +
+                       quoted(case_dir / "cords.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string users = testing::readText(case_dir / "cords.json");
   r = runChordfit("make-valve --edge 3.0 --out " + quoted(case_dir));

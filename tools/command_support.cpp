@@ -109,7 +109,7 @@ std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
 }  // namespace
 
 std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
-                                                       const std::string& case_dir,
+                                                       const std::string& case_dir, SettingsUse use,
                                                        const char* command,
                                                        const std::vector<std::string>& overrides) {
   // Named inside the case, under a "case DIR: N problem(s)" line, as loadCaseOrReport does.
@@ -140,8 +140,7 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   settings.phase = ClosurePhase::kClose;
   // metrics reads the settings (the leaflets' thickness) but runs no closure: the step cap is
   // not its business.
-  const bool closes = std::string(command) != "metrics";
-  if (diagnostics.ok() && closes) {
+  if (diagnostics.ok() && use != SettingsUse::kMeasure) {
     const std::string problem = stepCapProblem(valve_case, settings);
     // Named after the case, unless the case's own settings pass and the overrides broke them
     // (checked only then: each check builds the closure's model).
@@ -163,8 +162,7 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   // cords at 200 mmHg closed with P2 under the anterior leaflet with the 10 ms ramp and with a
   // P2 flap with 20 or 40 ms (175 mmHg too; 150 mmHg the same with 10 and 40 ms).
   constexpr double kFastestCalibratedMmHgPerMs = 15.0;
-  // Only for a command that runs closures now (validate passes no command and takes no --set).
-  if (closes && *command != '\0' && settings.ramp_ms > 0.0 &&
+  if (use == SettingsUse::kClose && settings.ramp_ms > 0.0 &&
       settings.pressure_mmhg / settings.ramp_ms > kFastestCalibratedMmHgPerMs)
     std::fprintf(stderr,
                  "note: %s: %g mmHg over a %g ms ramp loads the valve at %.0f mmHg/ms, faster "

@@ -30,11 +30,17 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
 // command line's `overrides` ("KEY=VALUE": a key of that block and a number, true or false;
 // `--set`), which are also written into valve_case.simulation_json so that everything reading
 // the case's settings later sees them; phase kClose. On unknown keys, wrong types,
-// out-of-range values or a pressure ramp longer than the step cap (not checked for
-// "metrics", which runs no closure) prints the problems, naming CASE_DIR/case.json or
-// "<command>: --set", and returns nullopt.
+// out-of-range values or a pressure ramp longer than the step cap (not checked when `use` is
+// kMeasure) prints the problems under "case CASE_DIR: N problem(s)", naming case.json or
+// "<command>: --set", and returns nullopt. With kClose it also notes a pressure loaded faster
+// than the ramp was calibrated for.
+enum class SettingsUse {
+  kCheck,    // validate: every check, no closure run now
+  kMeasure,  // metrics: reads the settings (the leaflets' thickness), runs no closure
+  kClose,    // simulate, sweep-cord, fit, compare: closures run now
+};
 std::optional<SimulationSettings> caseSettingsOrReport(
-    ValveCase& valve_case, const std::string& case_dir, const char* command = "",
+    ValveCase& valve_case, const std::string& case_dir, SettingsUse use, const char* command = "",
     const std::vector<std::string>& overrides = {});
 
 // Each (option, value) must be a finite number > 0; the first that is not gets

@@ -269,8 +269,8 @@ int runCompare(const CompareOptions& options) {
 
   auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
-  const auto case_settings =
-      caseSettingsOrReport(*valve_case, options.case_dir, "compare", options.settings_overrides);
+  const auto case_settings = caseSettingsOrReport(
+      *valve_case, options.case_dir, SettingsUse::kClose, "compare", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 

@@ -121,8 +121,8 @@ int runFit(const FitCommandOptions& o) {
               << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
     return kExitBadInput;
   }
-  const auto case_settings =
-      caseSettingsOrReport(*valve_case, o.case_dir, "fit", o.settings_overrides);
+  const auto case_settings = caseSettingsOrReport(*valve_case, o.case_dir, SettingsUse::kClose,
+                                                  "fit", o.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 

@@ -41,6 +41,11 @@ std::string percent(double fraction) {
   return std::to_string(static_cast<int>(std::lround(100.0 * fraction))) + " %";
 }
 
+// The landmarks in rows `al`, `pm`, `anterior` of `points` (the file's order is 0, 1, 2).
+ImportLandmarks landmarksOfRows(const Eigen::MatrixXd& points, int al, int pm, int anterior) {
+  return {points.row(al).transpose(), points.row(pm).transpose(), points.row(anterior).transpose()};
+}
+
 // For an implausible anterior share: another order of the three landmarks under which it is
 // plausible, in words, or "" (then the valve may just be unusual, or a point misplaced, and the
 // import only warns).
@@ -49,11 +54,8 @@ std::string landmarkOrderProblem(const Eigen::MatrixXd& V, const Eigen::MatrixXi
                                  const Eigen::MatrixXd& points) {
   for (int anterior : {0, 1}) {
     const int first = anterior == 0 ? 1 : 0;  // the other two, in the file's order
-    ImportLandmarks l;
-    l.anterolateral = points.row(first).transpose();
-    l.posteromedial = points.row(2).transpose();
-    l.anterior = points.row(anterior).transpose();
-    const ImportedCase other = importValveCase(V, F, l, Eigen::MatrixXd(), "probe");
+    const ImportedCase other = importValveCase(V, F, landmarksOfRows(points, first, 2, anterior),
+                                               Eigen::MatrixXd(), "probe");
     if (other.ok() && plausibleAnteriorFraction(other.anterior_fraction)) {
       return "with point " + std::to_string(anterior + 1) + " as the anterior point it is " +
              percent(other.anterior_fraction) +
@@ -215,10 +217,7 @@ int runImportMesh(const ImportMeshOptions& options) {
                 "of the anterior annulus), got " +
                     std::to_string(landmarks.points.rows()));
   }
-  ImportLandmarks l;
-  l.anterolateral = landmarks.points.row(0).transpose();
-  l.posteromedial = landmarks.points.row(1).transpose();
-  l.anterior = landmarks.points.row(2).transpose();
+  const ImportLandmarks l = landmarksOfRows(landmarks.points, 0, 1, 2);
   // The default name: the output directory's own, also when given as "dir/" or ".".
   fs::path named = fs::absolute(out).lexically_normal();
   if (named.filename().empty()) named = named.parent_path();
@@ -232,9 +231,9 @@ int runImportMesh(const ImportMeshOptions& options) {
       return points;
     };
     if (imported.error_input == ImportInput::kLandmarks) {
-      const Eigen::MatrixXd p = turned(landmarks.points);
-      const ImportLandmarks t{p.row(0).transpose(), p.row(1).transpose(), p.row(2).transpose()};
-      if (importValveCase(V, F, t, Eigen::MatrixXd(), name).ok())
+      if (importValveCase(V, F, landmarksOfRows(turned(landmarks.points), 0, 1, 2),
+                          Eigen::MatrixXd(), name)
+              .ok())
         imported.error += frameHint(landmarks);
     } else if (imported.error_input == ImportInput::kClosedAnnulus &&
                importValveCase(V, F, l, turned(closed.points), name).ok()) {
@@ -294,15 +293,16 @@ int runImportMesh(const ImportMeshOptions& options) {
   }
   if (!plausibleAnteriorFraction(imported.anterior_fraction)) {
     const double other = 1.0 - imported.anterior_fraction;
+    const std::string cause =
+        plausibleAnteriorFraction(other)
+            ? ": point 3 may lie on the posterior annulus, or a commissure be misplaced (the "
+              "other arc is " +
+                  percent(other) + ")"
+            : "";
     std::printf(
         "warning: the anterior annulus is usually about a third of the circumference; check "
         "the landmarks (anterolateral, posteromedial, anterior)%s\n",
-        plausibleAnteriorFraction(other)
-            ? (": point 3 may lie on the posterior annulus, or a commissure be misplaced (the "
-               "other arc is " +
-               percent(other) + ")")
-                  .c_str()
-            : "");
+        cause.c_str());
   }
 
   if (const double agreement = tracingLeafletAgreement(c.mesh, c.tracings);

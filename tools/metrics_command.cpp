@@ -18,7 +18,8 @@ int runMetrics(const MetricsOptions& options) {
   if (!valve_case) return kExitBadInput;
   // The settings give the leaflets' thickness for the orifice coverage: a bad block is refused
   // here as by the commands that simulate.
-  if (!caseSettingsOrReport(*valve_case, options.case_dir, "metrics")) return kExitBadInput;
+  if (!caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kMeasure, "metrics"))
+    return kExitBadInput;
   Diagnostics diagnostics;
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;

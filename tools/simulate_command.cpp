@@ -108,8 +108,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
-  auto case_settings =
-      caseSettingsOrReport(*valve_case, options.case_dir, "simulate", options.settings_overrides);
+  auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kClose,
+                                            "simulate", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   SimulationSettings& settings = *case_settings;
   settings.threads = options.threads;

@@ -181,8 +181,8 @@ int runSweepCord(const SweepCordOptions& options) {
               << " cords" << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
     return kExitBadInput;
   }
-  const auto case_settings =
-      caseSettingsOrReport(*valve_case, options.case_dir, "sweep-cord", options.settings_overrides);
+  const auto case_settings = caseSettingsOrReport(
+      *valve_case, options.case_dir, SettingsUse::kClose, "sweep-cord", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
