@@ -69,8 +69,10 @@ class RegularisationCost : public ceres::CostFunction {
 
 class ProgressAndBudget : public ceres::IterationCallback {
  public:
-  ProgressAndBudget(FitObjective& objective, const std::vector<double>& x)
-      : objective_(objective), x_(x) {}
+  // warm_rejections: rejected steps in a row after which a solve on warm-started differences
+  // stops so the driver can go on with full closures (0: never).
+  ProgressAndBudget(FitObjective& objective, const std::vector<double>& x, int warm_rejections)
+      : objective_(objective), x_(x), warm_rejections_(warm_rejections) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     // After a rejected step x stays where it was, but Ceres reports the trial point's cost
     // (measured: costs above the best with one closure each); the trial is the closure run
@@ -92,13 +94,30 @@ class ProgressAndBudget : public ceres::IterationCallback {
       budget_reached = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
+    // Iteration 0 is the start, not a step.
+    rejected_in_a_row_ =
+        summary.iteration == 0 || summary.step_is_successful ? 0 : rejected_in_a_row_ + 1;
+    if (warm_rejections_ > 0 && objective_.warmDifferences() &&
+        rejected_in_a_row_ >= warm_rejections_) {
+      warm_distrusted = true;
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
     return ceres::SOLVER_CONTINUE;
   }
   bool budget_reached = false;
+  bool warm_distrusted = false;  // stopped for rejected steps on warm-started differences
 
  private:
   FitObjective& objective_;
   const std::vector<double>& x_;  // Ceres updates it every iteration
+  int warm_rejections_;
+  int rejected_in_a_row_ = 0;
+};
+
+// One Levenberg-Marquardt solve from the objective's start point.
+struct SolveResult {
+  Termination termination;
+  bool warm_distrusted = false;
 };
 
 }  // namespace
@@ -115,23 +134,23 @@ void quietCeresLogging() {
   });
 }
 
-Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
-  quietCeresLogging();
+namespace {
+
+SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& settings) {
   const ForwardResidual& residual = objective.residual();
   const FitParameterization& parameters = residual.parameters();
   const int n = parameters.size();
-  if (n == 0) return {"nothing to fit (every cord is locked)"};
-  std::vector<double> x(parameters.initial().data(), parameters.initial().data() + n);
-  const bool start_known = objective.cached(parameters.initial()) != nullptr;
+  const Eigen::VectorXd& start = objective.startPoint();
+  std::vector<double> x(start.data(), start.data() + n);
+  const bool start_known = objective.cached(start) != nullptr;
   // The start's closure, its Jacobian and one trial step: less cannot move x.
-  const int first_step_sims =
-      (start_known ? 0 : 1) + objective.jacobianSims(parameters.initial()) + 1;
+  const int first_step_sims = (start_known ? 0 : 1) + objective.jacobianSims(start) + 1;
   if (!objective.budgetAllows(first_step_sims)) {
-    return {"budget of " + std::to_string(objective.maxSims()) +
-                " forward runs is below one Jacobian and a step (" +
-                std::to_string(first_step_sims) + " runs, " +
-                std::to_string(objective.maxSims() - objective.forwardSims()) + " left)",
-            true};
+    return {{"budget of " + std::to_string(objective.maxSims()) +
+                 " forward runs is below one Jacobian and a step (" +
+                 std::to_string(first_step_sims) + " runs, " +
+                 std::to_string(objective.maxSims() - objective.forwardSims()) + " left)",
+             true}};
   }
 
   ceres::Problem problem;
@@ -171,7 +190,7 @@ Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   // With bounds Ceres by default runs a line search along the projected step, which asks for
   // Jacobians (2P closures each) at trial points; one Jacobian per accepted step is enough.
   options.max_num_line_search_step_size_iterations = 0;
-  ProgressAndBudget callback(objective, x);
+  ProgressAndBudget callback(objective, x, settings.warm_rejections_before_full);
   options.callbacks.push_back(&callback);
 
   ceres::Solver::Summary summary;
@@ -188,18 +207,42 @@ Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
                               objective.best()->cost, objective.best()->mean_deviation_mm);
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
-    return {"budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
-                (refused > 0
-                     ? " (the Jacobian at the last accepted step needs " + std::to_string(refused) +
-                           " runs, " +
-                           std::to_string(objective.maxSims() - objective.forwardSims()) + " left)"
-                     : std::string()),
+    return {{"budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
+                 (refused > 0
+                      ? " (the Jacobian at the last accepted step needs " +
+                            std::to_string(refused) + " runs, " +
+                            std::to_string(objective.maxSims() - objective.forwardSims()) + " left)"
+                      : std::string()),
+             true}};
+  }
+  if (callback.warm_distrusted) {
+    return {{std::to_string(settings.warm_rejections_before_full) +
+             " steps in a row rejected on warm-started differences"},
             true};
   }
-  return {std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
-                      : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "
-                                                                          : "stopped: ") +
-          summary.message};
+  return {{std::string(summary.termination_type == ceres::CONVERGENCE      ? "converged: "
+                       : summary.termination_type == ceres::NO_CONVERGENCE ? "not converged: "
+                                                                           : "stopped: ") +
+           summary.message}};
+}
+
+}  // namespace
+
+Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettings& settings) {
+  quietCeresLogging();
+  if (objective.parameterCount() == 0) return {"nothing to fit (every cord is locked)"};
+  SolveResult solve = solveFromStart(objective, settings);
+  if (!solve.warm_distrusted) return solve.termination;
+  // The warm-started Jacobian mispredicted step after step: go on from the best point with
+  // full-closure differences, recorded as their own stage.
+  objective.useFullClosureDifferences();
+  objective.restartAt(objective.best()->x);
+  objective.setStageLabel(name() + "-full");
+  SolveResult full = solveFromStart(objective, settings);
+  objective.setStageLabel("");
+  full.termination.message = solve.termination.message +
+                             "; full closures from the best point: " + full.termination.message;
+  return full.termination;
 }
 
 }  // namespace chordfit::inverse

@@ -15,6 +15,7 @@ FitObjective::FitObjective(const ForwardResidual& residual, const FiniteDifferen
                            std::function<void(const IterationRecord&)> on_iteration)
     : residual_(residual),
       fd_(fd),
+      start_x_(residual.parameters().initial()),
       max_sims_(max_sims),
       sims_(sims_before),
       start_(start),
@@ -82,6 +83,11 @@ int FitObjective::jacobianSims(const Eigen::VectorXd& x) {
   return 2 * static_cast<int>(std::count(slack.begin(), slack.end(), false));
 }
 
+void FitObjective::useFullClosureDifferences() {
+  fd_.warm_start = false;
+  for (Entry& entry : cache_) entry.jacobian = nullptr;
+}
+
 void FitObjective::remember(const ForwardEvaluation& evaluation) {
   auto shared = std::make_shared<const ForwardEvaluation>(evaluation);
   if (shared->ok() && (!best_ || shared->cost < best_->cost)) best_ = shared;
@@ -102,7 +108,7 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::cachedJacobian(const Eigen:
 void FitObjective::recordIteration(const std::string& stage, int iteration, double cost,
                                    double mean_deviation_mm) {
   IterationRecord record;
-  record.stage = stage;
+  record.stage = stage_label_.empty() ? stage : stage_label_;
   record.iteration = iteration;
   record.cost = cost;
   record.best_cost = best_ ? best_->cost : cost;

@@ -45,6 +45,16 @@ class FitObjective {
 
   const ForwardResidual& residual() const { return residual_; }
   int parameterCount() const { return residual_.parameters().size(); }
+  // Where a driver starts: the parameterisation's initial point, or the point restartAt gave.
+  // The regularisation's prior stays at the initial point either way.
+  const Eigen::VectorXd& startPoint() const { return start_x_; }
+  void restartAt(const Eigen::VectorXd& x) { start_x_ = x; }
+  // From now on, Jacobians come from full closures (no warm start); those computed warm are
+  // forgotten. The fit's finish after a warm-started solve (fit_cords.cpp).
+  void useFullClosureDifferences();
+  bool warmDifferences() const { return fd_.warm_start; }
+  // The stage name history records carry instead of the driver's own (empty: the driver's).
+  void setStageLabel(std::string label) { stage_label_ = std::move(label); }
 
   // Full closure at x (cached). Counts one forward run when not cached. Failed closures are
   // returned with error set and never become the best.
@@ -93,6 +103,8 @@ class FitObjective {
 
   const ForwardResidual& residual_;
   FiniteDifferenceOptions fd_;
+  Eigen::VectorXd start_x_;
+  std::string stage_label_;
   int max_sims_;
   int sims_;
   bool budget_refused_ = false;

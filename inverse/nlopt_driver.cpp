@@ -69,12 +69,12 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
   CallbackState state;
   state.objective = &objective;
   state.stage = algorithm_;
-  if (const auto start = objective.evaluate(parameters.initial()); start->ok()) {
+  if (const auto start = objective.evaluate(objective.startPoint()); start->ok()) {
     state.failure_cost = std::max(1e6, 100.0 * start->cost);
   }
   opt.set_min_objective(cost, &state);
 
-  std::vector<double> x = toStd(parameters.initial());
+  std::vector<double> x = toStd(objective.startPoint());
   double value = 0.0;
   std::string message;
   bool budget_spent = false;

@@ -30,6 +30,11 @@ struct OptimizerSettings {
   double initial_tip_step_mm = 1.0;
   std::uint32_t random_seed = 1;             // crs2: same seed => same run
   double initial_trust_region_radius = 1.0;  // ceres (Levenberg-Marquardt: 1 / initial mu)
+  // ceres with warm-started differences: after this many rejected steps in a row, the solve
+  // goes on from its best point with full-closure differences (0: never). A rejected step is
+  // a Jacobian that mispredicted the cost; a warm-started perturbation that settled on
+  // another branch than the full closure is the usual cause (ceres_driver.h).
+  int warm_rejections_before_full = 2;
 };
 
 // How a driver's run ended. `budget_spent`: it stopped because --max-sims allowed no further
