@@ -322,22 +322,41 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   return m;
 }
 
-std::string table1Header() {
-  return "| Case | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | Prolapse "
+std::string table1Header(const std::string& first_column) {
+  return "| " + first_column +
+         " | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | Prolapse "
          "Recon. |\n|---|---:|---:|---:|---:|---:|---|\n";
 }
 
+namespace {
+
+std::string segmentList(const std::vector<std::string>& segments) {
+  if (segments.empty()) return "none";
+  std::string joined;
+  for (const std::string& name : segments) joined += (joined.empty() ? "" : ", ") + name;
+  return joined;
+}
+
+// "Yes (P2)": a bare Yes on a normal valve read as "it prolapses".
+std::string reconstructedCell(const ValveMetrics& m) {
+  if (m.prolapse_reconstructed) return "Yes (" + segmentList(m.section_prolapse.segments) + ")";
+  return "No (" + segmentList(m.section_prolapse.segments) + "; tracings " +
+         segmentList(m.tracing_prolapse.segments) + ")";
+}
+
+}  // namespace
+
 std::string table1Row(const std::string& label, const ValveMetrics& m) {
-  char buffer[256];
+  // The numbers only through snprintf: a label or segment list has no length limit.
+  char numbers[160];
   if (m.has_tracings) {
-    std::snprintf(buffer, sizeof buffer, "| %s | %.0f | %.2f | %.2f | %.2f | %.2f ± %.2f | %s |\n",
-                  label.c_str(), m.area_mm2, m.deviation.min, m.deviation.median, m.deviation.max,
-                  m.deviation.mean, m.deviation.sd, m.prolapse_reconstructed ? "Yes" : "No");
-  } else {
-    std::snprintf(buffer, sizeof buffer, "| %s | %.0f | – | – | – | – | – (no tracings) |\n",
-                  label.c_str(), m.area_mm2);
+    std::snprintf(numbers, sizeof numbers, "%.0f | %.2f | %.2f | %.2f | %.2f ± %.2f", m.area_mm2,
+                  m.deviation.min, m.deviation.median, m.deviation.max, m.deviation.mean,
+                  m.deviation.sd);
+    return "| " + label + " | " + numbers + " | " + reconstructedCell(m) + " |\n";
   }
-  return buffer;
+  std::snprintf(numbers, sizeof numbers, "%.0f", m.area_mm2);
+  return "| " + label + " | " + numbers + " | – | – | – | – | – (no tracings) |\n";
 }
 
 }  // namespace chordfit

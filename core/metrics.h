@@ -144,7 +144,10 @@ struct ValveMetrics {
 ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V);
 
 // The paper's Table 1 as Markdown: header, separator, and one row per labelled result.
-std::string table1Header();
+// first_column names what the rows are (a case, or the cord sets closed on one case). The
+// last column says whether the closed mesh's planes prolapse where the tracings do, and
+// where: "Yes (P2)", "Yes (none)", "No (P1, P2; tracings P2)".
+std::string table1Header(const std::string& first_column = "Case");
 std::string table1Row(const std::string& label, const ValveMetrics& metrics);
 
 }  // namespace chordfit

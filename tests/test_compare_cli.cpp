@@ -61,7 +61,7 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
       runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") + " " +
                   quoted(*dir_ / "loose.json") + " --labels heuristic,loose --out " + quoted(out));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("| Case | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | "
+  EXPECT_NE(r.out.find("| Cord set | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | "
                        "Prolapse Recon. |"),
             std::string::npos)
       << r.out;
@@ -150,6 +150,34 @@ TEST_F(CompareCommand, MeasuresEachCordSetAgainstTheCasesTruth) {
   EXPECT_NE(readText(out / "compare.md").find("Against the case's truth"), std::string::npos);
   // The case's cords keep the heuristic's tips: their offset is said to be the heuristic's.
   EXPECT_EQ(testing::occurrences(r.out, "(the heuristic's, not moved)"), 1u) << r.out;
+  // The truth's own AvgD, the noise floor, for context.
+  const auto truth_metrics = nlohmann::json::parse(readText(caseDir() / "truth" / "metrics.json"));
+  char floor[64];
+  std::snprintf(floor, sizeof floor, "reach AvgD %.2f mm", truth_metrics["mean_mm"].get<double>());
+  EXPECT_NE(r.out.find(floor), std::string::npos) << r.out;
+
+  // Per cord and set: its length and signed error against the truth, in cords.csv and as a
+  // side-by-side table in compare.md.
+  const auto cord_rows = csvRows(readText(out / "cords.csv"));
+  const std::size_t n = cords["cords"].size();
+  ASSERT_EQ(cord_rows.size(), 1 + 2 * n);
+  EXPECT_EQ(cord_rows[0][9], "error_pct");
+  const nlohmann::json heuristic = nlohmann::json::parse(readText(caseDir() / "cords.json"));
+  for (std::size_t i = 0; i < n; ++i) {
+    const auto& h = cord_rows[1 + i];
+    const auto& t = cord_rows[1 + n + i];
+    EXPECT_EQ(h[1], std::to_string(i));
+    const double true_length = truth["cords"][i]["true_rest_length_mm"].get<double>();
+    const double heuristic_length = heuristic["cords"][i]["rest_length_mm"].get<double>();
+    EXPECT_NEAR(std::stod(h[9]), 100.0 * (heuristic_length / true_length - 1.0), 1e-3) << i;
+    EXPECT_EQ(t[9], "0.000") << i;
+    EXPECT_EQ(t[6], "manual") << i;
+  }
+  const std::string md = readText(out / "compare.md");
+  EXPECT_NE(md.find("| Cord | Group | Kind | True (mm) | Taut | heuristic | true |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("(+0.0 %) |\n"), std::string::npos) << md;
 }
 
 TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {
@@ -180,7 +208,8 @@ TEST_F(CompareCommand, RemovesTheFiguresOfCordSetsAnEarlierCompareHadAndKeepsOth
   for (const char* name : {"enface_10.svg", "enface_01.svg", "notes.txt"})
     EXPECT_EQ(readText(out / name), "the user's") << name << ": no run recorded it";
   EXPECT_NE(r.out.find("wrote " + (out / "compare.md").string() +
-                       ", compare.csv, sections.svg, enface_1.svg; removed enface_2.svg"),
+                       ", compare.csv, cords.csv, sections.svg, enface_1.svg; removed "
+                       "enface_2.svg"),
             std::string::npos)
       << r.out;
 }

@@ -175,6 +175,85 @@ std::string compareCsv(const std::vector<ComparedSet>& sets) {
   return csv;
 }
 
+// One row per cord and set (long format, any cord counts): the set's rest length and, on a
+// synthetic case whose truth pairs with the set, the true length and the signed error.
+std::string cordsCsv(const ValveCase& c, const std::vector<ComparedSet>& sets,
+                     const std::optional<CaseTruth>& truth) {
+  std::string csv =
+      "label,cord,group,kind,rest_length_mm,scale,provenance,locked,true_rest_length_mm,"
+      "error_pct,taut_in_truth\n";
+  for (const ComparedSet& s : sets) {
+    const bool paired = s.recovery && s.recovery->problem.empty();
+    for (std::size_t i = 0; i < s.cords.cords.size(); ++i) {
+      const Cord& cord = s.cords.cords[i];
+      csv += csvQuoted(s.label) + "," + std::to_string(i) + "," +
+             groupName(cord, c.mesh.leaflet, c.mesh.leaflet_names, s.cords.tips) + "," +
+             toString(cord.kind) + "," + csvNumber(cord.rest_length) + "," +
+             csvNumber(cord.scale()) + "," + toString(cord.provenance) + "," +
+             (cord.locked ? "yes" : "no") + ",";
+      if (paired) {
+        const TrueCord& t = truth->cords[i];
+        csv += (t.ruptured ? std::string() : csvNumber(t.rest_length_mm)) + "," +
+               finiteCell(s.recovery->signed_error_pct[i], "%.3f") + "," + (t.taut ? "yes" : "no");
+      } else {
+        csv += ",,";
+      }
+      csv += "\n";
+    }
+  }
+  return csv;
+}
+
+// compare.md's per-cord table against the truth: each set's length and signed error, side
+// by side ("manual vs optimised" per cord). Only when every set pairs with the truth.
+std::string perCordTruthTable(const ValveCase& c, const std::vector<ComparedSet>& sets,
+                              const CaseTruth& truth) {
+  for (const ComparedSet& s : sets)
+    if (!s.recovery || !s.recovery->problem.empty()) return "";
+  std::string md =
+      "\nPer cord: each set's rest length (mm) and its error against the true length. Taut: "
+      "under tension in the true closed valve; a cord slack there is bounded by the tracings "
+      "from below only, so its error says little about a fit.\n\n| Cord | Group | Kind | True "
+      "(mm) | Taut |";
+  std::string rule = "|---:|---|---|---:|---|";
+  for (const ComparedSet& s : sets) {
+    md += " " + s.label + " |";
+    rule += "---:|";
+  }
+  md += "\n" + rule + "\n";
+  const CordSet& first = sets.front().cords;
+  for (std::size_t i = 0; i < truth.cords.size(); ++i) {
+    const TrueCord& t = truth.cords[i];
+    char cell[64];
+    std::snprintf(cell, sizeof cell, "%.2f", t.rest_length_mm);
+    md += "| " + std::to_string(i) + " | " +
+          groupName(first.cords[i], c.mesh.leaflet, c.mesh.leaflet_names, first.tips) + " | " +
+          toString(first.cords[i].kind) + " | " + (t.ruptured ? "ruptured" : cell) + " | " +
+          (t.taut ? "yes" : "no") + " |";
+    for (const ComparedSet& s : sets) {
+      const double error = s.recovery->signed_error_pct[i];
+      if (std::isfinite(error))
+        std::snprintf(cell, sizeof cell, " %.2f (%+.1f %%) |", s.cords.cords[i].rest_length, error);
+      else
+        std::snprintf(cell, sizeof cell, " %.2f |", s.cords.cords[i].rest_length);
+      md += cell;
+    }
+    md += "\n";
+  }
+  return md;
+}
+
+// "noise floor ...": what the truth itself reaches against the tracings, or "" when unknown.
+std::string noiseFloorLine(const std::optional<CaseTruth>& truth) {
+  if (!truth || !std::isfinite(truth->noise_floor_mm)) return "";
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "noise floor: the true cords closed on the truth's finer mesh reach AvgD %.2f mm "
+                "(truth/metrics.json); closed on this case's mesh they may not\n",
+                truth->noise_floor_mm);
+  return line;
+}
+
 // "97.9 % (12)": the closed valve's orifice coverage seen en face and its open area.
 std::string coverageCell(const OrificeCoverage& orifice) {
   char text[64];
@@ -184,7 +263,8 @@ std::string coverageCell(const OrificeCoverage& orifice) {
 }
 
 std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& sets,
-                            const std::vector<std::string>& settings_overrides) {
+                            const std::vector<std::string>& settings_overrides,
+                            const std::optional<CaseTruth>& truth) {
   std::string md = "# Cord sets compared on case " + c.name + "\n\n";
   md += "Each cord set closed with the case's solver settings (`chordfit compare`)";
   if (!settings_overrides.empty()) {
@@ -192,8 +272,9 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
     for (const std::string& item : settings_overrides) md += " `" + item + "`";
   }
   md += "; deviations from the tracings in mm.\n\n";
-  md += table1Header();
+  md += table1Header("Cord set");
   for (const ComparedSet& s : sets) md += table1Row(s.label, s.metrics);
+  if (const std::string floor = noiseFloorLine(truth); !floor.empty()) md += "\nThe " + floor;
   md +=
       "\n| Cord set | File | Prolapse (tracings) | Prolapse (mesh, tracing planes) | Prolapse "
       "(mesh tissue) | Orifice covered (open mm²) | Converged (steps) |\n"
@@ -214,6 +295,7 @@ std::string compareMarkdown(const ValveCase& c, const std::vector<ComparedSet>& 
         "distance from its true position.\n\n| Cord set | Rest-length error |\n|---|---|\n";
     for (const ComparedSet& s : sets)
       md += "| " + s.label + " | " + recoveryText(*s.recovery) + " |\n";
+    md += perCordTruthTable(c, sets, *truth);
   }
   return md;
 }
@@ -302,7 +384,8 @@ int runCompare(const CompareOptions& options) {
   }
 
   // A synthetic case (make-case) carries its truth: say how far each set is from it.
-  if (const std::optional<CaseTruth> truth = readCaseTruth(options.case_dir)) {
+  const std::optional<CaseTruth> truth = readCaseTruth(options.case_dir);
+  if (truth) {
     for (ComparedSet& s : sets) s.recovery = recoveryAgainstTruth(s.cords, *truth);
   }
 
@@ -334,13 +417,14 @@ int runCompare(const CompareOptions& options) {
     for (const std::string& item : options.settings_overrides) std::cout << " " << item;
     std::cout << "\n";
   }
-  std::cout << table1Header();
+  std::cout << table1Header("Cord set");
   for (const ComparedSet& s : sets) std::cout << table1Row(s.label, s.metrics);
   if (valve_case->tracings.empty()) {
     std::cout << "(the case has no tracings: no deviation and no prolapse comparison)\n";
   } else {
     std::cout << "prolapse (tracings): "
-              << joinSegments(sets.front().metrics.tracing_prolapse.segments) << "\n";
+              << joinSegments(sets.front().metrics.tracing_prolapse.segments) << "\n"
+              << noiseFloorLine(truth);
   }
   for (const ComparedSet& s : sets) {
     std::cout << s.label << (s.converged ? "" : "  [closure NOT converged]") << ":\n"
@@ -354,8 +438,9 @@ int runCompare(const CompareOptions& options) {
                         enfaceFiguresBeyond(options.out_dir, sets.size()), "compare");
     const std::filesystem::path& out = staged.dir();
     writeFileAtomically(out / "compare.md",
-                        compareMarkdown(*valve_case, sets, options.settings_overrides));
+                        compareMarkdown(*valve_case, sets, options.settings_overrides, truth));
     writeFileAtomically(out / "compare.csv", compareCsv(sets));
+    writeFileAtomically(out / "cords.csv", cordsCsv(*valve_case, sets, truth));
     const std::string sections = sectionsSvg(*valve_case, sets);
     if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
     // One atrial view per set, numbered in the order given (labels need not be file names).
@@ -372,7 +457,7 @@ int runCompare(const CompareOptions& options) {
 }
 
 std::vector<std::string> compareOutputFiles(const CompareOptions& options) {
-  std::vector<std::string> files = {"compare.md", "compare.csv", "sections.svg"};
+  std::vector<std::string> files = {"compare.md", "compare.csv", "cords.csv", "sections.svg"};
   for (std::size_t k = 1; k <= options.cords_files.size(); ++k)
     files.push_back(enfaceFigureName(k));
   return files;

@@ -275,7 +275,8 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
-  std::cout << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics);
+  std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
+            << table1Row("fit", fit_metrics);
   std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;
 }

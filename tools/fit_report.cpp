@@ -292,7 +292,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n\n";
   md << "## Table 1: seed vs fit\n\n"
-     << table1Header() << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics) << "\n";
+     << table1Header("Cord set") << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics)
+     << "\n";
   md << "Prolapse segments: tracings " << joinSegments(fit_metrics.tracing_prolapse.segments)
      << "; in the tracing planes: seed " << joinSegments(seed_metrics.section_prolapse.segments)
      << ", fit " << joinSegments(fit_metrics.section_prolapse.segments)

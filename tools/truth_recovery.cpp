@@ -67,6 +67,12 @@ std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
     if (result.case_heuristic_tip_positions.size() != result.tip_positions.size())
       result.case_heuristic_tip_positions.clear();
   }
+  // The noise floor is context only: a missing or unreadable metrics.json leaves it NaN.
+  std::string metrics_text;
+  if (readWholeFile(case_dir / "truth" / "metrics.json", metrics_text)) {
+    const nlohmann::json metrics = nlohmann::json::parse(metrics_text, nullptr, false);
+    if (number(metrics, "mean_mm")) result.noise_floor_mm = metrics["mean_mm"].get<double>();
+  }
   return result;
 }
 
@@ -91,8 +97,12 @@ TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth) {
   std::vector<double> all, taut;
   for (std::size_t i = 0; i < set.cords.size(); ++i) {
     const TrueCord& t = truth.cords[i];
-    if (t.ruptured) continue;
-    const double error = 100.0 * std::abs(set.cords[i].rest_length / t.rest_length_mm - 1.0);
+    if (t.ruptured) {
+      r.signed_error_pct.push_back(std::numeric_limits<double>::quiet_NaN());
+      continue;
+    }
+    r.signed_error_pct.push_back(100.0 * (set.cords[i].rest_length / t.rest_length_mm - 1.0));
+    const double error = std::abs(r.signed_error_pct.back());
     all.push_back(error);
     if (t.taut) taut.push_back(error);
   }

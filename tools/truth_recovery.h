@@ -6,6 +6,7 @@
 #pragma once
 
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -29,6 +30,9 @@ struct CaseTruth {
   // Where the heuristic puts each tip on the case (what a fit starts from); empty when the
   // truth does not say.
   std::vector<Eigen::Vector3d> case_heuristic_tip_positions;
+  // The truth's own AvgD against the tracings (truth/metrics.json mean_mm): the noise floor,
+  // what no cord set closed on the case can be expected to beat. NaN when not given.
+  double noise_floor_mm = std::numeric_limits<double>::quiet_NaN();
 };
 
 // The truth of the case in `case_dir` (its truth/truth.json), or nullopt when there is none.
@@ -46,6 +50,8 @@ struct TruthRecovery {
   // The set's tips are the case's heuristic ones, unmoved (a fit of scales only): their offset
   // is the heuristic's, not a fitted one.
   bool heuristic_tips = false;
+  // Per cord, in the set's order: rest / true - 1 in % (signed; NaN for a ruptured cord).
+  std::vector<double> signed_error_pct;
 };
 
 TruthRecovery recoveryAgainstTruth(const CordSet& set, const CaseTruth& truth);
