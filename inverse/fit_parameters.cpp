@@ -34,18 +34,22 @@ std::vector<std::string> cordGroups(const ValveCase& valve_case, const CordSet& 
   return groups;
 }
 
+double snapToBoundWithinRounding(double value, double lo, double hi) {
+  const double rounding = 1e-12 * std::max(1.0, std::max(std::abs(lo), std::abs(hi)));
+  if (value < lo && value >= lo - rounding) return lo;
+  if (value > hi && value <= hi + rounding) return hi;
+  return value;
+}
+
 FitParameterization::FitParameterization(const ValveCase& valve_case, const CordSet& start,
                                          ParameterMode mode, const ParameterBounds& bounds)
     : start_(start), mode_(mode), cord_parameter_(start.cords.size(), -1) {
   std::vector<double> initial, lower, upper;
   auto add = [&](std::string name, double value, double lo, double hi) {
     names_.push_back(std::move(name));
-    // A start within rounding of a bound is on it, not beyond it: a pre-fit's rest length
-    // seed * 0.7 gives scale() = 0.69999999999999984, and clamping that would mark the start
-    // as moved, throw its known closure away and cost a closure to redo it.
-    const double rounding = 1e-12 * std::max(1.0, std::max(std::abs(lo), std::abs(hi)));
-    if (value < lo && value >= lo - rounding) value = lo;
-    if (value > hi && value <= hi + rounding) value = hi;
+    // Clamping a start beyond a bound by rounding only would mark it as moved, throw its known
+    // closure away and cost a closure to redo it.
+    value = snapToBoundWithinRounding(value, lo, hi);
     unclamped_start_.push_back(value);
     initial.push_back(std::clamp(value, lo, hi));
     lower.push_back(lo);

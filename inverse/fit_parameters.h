@@ -35,6 +35,10 @@ struct ParameterBounds {
   double tip_box_mm = 8.0;  // each tip offset coordinate in [-box, +box]
 };
 
+// value, moved onto a bound it misses by rounding only: a pre-fit's or an edit's rest length
+// seed * 0.7 gives scale() = 0.69999999999999984, which is on the bound 0.7, not beyond it.
+double snapToBoundWithinRounding(double value, double lo, double hi);
+
 class FitParameterization {
  public:
   // `start`: the cord set the fit starts from (heuristic or the user's edits). Its free cords'

@@ -70,6 +70,24 @@ TEST(EditCordsCli, ScalesTheSeedLengthMostSpecificLastMarksManualAndLocks) {
   }
 }
 
+// The note on scales the fit would clamp names the cords, and a scale that misses the bound
+// by rounding only (seed * 0.7 reads back as 0.6999999999999998) is on the bound, as the fit
+// takes it.
+TEST(EditCordsCli, NotesOnlyScalesReallyOutsideTheFitsBoundsAndNamesTheirCords) {
+  TempDir dir;
+  auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.7 --out " +
+                       quoted(dir / "on_bound.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("outside the fit's default bounds"), std::string::npos) << r.out;
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.7 --cord 3=0.6 --cord 5=1.6 " +
+                  "--out " + quoted(dir / "beyond.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: 2 unlocked cords (3,5) have a scale outside the fit's default "
+                       "bounds [0.7, 1.5]"),
+            std::string::npos)
+      << r.out;
+}
+
 TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {
   TempDir dir;
   auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cord 1,2=0.85 --lock 1 --out " +

@@ -15,6 +15,7 @@
 #include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
+#include "inverse/fit_parameters.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/staged_output.h"
@@ -283,11 +284,14 @@ int runEditCords(const EditCordsOptions& options) {
                 "seg", "kind", "seed (mm)", "rest (mm) before>after", "scale", "provenance",
                 "locked");
   }
-  int outside_bounds = 0;
+  std::vector<int> outside_bounds;  // unlocked cords the fit would start clamped
   for (int i = 0; i < count; ++i) {
     const Cord& a = before.cords[i];
     const Cord& b = set.cords[i];
-    if (!b.locked && (b.scale() < kFitScaleLower || b.scale() > kFitScaleUpper)) ++outside_bounds;
+    const double scale =
+        inverse::snapToBoundWithinRounding(b.scale(), kFitScaleLower, kFitScaleUpper);
+    if (!b.locked && (scale < kFitScaleLower || scale > kFitScaleUpper))
+      outside_bounds.push_back(i);
     if (a.rest_length == b.rest_length && a.locked == b.locked) continue;
     std::printf("  %5d  %-30s %-4s %-9s %9.2f %8.2f > %8.2f %7.3f  %-9s %s\n", i, group[i].c_str(),
                 segment[i].c_str(), toString(b.kind), b.seed_rest_length, a.rest_length,
@@ -303,12 +307,17 @@ int runEditCords(const EditCordsOptions& options) {
     std::fprintf(stderr, "warning: edit-cords: nothing changed: %s\n",
                  edited.empty() ? "every cord the scalings name is locked"
                                 : "the scalings leave every rest length as it was (scale 1)");
-  if (outside_bounds > 0) {
+  if (!outside_bounds.empty()) {
+    std::string listed;
+    for (std::size_t k = 0; k < outside_bounds.size() && k < 12; ++k)
+      listed += (k == 0 ? "" : ",") + std::to_string(outside_bounds[k]);
+    if (outside_bounds.size() > 12) listed += ",...";
     std::printf(
-        "note: %d unlocked cords have a scale outside the fit's default bounds [%.1f, %.1f]; "
-        "`chordfit fit --seed-cords` starts them clamped (lock them to keep them, or widen "
-        "--scale-bounds)\n",
-        outside_bounds, kFitScaleLower, kFitScaleUpper);
+        "note: %zu unlocked cord%s (%s) %s a scale outside the fit's default bounds [%.1f, "
+        "%.1f]; `chordfit fit --seed-cords` starts them clamped (lock them to keep them, or "
+        "widen --scale-bounds)\n",
+        outside_bounds.size(), outside_bounds.size() == 1 ? "" : "s", listed.c_str(),
+        outside_bounds.size() == 1 ? "has" : "have", kFitScaleLower, kFitScaleUpper);
   }
   return kExitOk;
 }

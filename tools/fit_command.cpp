@@ -260,6 +260,19 @@ int runFit(const FitCommandOptions& o) {
   std::printf("fit: %s after %d forward run%s, %.1f s (%s)\n", o.optimizer.c_str(),
               fit.forward_sims, fit.forward_sims == 1 ? "" : "s", fit.seconds,
               fit.termination.c_str());
+  // NLopt's local methods stop on a relative cost change between evaluations, which a
+  // simulator's map can meet far from a minimum (bobyqa on the quick start's case: AvgD
+  // 0.73 mm after 137 of 400 closures, where ceres reaches 0.40).
+  const bool local_nlopt =
+      o.optimizer == "bobyqa" || o.optimizer == "cobyla" || o.optimizer == "sbplx";
+  if (local_nlopt && fit.termination.rfind("converged", 0) == 0 &&
+      fit.forward_sims < o.max_sims / 2) {
+    std::printf(
+        "note: %s stopped on its tolerance with %d of --max-sims %d closures unused; a "
+        "derivative-free local method can stop early on a simulator's map (compare with "
+        "--optimizer ceres, the default)\n",
+        o.optimizer.c_str(), o.max_sims - fit.forward_sims, o.max_sims);
+  }
   if (fit.unsettled_sims > 0) {
     std::printf(
         "note: %d of the %d forward runs reached the step cap without settling (their state is "

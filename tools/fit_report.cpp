@@ -56,7 +56,8 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
   const Eigen::VectorXd& spans = fit.closed_spans;
   std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale | Closed span (mm) "
+  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale (× heuristic) | "
+        "Closed span (mm) "
         "| "
         "± SD (%) | Sensitivity (mm per 1 %) | Provenance | Locked |\n"
         "|---:|---|---|---:|---:|---:|---:|---:|---:|---|---|\n";
@@ -271,15 +272,17 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
        << "\n";
   }
   md << "- slack release: " << slackReleaseLine(fit, o.slack_release, o.params) << "\n";
-  md << "- finite differences: step " << o.fd_scale_step << " on a scale"
-     << (o.params == "scales+tips" ? ", " + formatFixed(o.fd_tip_step_mm, 2) + " mm on a tip"
-                                   : std::string())
-     << (o.fd_warm_start
-             ? ", perturbed closures warm-started from the base closed state (--fd-warm)"
-             : ", perturbed closures from the open state")
-     << (o.fd_slack_closures ? ", slack-only parameters closed too (--fd-slack-closures)"
-                             : std::string())
-     << "\n";
+  // Only Ceres differentiates; NLopt's methods are derivative-free.
+  if (o.optimizer == "ceres")
+    md << "- finite differences: step " << o.fd_scale_step << " on a scale"
+       << (o.params == "scales+tips" ? ", " + formatFixed(o.fd_tip_step_mm, 2) + " mm on a tip"
+                                     : std::string())
+       << (o.fd_warm_start
+               ? ", perturbed closures warm-started from the base closed state (--fd-warm)"
+               : ", perturbed closures from the open state")
+       << (o.fd_slack_closures ? ", slack-only parameters closed too (--fd-slack-closures)"
+                               : std::string())
+       << "\n";
   if (!o.settings_overrides.empty()) {
     md << "- simulator settings over the case's (--set):";
     for (const std::string& item : o.settings_overrides) md << " `" << item << "`";
@@ -328,7 +331,10 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
         "slack cord (span below its length) pulls on nothing there, so any length down to its "
         "span closes the valve the same way: the tracings bound it from below only. ± SD "
         "\"prior only\": no tracing point moves with the cord, so its length is the prior's "
-        "(the seed's and its neighbours'), not a measurement. "
+        "(the seed's and its neighbours'), not a measurement. The SD is local: it says how far a "
+        "cord can move while the others stay, not whether another combination of lengths fits "
+        "the tracings as well (a flap held by other cords); on a synthetic case, compare's "
+        "per-cord table against the truth shows where a fit took another way. "
      << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
      << (fit.uncertainty.ok()
              ? std::to_string(identifiedCords(fit)) + " of " + std::to_string(freeCords(fit)) +
