@@ -6,6 +6,8 @@
 #include <regex>
 #include <utility>
 
+#include <sys/stat.h>
+
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -458,6 +460,48 @@ TEST(ChordfitCli, AnOutThroughADanglingSymbolicLinkIsRefusedBeforeTheWork) {
   }
   EXPECT_TRUE(std::filesystem::is_symlink(dir / "link")) << "the link is left alone";
   EXPECT_FALSE(std::filesystem::exists(dir / "missing"));
+}
+
+// An --out that names a device or FIFO is refused: the atomic write's rename would replace the
+// node itself (as root, `heuristic --out /dev/null` would have replaced the system's).
+TEST(ChordfitCli, AnOutThatIsADeviceOrFifoIsRefusedAndLeftAlone) {
+  TempDir dir;
+  const std::string example =
+      quoted(std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case");
+  ASSERT_EQ(::mkfifo((dir / "pipe").c_str(), 0600), 0);
+  std::filesystem::create_directory(dir / "sim");
+  ASSERT_EQ(::mkfifo((dir / "sim" / "closed.ply").c_str(), 0600), 0);
+  for (const std::string& command :
+       {"heuristic " + example + " --out " + quoted(dir / "pipe"),
+        "metrics " + example + " --mesh " + example + "/open.obj --out " + quoted(dir / "pipe"),
+        "simulate " + example + " --out " + quoted(dir / "sim")}) {
+    const auto r = runChordfit(command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("is not a regular file (a device, FIFO or socket)"), std::string::npos)
+        << command << ": " << r.err;
+  }
+  EXPECT_TRUE(std::filesystem::is_fifo(dir / "pipe"));
+  EXPECT_TRUE(std::filesystem::is_fifo(dir / "sim" / "closed.ply"));
+}
+
+// case.json with an unknown key nested 100,000 levels deep: refused by the case's validation
+// (exit 2) in every command, not a stack overflow in the check of --out against the inputs.
+TEST(ChordfitCli, ADeeplyNestedCaseFileIsRefusedNotACrash) {
+  TempDir dir;
+  const auto example = std::filesystem::path(CHORDFIT_SOURCE_DIR) / "docs" / "example-case";
+  std::filesystem::copy(example, dir / "case", std::filesystem::copy_options::recursive);
+  auto json = nlohmann::json::parse(testing::readText(dir / "case" / "case.json"));
+  std::string text = json.dump();
+  text.pop_back();  // the closing brace
+  text += ",\"x\":" + std::string(100000, '[') + std::string(100000, ']') + "}";
+  testing::writeText(dir / "case" / "case.json", text);
+  for (const std::string& command :
+       {"heuristic " + quoted(dir / "case") + " --out " + quoted(dir / "h.json"),
+        "simulate " + quoted(dir / "case") + " --out " + quoted(dir / "sim")}) {
+    const auto r = runChordfit(command);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("x: unknown key"), std::string::npos) << command << ": " << r.err;
+  }
 }
 
 TEST(ChordfitCli, UnknownCommandsAndMissingArgumentsAreUsageErrors) {

@@ -279,19 +279,24 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
   const nlohmann::json json = nlohmann::json::parse(text, nullptr, false);
   // Every string of the case file that names an existing file of the case: the mesh, the
   // annulus curves, tracings, tips, cords, tissue.
-  std::function<void(const nlohmann::json&)> collect = [&](const nlohmann::json& value) {
+  // The case format nests file names two levels deep ({"annulus": {"closed": ...}}); the
+  // depth limit keeps a deeply nested unknown key (refused later by the case's validation)
+  // from exhausting the stack here.
+  constexpr int kMaxDepth = 4;
+  std::function<void(const nlohmann::json&, int)> collect = [&](const nlohmann::json& value,
+                                                                int depth) {
     if (value.is_string()) {
       std::error_code ec;
       const std::filesystem::path file = dir / value.get<std::string>();
       if (!value.get<std::string>().empty() && std::filesystem::is_regular_file(file, ec))
         files.push_back(file.string());
-    } else if (value.is_structured()) {
-      for (const auto& item : value) collect(item);
+    } else if (value.is_structured() && depth < kMaxDepth) {
+      for (const auto& item : value) collect(item, depth + 1);
     }
   };
   if (json.is_discarded() || !json.is_object()) return files;
   for (const auto& [key, value] : json.items())
-    if (with_cords || key != "cords") collect(value);
+    if (with_cords || key != "cords") collect(value, 1);
   // The curve files a tracings file names ({"tracings": [{"file": ...}]}), relative to it.
   if (const auto t = json.find("tracings"); t != json.end() && t->is_string()) {
     const std::filesystem::path tracings_file = dir / t->get<std::string>();
@@ -318,6 +323,7 @@ bool outputFileUsable(const char* command, const std::string& file) {
   if (std::filesystem::is_directory(file, ec) || std::filesystem::path(file).filename().empty())
     return reportOutputProblem(command, file, "is a directory; give the file to write");
   if (!reportOutputProblem(command, file, danglingLinkProblem(file))) return false;
+  if (!reportOutputProblem(command, file, specialFileProblem(file))) return false;
   return reportOutputProblem(
       command, file, outputPlaceProblem(std::filesystem::path(file).parent_path().string()));
 }

@@ -87,11 +87,23 @@ std::vector<std::string> stagedFiles(const fs::path& staging) {
 
 }  // namespace
 
+std::string specialFileProblem(const fs::path& file) {
+  std::error_code ec;
+  const fs::file_status status = fs::status(file, ec);
+  if (ec || !fs::exists(status) || fs::is_regular_file(status) || fs::is_directory(status))
+    return "";
+  // The rename of an atomic write would replace the node itself (as root, `--out /dev/null`
+  // would leave a regular file where the system's /dev/null was).
+  return "is not a regular file (a device, FIFO or socket); give a file to write";
+}
+
 std::optional<InTheWay> whatIsInTheWay(const fs::path& out, const std::string& name) {
   std::error_code ec;
   // symlink_status: a link to a directory is replaced by the rename, not in the way.
   if (fs::is_directory(fs::symlink_status(out / name, ec)))
     return InTheWay{out / name, "a directory of that name is in the way of an output file"};
+  if (const std::string special = specialFileProblem(out / name); !special.empty())
+    return InTheWay{out / name, special};
   for (fs::path dir = fs::path(name).parent_path(); !dir.empty(); dir = dir.parent_path()) {
     // Anything there that is not a directory, following links: a file, or a link to a file
     // or to nothing (a dangling link made the directory's creation fail after the first

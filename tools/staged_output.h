@@ -77,6 +77,9 @@ struct InTheWay {
   std::filesystem::path path;
   std::string what;
 };
+// What is wrong with writing `file` by temp + rename when it exists and is neither a regular
+// file nor a directory (a device, FIFO or socket, following links), or "".
+std::string specialFileProblem(const std::filesystem::path& file);
 std::optional<InTheWay> whatIsInTheWay(const std::filesystem::path& out, const std::string& name);
 
 // Whether a chordfit run published `file`: its directory's record lists it.
