@@ -147,6 +147,52 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
                       "points must follow the ring's vertex order");
     return false;
   }
+  // Each side, not only the whole: a point repeated (or nearly) squeezes one side of the
+  // ring to nothing and the interpolated annulus tears the mesh (the closure diverged).
+  const Eigen::Index n = open_ring.rows();
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const double open_side = (open_ring.row((k + 1) % n) - open_ring.row(k)).norm();
+    const double closed_side = (closed.row((k + 1) % n) - closed.row(k)).norm();
+    if (!(closed_side >= 0.25 * open_side && closed_side <= 4.0 * open_side)) {
+      diagnostics.error(file, "points[" + std::to_string(k) + "]",
+                        "the side to point " + std::to_string((k + 1) % n) + " is " +
+                            millimetres(closed_side) + " long against the ring's " +
+                            millimetres(open_side) +
+                            " (accepted: 0.25 to 4 times): a repeated or misplaced point?");
+      return false;
+    }
+  }
+  // The same start: the points, each polygon about its own centre (the annulus may move as a
+  // whole between the phases), lie nearest the ring with no cyclic shift. A list shifted by a
+  // few places, or turned by half (x and y negated), passed the checks above and then pulled
+  // every ring vertex across the orifice.
+  const Eigen::RowVector3d open_centre = open_ring.colwise().mean();
+  const Eigen::RowVector3d closed_centre = closed.colwise().mean();
+  auto shiftCost = [&](Eigen::Index shift) {
+    double cost = 0.0;
+    for (Eigen::Index k = 0; k < n; ++k)
+      cost += ((closed.row((k + shift) % n) - closed_centre) - (open_ring.row(k) - open_centre))
+                  .squaredNorm();
+    return cost;
+  };
+  const double unshifted = shiftCost(0);
+  Eigen::Index best = 0;
+  double best_cost = unshifted;
+  for (Eigen::Index shift = 1; shift < n; ++shift) {
+    if (const double cost = shiftCost(shift); cost < best_cost) best = shift, best_cost = cost;
+  }
+  if (best != 0 && best_cost < 0.5 * unshifted) {
+    diagnostics.error(file, "points",
+                      "the closed annulus fits the ring best shifted by " + std::to_string(best) +
+                          " of " + std::to_string(n) + " places (its point " +
+                          std::to_string(best) +
+                          " lies where ring vertex 0 is): the points must follow the ring's "
+                          "vertex order from the same start" +
+                          (2 * best == n || 2 * best == n + 1 || 2 * best == n - 1
+                               ? " (half a turn: a file in RAS read as LPS, or the other way?)"
+                               : ""));
+    return false;
+  }
   return true;
 }
 
@@ -161,6 +207,15 @@ bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>&
     if (tips[t].closed_position)
       ok &= valve.check(tips[t].closed_position->transpose(), file, where + ".closed_position",
                         diagnostics);
+    // Tips in one place give every cord one origin (import-mesh refuses them too).
+    for (std::size_t earlier = 0; earlier < t; ++earlier) {
+      if ((tips[t].position - tips[earlier].position).norm() < 1.0) {
+        diagnostics.error(file, where + ".position",
+                          "less than 1 mm from tips[" + std::to_string(earlier) +
+                              "].position: two PM tips in one place");
+        ok = false;
+      }
+    }
   }
   return ok;
 }

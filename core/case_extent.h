@@ -40,9 +40,11 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
                           Diagnostics& diagnostics);
 
 // The closed annulus against the open ring it moves (row k of `closed` is where ring vertex k
-// goes): the same winding (Newell normals of the two polygons at less than 90 degrees) and a
-// perimeter within 0.25-4 times the ring's. Errors name (file, "points"). A reversed order or
-// a collapsed annulus passed every other check and then made the closure diverge (exit 3).
+// goes): the same winding (Newell normals of the two polygons at less than 90 degrees), a
+// perimeter and every side within 0.25-4 times the ring's, and the same start (no cyclic
+// shift of the points, each polygon about its centre, fits the ring better). Errors name
+// (file, "points"). A reversed, shifted or half-turned order, or a collapsed annulus, passed
+// every other check and then made the closure diverge (exit 3) or pull the ring across.
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
                         const std::string& file, Diagnostics& diagnostics);
 

@@ -79,11 +79,22 @@ bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
     return false;
   }
   const int leaflet_count = static_cast<int>(c.mesh.leaflet_names.size());
+  std::vector<int> vertices_per_leaflet(leaflet_count, 0);
   for (Eigen::Index v = 0; v < c.mesh.leaflet.size(); ++v) {
     if (c.mesh.leaflet(v) < 0 || c.mesh.leaflet(v) >= leaflet_count) {
       fields.error(indexPath("labels", v), "label " + std::to_string(c.mesh.leaflet(v)) +
                                                " is not a leaflet (case has " +
                                                std::to_string(leaflet_count) + " leaflets)");
+      return false;
+    }
+    ++vertices_per_leaflet[c.mesh.leaflet(v)];
+  }
+  // A leaflet without vertices has no cords, segments or surface: own-leaflet distances to
+  // it are undefined (the fit measured tracing points against nothing).
+  for (int l = 0; l < leaflet_count; ++l) {
+    if (vertices_per_leaflet[l] == 0) {
+      fields.error("labels", "no vertex is labelled " + std::to_string(l) + " (" +
+                                 c.mesh.leaflet_names[l] + "): every leaflet needs its vertices");
       return false;
     }
   }
@@ -346,6 +357,19 @@ bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
   for (std::size_t i = 0; i < names->size(); ++i) {
     std::string name;
     if (!fields.text((*names)[i], indexPath("leaflets.names", i), name)) return false;
+    // Names make the cord groups ("anterior/anterolateral") and the tracings' leaflets: a
+    // blank or repeated one merged two leaflets into one group.
+    if (name.find_first_not_of(" \t") == std::string::npos) {
+      fields.error(indexPath("leaflets.names", i), "a leaflet name must not be blank");
+      return false;
+    }
+    for (std::size_t j = 0; j < i; ++j) {
+      if (c.mesh.leaflet_names[j] == name) {
+        fields.error(indexPath("leaflets.names", i),
+                     "\"" + name + "\" repeats leaflets.names[" + std::to_string(j) + "]");
+        return false;
+      }
+    }
     c.mesh.leaflet_names.push_back(name);
   }
   return true;

@@ -181,6 +181,73 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusRunningTheOtherWayOrCollapsed) {
   expectError("annulus_closed\\.json", "points: the closed annulus is 0 mm around");
 }
 
+// From a bad-input sweep: a closed annulus listed from another start (a shifted list, or half
+// a turn: RAS points read as LPS) or with a repeated point passed every check; the shifted or
+// turned one pulled the ring across the orifice, the repeated one diverged (exit 3).
+TEST_F(ValidateCommand, ReportsAClosedAnnulusShiftedTurnedOrWithARepeatedPoint) {
+  const Eigen::MatrixXd& closed = valve_.annulus_closed;
+  const Eigen::Index n = closed.rows();
+  auto writeClosed = [&](const std::function<Eigen::RowVector3d(Eigen::Index)>& point) {
+    nlohmann::json points = nlohmann::json::array();
+    for (Eigen::Index k = 0; k < n; ++k) {
+      const Eigen::RowVector3d p = point(k);
+      points.push_back({p(0), p(1), p(2)});
+    }
+    writeText(dir_ / "annulus_closed.json", nlohmann::json{{"points", points}}.dump());
+  };
+  writeClosed([&](Eigen::Index k) { return closed.row((k + n - 2) % n); });
+  expectError("annulus_closed\\.json",
+              "points: the closed annulus fits the ring best shifted by 2 of 8");
+  const Eigen::RowVector3d centre = closed.colwise().mean();
+  writeClosed([&](Eigen::Index k) {
+    Eigen::RowVector3d p = closed.row(k) - centre;
+    return Eigen::RowVector3d(centre(0) - p(0), centre(1) - p(1), centre(2) + p(2));
+  });
+  expectError("annulus_closed\\.json", "shifted by 4 of 8 places .*half a turn");
+  writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 2 : k); });
+  expectError("annulus_closed\\.json", "points\\[2\\]: the side to point 3 is 0 mm long");
+  // The whole annulus moved (toward the apex in systole) is no shift.
+  writeClosed([&](Eigen::Index k) -> Eigen::RowVector3d {
+    return closed.row(k) + Eigen::RowVector3d(0, 0, -3);
+  });
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.err.find("annulus_closed.json: points"), std::string::npos) << r.err;
+}
+
+// Leaflet names make the cord groups and the tracings' leaflets; a leaflet needs vertices.
+TEST_F(ValidateCommand, ReportsBlankOrRepeatedLeafletNamesAndALeafletWithoutVertices) {
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"anterior", "anterior"}; });
+  expectError("case\\.json",
+              "leaflets\\.names\\[1\\]: \"anterior\" repeats leaflets\\.names\\[0\\]");
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"anterior", " "}; });
+  expectError("case\\.json", "leaflets\\.names\\[1\\]: a leaflet name must not be blank");
+  editCaseJson([](nlohmann::json& j) {
+    j["leaflets"]["names"] = {"anterior", "posterior", "septal"};
+  });
+  expectError("leaflets\\.json", "labels: no vertex is labelled 2 \\(septal\\)");
+}
+
+// A cord given twice pulls twice as hard, and two tips in one place give every cord one origin.
+TEST_F(ValidateCommand, ReportsARepeatedCordAndTwoTipsInOnePlace) {
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  set.tips.push_back({"posteromedial", Eigen::Vector3d(0, -5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  Cord other = cord;
+  other.tip = 1;  // the same insertion from the other tip: a cord of its own
+  set.cords = {cord, other, cord};
+  writeCordSet(dir_ / "cords.json", set);
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json",
+              "cords\\[2\\]: repeats cords\\[0\\] \\(the same tip and insertion\\)");
+  set.cords = {cord, other};
+  set.tips[1].position = Eigen::Vector3d(0, 5.5, -20);
+  writeCordSet(dir_ / "cords.json", set);
+  expectError("cords\\.json", "tips\\[1\\]\\.position: less than 1 mm from tips\\[0\\]\\.position");
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
   writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},

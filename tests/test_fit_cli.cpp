@@ -95,6 +95,16 @@ TEST(FitCommand, RejectsAMissingSeedFileWithExitCode2) {
   EXPECT_NE(err.find("nowhere.json"), std::string::npos) << err;
 }
 
+// A cord set without cords gave a "fit" of nothing with exit 0 and every output written.
+TEST(FitCommand, RefusesASeedWithoutCords) {
+  TempDir dir;
+  auto cords = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  cords["cords"] = nlohmann::json::array();
+  testing::writeText(dir / "empty.json", cords.dump());
+  const std::string message = refusedFitMessage("--seed-cords " + quoted(dir / "empty.json"));
+  EXPECT_NE(message.find("empty.json has no cords: nothing to fit"), std::string::npos) << message;
+}
+
 TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
   const std::string err = refusedFitMessage("--scale-bounds 1.5,0.7");
   EXPECT_NE(err.find("--scale-bounds"), std::string::npos) << err;

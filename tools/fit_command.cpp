@@ -110,6 +110,14 @@ int runFit(const FitCommandOptions& o) {
   }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
+  if (seed->cords.empty()) {
+    std::cerr << "error: fit: "
+              << (o.seed_cords_file.empty() ? o.case_dir + ": the case's cord set"
+                                            : o.seed_cords_file)
+              << " has no cords: nothing to fit (give --seed-cords, e.g. from `chordfit "
+                 "heuristic`)\n";
+    return kExitBadInput;
+  }
   // A scale at the upper bound must leave a cord set the readers take (cords.json is read
   // back for the fitted closure); found after the fit, it would cost the whole run.
   for (const Cord& cord : seed->cords) {
