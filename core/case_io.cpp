@@ -491,6 +491,19 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
   // A directory without case.json is not a case at all: say what a case is and how one is
   // made, rather than "case.json: file not found".
   std::error_code ec;
+  // A link that loops, or a directory the user may not search, is not "not found": say why.
+  const fs::file_status case_file_status = fs::status(directory / kCaseFile, ec);
+  if (ec && case_file_status.type() != fs::file_type::not_found) {
+    diagnostics.error((directory / kCaseFile).string(), "",
+                      "cannot be read (" + ec.message() + ")");
+    return std::nullopt;
+  }
+  if (fs::is_symlink(fs::symlink_status(directory / kCaseFile, ec)) &&
+      !fs::exists(case_file_status)) {
+    diagnostics.error((directory / kCaseFile).string(), "",
+                      "is a symbolic link to nothing (a missing target or a loop of links)");
+    return std::nullopt;
+  }
   if (!fs::exists(directory / kCaseFile, ec)) {
     diagnostics.error((directory / kCaseFile).string(), "",
                       "not found: a case directory holds case.json and the files it names "

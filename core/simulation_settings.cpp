@@ -35,10 +35,12 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
   const LeafletMaterial& m = s.material;
   const Range ranges[] = {
       {"pressure_mmhg", s.pressure_mmhg, 0.0, true, 500.0},
-      {"youngs_modulus_mpa", m.youngs_modulus_mpa, 0.0, true, 1000.0},
+      // Lower bounds far below any tissue but above the values that made the automatic step
+      // count overflow (1e-300 g/cm³ printed a 150-digit step count blaming max_steps).
+      {"youngs_modulus_mpa", m.youngs_modulus_mpa, 1e-3, false, 1000.0},
       {"thickness_mm", m.thickness_mm, 0.0, true, 10.0},
       {"poisson_ratio", m.poisson_ratio, -1.0, true, 0.499},
-      {"density_g_per_cm3", m.density_g_per_cm3, 0.0, true, 100.0},
+      {"density_g_per_cm3", m.density_g_per_cm3, 1e-3, false, 100.0},
       {"area_bulk_fraction", m.area_bulk_fraction, 0.0, false, 100.0},
       {"flexural_modulus_factor", m.flexural_modulus_factor, 0.0, true, 100.0},
       {"flow_speed_mm_per_ms", s.flow_speed_mm_per_ms, 0.0, false, 100.0},

@@ -248,6 +248,33 @@ TEST_F(ValidateCommand, ReportsARepeatedCordAndTwoTipsInOnePlace) {
   expectError("cords\\.json", "tips\\[1\\]\\.position: less than 1 mm from tips\\[0\\]\\.position");
 }
 
+// A piece of the mesh with no ring vertex hangs from nothing: a stray copy of the leaflets
+// drifted to the step cap and exit 0.
+TEST_F(ValidateCommand, ReportsAPieceOfTheMeshThatNoRingVertexIsOn) {
+  const Eigen::Index n = valve_.mesh.V.rows();
+  valve_.mesh.V.conservativeResize(n + 3, Eigen::NoChange);
+  valve_.mesh.V.bottomRows(3) << 0, 0, -2, 1, 0, -2, 0, 1, -2;
+  valve_.mesh.F.conservativeResize(valve_.mesh.F.rows() + 1, Eigen::NoChange);
+  valve_.mesh.F.bottomRows(1) << n, n + 1, n + 2;
+  valve_.mesh.leaflet.conservativeResize(n + 3);
+  valve_.mesh.leaflet.tail(3).setZero();
+  writeCase(dir_.path(), valve_);
+  expectError("annulus_ring\\.json", "belongs to a piece of the mesh that no ring vertex is on");
+}
+
+// A case.json that is a loop of links, or a directory the user may not search, is not "not
+// found".
+TEST_F(ValidateCommand, SaysWhyACaseFileThatIsALoopOfLinksCannotBeRead) {
+  std::filesystem::remove(dir_ / "case.json");
+  std::filesystem::create_symlink("other.json", dir_ / "case.json");
+  std::filesystem::create_symlink("case.json", dir_ / "other.json");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("case.json: cannot be read (Too many levels of symbolic links)"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
   writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},

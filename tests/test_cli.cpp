@@ -14,6 +14,7 @@
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/curve_io.h"
+#include "core/mesh_io.h"
 #include "core/metrics.h"
 #include "tests/test_support.h"
 
@@ -375,6 +376,22 @@ TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
                              quoted(dir / "other" / "open.ply"));
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("does not have the case mesh's topology"), std::string::npos) << r.err;
+}
+
+// The same counts but one triangle's corners in another order: named, not "topology (161 /
+// 254 vs 161 / 254)".
+TEST(ChordfitCli, NamesTheFirstTriangleThatDiffersFromTheCaseMesh) {
+  TempDir dir;
+  ValveCase valve = testing::tinyConeCase();
+  writeCase(dir / "case", valve);
+  std::swap(valve.mesh.F(3, 0), valve.mesh.F(3, 2));
+  writePly(dir / "flipped.ply", valve.mesh.V, valve.mesh.F);
+  const auto r =
+      runChordfit("metrics " + quoted(dir / "case") + " --mesh " + quoted(dir / "flipped.ply"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("flipped.ply: faces[3]: vertices "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("must keep the case mesh's triangles in their order"), std::string::npos)
+      << r.err;
 }
 
 TEST(ChordfitCli, HeuristicRejectsANonPositiveSpacingOrDepth) {

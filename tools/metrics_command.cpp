@@ -28,12 +28,26 @@ int runMetrics(const MetricsOptions& options) {
     return reportProblems(diagnostics);
   }
   // Metrics need the case's leaflet labels and annulus ring: same vertices, same triangles.
-  if (V.rows() != valve_case->mesh.V.rows() || F != valve_case->mesh.F) {
+  const Eigen::MatrixXi& case_F = valve_case->mesh.F;
+  if (V.rows() != valve_case->mesh.V.rows() || F.rows() != case_F.rows()) {
     diagnostics.error(options.mesh_file, "",
                       "mesh does not have the case mesh's topology (" + std::to_string(V.rows()) +
                           " vertices / " + std::to_string(F.rows()) + " triangles vs " +
                           std::to_string(valve_case->mesh.V.rows()) + " / " +
-                          std::to_string(valve_case->mesh.F.rows()) + ")");
+                          std::to_string(case_F.rows()) + ")");
+    return reportProblems(diagnostics);
+  }
+  // The same counts: name the first triangle that differs (a flipped or renumbered face).
+  for (Eigen::Index f = 0; f < F.rows(); ++f) {
+    if (F.row(f) == case_F.row(f)) continue;
+    auto corners = [](const Eigen::MatrixXi& faces, Eigen::Index row) {
+      return std::to_string(faces(row, 0)) + " " + std::to_string(faces(row, 1)) + " " +
+             std::to_string(faces(row, 2));
+    };
+    diagnostics.error(options.mesh_file, "faces[" + std::to_string(f) + "]",
+                      "vertices " + corners(F, f) + " where the case mesh has " +
+                          corners(case_F, f) +
+                          ": the closed mesh must keep the case mesh's triangles in their order");
     return reportProblems(diagnostics);
   }
   // A closed valve stays within reach of its open state (case_extent.h).
