@@ -67,6 +67,12 @@ std::string inputFileProblem(const std::filesystem::path& path, const std::strin
   return "";
 }
 
+bool startsWithByteOrderMark(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  char head[3] = {};
+  return in.read(head, 3) && std::string(head, 3) == kUtf8ByteOrderMark;
+}
+
 bool readWholeFile(const std::filesystem::path& path, std::string& bytes) {
   bytes.clear();
   if (!inputFileProblem(path).empty()) return false;

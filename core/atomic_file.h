@@ -25,6 +25,11 @@ constexpr std::uintmax_t kMaxInputFileBytes = std::uintmax_t{512} << 20;
 // a pipe: /dev/zero would be read forever) or a size above kMaxInputFileBytes.
 std::string inputFileProblem(const std::filesystem::path& path, const std::string& what = "a file");
 
+// The UTF-8 byte-order mark some editors and spreadsheet exports put at a text file's start.
+inline constexpr const char* kUtf8ByteOrderMark = "\xEF\xBB\xBF";
+// Whether the file at `path` starts with it (false when it cannot be read).
+bool startsWithByteOrderMark(const std::filesystem::path& path);
+
 // Reads a whole file. Returns false (and leaves `bytes` empty) when it cannot be opened or
 // inputFileProblem refuses it; callers that report why check inputFileProblem first.
 bool readWholeFile(const std::filesystem::path& path, std::string& bytes);

@@ -219,6 +219,8 @@ bool readDelimitedCurve(const std::filesystem::path& path, const std::string& fi
     CurveTextReader reader(file, diagnostics, lowerCase(path.extension().string()) == ".fcsv");
     int number = 0;
     for (std::string line; std::getline(in, line);) {
+      // A UTF-8 byte-order mark (spreadsheet exports write one) is not part of the header.
+      if (number == 0 && line.rfind(kUtf8ByteOrderMark, 0) == 0) line.erase(0, 3);
       if (!reader.line(line, ++number)) break;
     }
     Curve result;

@@ -556,6 +556,15 @@ bool readMesh(const fs::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
     return false;
   }
   const std::string extension = asciiLowercase(path.extension().string());
+  // The mesh formats start with a keyword or numbers: a byte-order mark read as "first line
+  // is not 'ply'" or CGAL's bare "could not parse", the mark itself invisible. (A binary
+  // STL's 80-byte header may hold any bytes.)
+  if (extension != ".stl" && startsWithByteOrderMark(path)) {
+    diagnostics.error(file, "",
+                      "starts with a UTF-8 byte-order mark (bytes EF BB BF), which mesh files "
+                      "must not have: save it without one");
+    return false;
+  }
   bool ok = false;
   if (extension == ".vtk") {
     ok = readVtk(path, file, V, F, diagnostics);
