@@ -7,6 +7,8 @@
 
 #include <Eigen/Geometry>
 
+#include "core/annulus_plane.h"
+
 namespace chordfit {
 namespace {
 
@@ -147,18 +149,19 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
                       "points must follow the ring's vertex order");
     return false;
   }
-  // Each side, not only the whole: a point repeated (or nearly) squeezes one side of the
-  // ring to nothing and the interpolated annulus tears the mesh (the closure diverged).
+  // No side squeezed to nothing: a repeated (or nearly repeated) point tears the mesh where the
+  // ring is pulled onto it (the closure diverged). Measured against the ring's mean side, as
+  // a segmented ring's sides may differ several times over and a closed curve resampled by
+  // arc length need not follow them.
   const Eigen::Index n = open_ring.rows();
+  const double mean_open_side = open_length / static_cast<double>(n);
   for (Eigen::Index k = 0; k < n; ++k) {
-    const double open_side = (open_ring.row((k + 1) % n) - open_ring.row(k)).norm();
     const double closed_side = (closed.row((k + 1) % n) - closed.row(k)).norm();
-    if (!(closed_side >= 0.25 * open_side && closed_side <= 4.0 * open_side)) {
+    if (!(closed_side >= 0.1 * mean_open_side)) {
       diagnostics.error(file, "points[" + std::to_string(k) + "]",
                         "the side to point " + std::to_string((k + 1) % n) + " is " +
-                            millimetres(closed_side) + " long against the ring's " +
-                            millimetres(open_side) +
-                            " (accepted: 0.25 to 4 times): a repeated or misplaced point?");
+                            millimetres(closed_side) + " long, under a tenth of the ring's mean " +
+                            millimetres(mean_open_side) + ": a repeated point?");
       return false;
     }
   }
@@ -181,7 +184,11 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
   for (Eigen::Index shift = 1; shift < n; ++shift) {
     if (const double cost = shiftCost(shift); cost < best_cost) best = shift, best_cost = cost;
   }
-  if (best != 0 && best_cost < 0.5 * unshifted) {
+  // Only a shift by an eighth of the ring or more: a few places are a small rotation of the
+  // annulus between the phases, or a resampled curve starting half a spacing off (import-mesh
+  // anchors the commissures at the curve's nearest points).
+  const Eigen::Index shift_size = std::min(best, n - best);
+  if (best != 0 && 8 * shift_size >= n && best_cost < 0.5 * unshifted) {
     diagnostics.error(file, "points",
                       "the closed annulus fits the ring best shifted by " + std::to_string(best) +
                           " of " + std::to_string(n) + " places (its point " +
@@ -218,6 +225,34 @@ bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>&
     }
   }
   return ok;
+}
+
+bool checkTipsBelowAnnulus(const ValveMesh& mesh, const std::vector<PmTip>& tips,
+                           const std::string& file, Diagnostics& diagnostics) {
+  if (mesh.annulus.size() < 3) return true;  // the ring's own checks report it
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i)
+    if (mesh.annulus(i) < 0 || mesh.annulus(i) >= mesh.V.rows()) return true;
+  const Plane plane = openAnnulusFrame(mesh).plane;
+  bool ok = true;
+  for (std::size_t t = 0; t < tips.size(); ++t) {
+    const double height = plane.signedDistance(tips[t].position);
+    if (height < 0.0) continue;
+    char what[240];
+    std::snprintf(what, sizeof what,
+                  "%.1f mm on the atrial side of the open annulus plane: PM tips lie below it, "
+                  "in the ventricle the leaflets hang into (a tip in another frame, or a sign "
+                  "slip?)",
+                  height);
+    diagnostics.error(file, "tips[" + std::to_string(t) + "].position", what);
+    ok = false;
+  }
+  return ok;
+}
+
+bool checkTipPlacement(const ValveMesh& mesh, const std::vector<PmTip>& tips,
+                       const std::string& file, Diagnostics& diagnostics) {
+  const bool near = checkTipsNearValve(mesh.V, tips, file, diagnostics);
+  return checkTipsBelowAnnulus(mesh, tips, file, diagnostics) && near;
 }
 
 }  // namespace chordfit

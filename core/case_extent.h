@@ -12,6 +12,7 @@
 
 #include "core/cordset.h"
 #include "core/diagnostics.h"
+#include "core/valve_mesh.h"
 
 namespace chordfit {
 
@@ -41,8 +42,9 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
 
 // The closed annulus against the open ring it moves (row k of `closed` is where ring vertex k
 // goes): the same winding (Newell normals of the two polygons at less than 90 degrees), a
-// perimeter and every side within 0.25-4 times the ring's, and the same start (no cyclic
-// shift of the points, each polygon about its centre, fits the ring better). Errors name
+// perimeter within 0.25-4 times the ring's, no side under a tenth of the ring's mean side, and
+// the same start (no cyclic shift by an eighth of the ring or more, each polygon about its
+// centre, fits the ring better). Errors name
 // (file, "points"). A reversed, shifted or half-turned order, or a collapsed annulus, passed
 // every other check and then made the closure diverge (exit 3) or pull the ring across.
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
@@ -51,5 +53,15 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
 // The same for PM tips: errors (file, "tips[t].position" or "tips[t].closed_position").
 bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,
                         const std::string& file, Diagnostics& diagnostics);
+
+// Each tip's open position below the open annulus plane (the side the leaflets hang into):
+// errors (file, "tips[t].position"). A tip above it (edit-cords --move-tip with the wrong
+// sign, a file in another frame) was accepted and pulled the cords up through the valve.
+bool checkTipsBelowAnnulus(const ValveMesh& mesh, const std::vector<PmTip>& tips,
+                           const std::string& file, Diagnostics& diagnostics);
+
+// Both: what every reader of a case's or a cord set's tips checks.
+bool checkTipPlacement(const ValveMesh& mesh, const std::vector<PmTip>& tips,
+                       const std::string& file, Diagnostics& diagnostics);
 
 }  // namespace chordfit

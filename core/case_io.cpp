@@ -451,14 +451,14 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
     const bool read = readTipsFile(*tips, c, diagnostics);
     ok &= read;
     if (read && mesh_ok && c.tips)
-      ok &= checkTipsNearValve(c.mesh.V, *c.tips, tips->name, diagnostics);
+      ok &= checkTipPlacement(c.mesh, *c.tips, tips->name, diagnostics);
   }
   if (const auto cords = sideFile(document, "", "cords", false, dir, fields)) {
     CordSet set;
     if (readCordSet(cords->path, cords->name, set, diagnostics)) {
       if (mesh_ok) {
         ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name, diagnostics);
-        ok &= checkTipsNearValve(c.mesh.V, set.tips, cords->name, diagnostics);
+        ok &= checkTipPlacement(c.mesh, set.tips, cords->name, diagnostics);
       }
       c.cords = set;
     } else {

@@ -328,20 +328,20 @@ std::string table1Header(const std::string& first_column) {
          "Recon. |\n|---|---:|---:|---:|---:|---:|---|\n";
 }
 
-namespace {
-
-std::string segmentList(const std::vector<std::string>& segments) {
+std::string joinSegments(const std::vector<std::string>& segments) {
   if (segments.empty()) return "none";
   std::string joined;
   for (const std::string& name : segments) joined += (joined.empty() ? "" : ", ") + name;
   return joined;
 }
 
+namespace {
+
 // "Yes (P2)": a bare Yes on a normal valve read as "it prolapses".
 std::string reconstructedCell(const ValveMetrics& m) {
-  if (m.prolapse_reconstructed) return "Yes (" + segmentList(m.section_prolapse.segments) + ")";
-  return "No (" + segmentList(m.section_prolapse.segments) + "; tracings " +
-         segmentList(m.tracing_prolapse.segments) + ")";
+  if (m.prolapse_reconstructed) return "Yes (" + joinSegments(m.section_prolapse.segments) + ")";
+  return "No (mesh " + joinSegments(m.section_prolapse.segments) + "; tracings " +
+         joinSegments(m.tracing_prolapse.segments) + ")";
 }
 
 }  // namespace

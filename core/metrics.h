@@ -146,8 +146,10 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
 // The paper's Table 1 as Markdown: header, separator, and one row per labelled result.
 // first_column names what the rows are (a case, or the cord sets closed on one case). The
 // last column says whether the closed mesh's planes prolapse where the tracings do, and
-// where: "Yes (P2)", "Yes (none)", "No (P1, P2; tracings P2)".
+// where: "Yes (P2)", "Yes (none)", "No (mesh P1, P2; tracings P2)".
 std::string table1Header(const std::string& first_column = "Case");
+// "A2, P2", or "none" for no segment.
+std::string joinSegments(const std::vector<std::string>& segments);
 std::string table1Row(const std::string& label, const ValveMetrics& metrics);
 
 }  // namespace chordfit

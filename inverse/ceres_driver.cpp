@@ -94,11 +94,14 @@ class ProgressAndBudget : public ceres::IterationCallback {
       budget_reached = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
-    // Iteration 0 is the start, not a step.
-    rejected_in_a_row_ =
-        summary.iteration == 0 || summary.step_is_successful ? 0 : rejected_in_a_row_ + 1;
+    // Iteration 0 is the start, not a step. A trial whose closure failed is no misprediction
+    // of the Jacobian: it neither counts nor breaks a run.
+    if (summary.iteration == 0 || summary.step_is_successful)
+      rejected_in_a_row_ = 0;
+    else if (summary.step_is_valid)
+      ++rejected_in_a_row_;
     if (warm_rejections_ > 0 && objective_.warmDifferences() &&
-        rejected_in_a_row_ >= warm_rejections_) {
+        rejected_in_a_row_ >= warm_rejections_ && fullRestartFits()) {
       warm_distrusted = true;
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
     }
@@ -108,6 +111,13 @@ class ProgressAndBudget : public ceres::IterationCallback {
   bool warm_distrusted = false;  // stopped for rejected steps on warm-started differences
 
  private:
+  // The full-closure solve needs a Jacobian at the best point and one trial; when they do not
+  // fit, the warm solve goes on with trial steps (1 closure each) instead.
+  bool fullRestartFits() {
+    const auto best = objective_.best();
+    return best && objective_.budgetAllows(objective_.jacobianSims(best->x) + 1);
+  }
+
   FitObjective& objective_;
   const std::vector<double>& x_;  // Ceres updates it every iteration
   int warm_rejections_;
@@ -235,6 +245,7 @@ Termination CeresDriver::minimize(FitObjective& objective, const OptimizerSettin
   if (!solve.warm_distrusted) return solve.termination;
   // The warm-started Jacobian mispredicted step after step: go on from the best point with
   // full-closure differences, recorded as their own stage.
+  if (!objective.best()) return solve.termination;  // the callback switches only from a best
   objective.useFullClosureDifferences();
   objective.restartAt(objective.best()->x);
   objective.setStageLabel(name() + "-full");

@@ -12,6 +12,14 @@
 // the Jacobian when the step is accepted. The solve goes on while one trial closure fits (the
 // iteration callback stops it when none is left); an accepted trial whose Jacobian the budget
 // refuses ends it and is kept as the best point. The run never exceeds the budget.
+//
+// Warm-started differences (--fd-warm): a warm-started perturbation can settle on another
+// branch than the full closure, and the Jacobian then mispredicts the cost. After
+// OptimizerSettings::warm_rejections_before_full valid steps in a row rejected, the solve
+// stops (when a full-closure Jacobian and a trial still fit the budget) and a second solve
+// goes on from the best point with full-closure differences, recorded as stage "ceres-full".
+// It starts with a fresh trust region and its own max_iterations. The prior stays at the
+// first solve's start, so both minimise the same cost.
 #pragma once
 
 #include "inverse/optimizer.h"

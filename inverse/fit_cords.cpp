@@ -147,6 +147,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   }
   const Termination termination = optimizer->minimize(objective, options.optimizer_settings);
   outcome.termination = termination.message;
+  outcome.switched_to_full_closures =
+      options.finite_difference.warm_start && !objective.warmDifferences();
   // The drivers count against the optimiser's share; say where the rest of --max-sims went.
   if (release_slack && termination.budget_spent)
     outcome.termination += "; 1 more of --max-sims " + std::to_string(options.max_sims) +
@@ -230,8 +232,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     int jacobian_sims = 0;
     std::string jacobian_error;
     if (!J) {
-      JacobianResult result =
-          centralDifferenceJacobian(residual, best->x, best->closed_V, options.finite_difference);
+      // The objective's differences: full closures when the driver gave up warm-started ones.
+      JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V,
+                                                        objective.finiteDifferences());
       jacobian_sims = result.forward_sims;
       jacobian_error = result.error;
       if (result.ok()) J = std::make_shared<const Eigen::MatrixXd>(std::move(result.J));

@@ -90,6 +90,9 @@ struct FitOutcome {
   FitUncertainty uncertainty;  // empty (sd.size() == 0) when not asked for
   double uncertainty_seconds = 0.0;
   std::string termination;
+  // Warm-started differences were given up for full closures during the solve (the Ceres
+  // driver after rejected steps); the uncertainty then uses full closures too.
+  bool switched_to_full_closures = false;
   bool error_is_input = false;  // the error is about the options (e.g. too small a budget)
   bool ok() const { return error.empty(); }
 };

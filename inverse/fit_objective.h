@@ -50,9 +50,13 @@ class FitObjective {
   const Eigen::VectorXd& startPoint() const { return start_x_; }
   void restartAt(const Eigen::VectorXd& x) { start_x_ = x; }
   // From now on, Jacobians come from full closures (no warm start); those computed warm are
-  // forgotten. The fit's finish after a warm-started solve (fit_cords.cpp).
+  // forgotten. The Ceres driver's way out of warm-started differences that mispredict
+  // (ceres_driver.h).
   void useFullClosureDifferences();
   bool warmDifferences() const { return fd_.warm_start; }
+  // The finite differences in use now (after useFullClosureDifferences, without warm start):
+  // what a Jacobian computed after the solve must use too.
+  const FiniteDifferenceOptions& finiteDifferences() const { return fd_; }
   // The stage name history records carry instead of the driver's own (empty: the driver's).
   void setStageLabel(std::string label) { stage_label_ = std::move(label); }
 

@@ -206,9 +206,15 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusShiftedTurnedOrWithARepeatedPoint) 
   expectError("annulus_closed\\.json", "shifted by 4 of 8 places .*half a turn");
   writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 2 : k); });
   expectError("annulus_closed\\.json", "points\\[2\\]: the side to point 3 is 0 mm long");
-  // The whole annulus moved (toward the apex in systole) is no shift.
+  // The whole annulus moved toward the apex, turned by 20 degrees about its axis and shrunk by
+  // a tenth is no shift: a small rotation between the phases looks like a shift of a place
+  // or two.
+  const double turn = 20.0 * M_PI / 180.0;
   writeClosed([&](Eigen::Index k) -> Eigen::RowVector3d {
-    return closed.row(k) + Eigen::RowVector3d(0, 0, -3);
+    const Eigen::RowVector3d p = closed.row(k) - centre;
+    return centre + Eigen::RowVector3d(0.9 * (std::cos(turn) * p(0) - std::sin(turn) * p(1)),
+                                       0.9 * (std::sin(turn) * p(0) + std::cos(turn) * p(1)),
+                                       p(2) - 3.0);
   });
   const testing::CommandResult r = validate();
   EXPECT_EQ(r.err.find("annulus_closed.json: points"), std::string::npos) << r.err;

@@ -467,6 +467,21 @@ TEST(FitCommand, WarmDifferencesThatMispredictGiveWayToFullClosures) {
   EXPECT_NE(testing::readText(dir / "fit" / "convergence.csv").find("\nceres-full,"),
             std::string::npos)
       << "the full-closure stage has its own rows";
+  EXPECT_TRUE(metrics["fd_switched_to_full_closures"].get<bool>());
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("until Ceres rejected two steps"),
+            std::string::npos);
+
+  // With too small a budget for a full-closure Jacobian and a step, the warm solve goes on
+  // with trial steps instead of stopping.
+  r = runChordfit("fit " + quoted(dir / "case") +
+                  " --fd-warm --max-sims 100 --no-uncertainty --quiet --out " +
+                  quoted(dir / "small"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto small = nlohmann::json::parse(testing::readText(dir / "small" / "metrics.json"));
+  EXPECT_FALSE(small["fd_switched_to_full_closures"].get<bool>()) << small["termination"];
+  EXPECT_NE(small["termination"].get<std::string>().find("budget of 99 forward runs reached"),
+            std::string::npos)
+      << small["termination"];
 }
 
 // A seed whose closure diverges (settings inside their ranges can still break a run) is a

@@ -54,7 +54,7 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
       !checkCordVertices(set, static_cast<int>(valve_case.mesh.V.rows()), cords_file,
                          diagnostics) ||
-      !checkTipsNearValve(valve_case.mesh.V, set.tips, cords_file, diagnostics)) {
+      !checkTipPlacement(valve_case.mesh, set.tips, cords_file, diagnostics)) {
     diagnostics.print(std::cerr);
     return std::nullopt;
   }
@@ -361,13 +361,6 @@ int reportClosureFailure(const SimulationResult& result, const std::string& what
   std::cerr << "error: " << what << ": " << (result.diverged ? "simulation failed: " : "")
             << result.error << suffix << "\n";
   return result.diverged ? kExitSimulationFailed : kExitBadInput;
-}
-
-std::string joinSegments(const std::vector<std::string>& segments) {
-  if (segments.empty()) return "none";
-  std::string joined;
-  for (const std::string& name : segments) joined += (joined.empty() ? "" : ", ") + name;
-  return joined;
 }
 
 std::string closedValveSummary(const ValveMetrics& m, const std::string& indent) {

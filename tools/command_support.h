@@ -97,9 +97,6 @@ int fitStepCapToMesh(ValveCase& valve_case);
 int reportClosureFailure(const SimulationResult& result, const std::string& what,
                          const std::string& suffix = "");
 
-// "P2, A2" or "none".
-std::string joinSegments(const std::vector<std::string>& segments);
-
 // The prolapse lines printed after a Table 1 row: what the tracings show, what the closed
 // mesh shows in the tracing planes (Table 1's "Prolapse reconstructed" compares these two)
 // and in its tissue (every vertex, open-state localisation; a diagnostic). `indent` prefixes

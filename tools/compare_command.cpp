@@ -187,7 +187,7 @@ std::string cordsCsv(const ValveCase& c, const std::vector<ComparedSet>& sets,
     for (std::size_t i = 0; i < s.cords.cords.size(); ++i) {
       const Cord& cord = s.cords.cords[i];
       csv += csvQuoted(s.label) + "," + std::to_string(i) + "," +
-             groupName(cord, c.mesh.leaflet, c.mesh.leaflet_names, s.cords.tips) + "," +
+             csvQuoted(groupName(cord, c.mesh.leaflet, c.mesh.leaflet_names, s.cords.tips)) + "," +
              toString(cord.kind) + "," + csvNumber(cord.rest_length) + "," +
              csvNumber(cord.scale()) + "," + toString(cord.provenance) + "," +
              (cord.locked ? "yes" : "no") + ",";

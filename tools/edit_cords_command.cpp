@@ -28,7 +28,9 @@ namespace {
 constexpr double kMaxScale = 10.0;
 // The fit's default scale bounds (inverse/fit_parameters.h): an unlocked cord outside them
 // starts the fit clamped.
-constexpr double kFitScaleLower = 0.7, kFitScaleUpper = 1.5;
+// The fit's default scale bounds.
+const double kFitScaleLower = inverse::ParameterBounds{}.scale_lower;
+const double kFitScaleUpper = inverse::ParameterBounds{}.scale_upper;
 
 int usage(const std::string& message) {
   std::cerr << "error: edit-cords: " << message << "\n";
@@ -247,10 +249,10 @@ int runEditCords(const EditCordsOptions& options) {
     set.tips[tip].position += offset;
     if (set.tips[tip].closed_position) *set.tips[tip].closed_position += offset;
   }
-  // A moved tip must stay within reach of the valve, as a case's tips must (case_extent.h);
-  // otherwise every command reading the set would refuse it.
+  // A moved tip must stay within reach of the valve and below the annulus, as a case's tips
+  // must (case_extent.h); otherwise every command reading the set would refuse it.
   Diagnostics far_tips;
-  if (!checkTipsNearValve(mesh.V, set.tips, "edit-cords: --move-tip", far_tips)) {
+  if (!checkTipPlacement(mesh, set.tips, "edit-cords: --move-tip", far_tips)) {
     far_tips.print(std::cerr);
     return kExitBadInput;
   }

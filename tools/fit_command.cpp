@@ -111,11 +111,13 @@ int runFit(const FitCommandOptions& o) {
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
   if (seed->cords.empty()) {
+    // Without --seed-cords the seed is the case's cords, or the heuristic's when it has none.
     std::cerr << "error: fit: "
-              << (o.seed_cords_file.empty() ? o.case_dir + ": the case's cord set"
-                                            : o.seed_cords_file)
-              << " has no cords: nothing to fit (give --seed-cords, e.g. from `chordfit "
-                 "heuristic`)\n";
+              << (!o.seed_cords_file.empty() ? o.seed_cords_file + " has no cords"
+                  : valve_case->cords
+                      ? o.case_dir + ": the case's cord set has no cords (give --seed-cords)"
+                      : o.case_dir + ": the heuristic placed no cords on this mesh")
+              << ": nothing to fit\n";
     return kExitBadInput;
   }
   // A scale at the upper bound must leave a cord set the readers take (cords.json is read
@@ -235,6 +237,8 @@ int runFit(const FitCommandOptions& o) {
                         {"fd_warm", o.fd_warm_start},
                         {"fd_slack_closures", o.fd_slack_closures},
                         {"uncertainty", o.uncertainty}};
+  // With --fd-warm: whether Ceres gave warm-started differences up for full closures.
+  if (o.fd_warm_start) metrics["fd_switched_to_full_closures"] = fit.switched_to_full_closures;
   if (o.uncertainty) {
     nlohmann::json u = {{"jacobian_sims", fit.uncertainty.jacobian_sims},
                         {"seconds", fit.uncertainty_seconds}};

@@ -56,7 +56,7 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
   const Eigen::VectorXd& spans = fit.closed_spans;
   std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale (× heuristic) | "
+  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale (× seed length) | "
         "Closed span (mm) "
         "| "
         "± SD (%) | Sensitivity (mm per 1 %) | Provenance | Locked |\n"
@@ -272,17 +272,23 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
        << "\n";
   }
   md << "- slack release: " << slackReleaseLine(fit, o.slack_release, o.params) << "\n";
-  // Only Ceres differentiates; NLopt's methods are derivative-free.
-  if (o.optimizer == "ceres")
-    md << "- finite differences: step " << o.fd_scale_step << " on a scale"
+  // Ceres differentiates, and so does the uncertainty after any optimiser (NLopt's methods
+  // themselves are derivative-free).
+  const bool ceres = o.optimizer == "ceres";
+  if (ceres || fit.uncertainty.ok()) {
+    md << "- finite differences" << (ceres ? "" : " (the uncertainty's only)") << ": step "
+       << o.fd_scale_step << " on a scale"
        << (o.params == "scales+tips" ? ", " + formatFixed(o.fd_tip_step_mm, 2) + " mm on a tip"
                                      : std::string())
-       << (o.fd_warm_start
-               ? ", perturbed closures warm-started from the base closed state (--fd-warm)"
-               : ", perturbed closures from the open state")
+       << (!o.fd_warm_start ? ", perturbed closures from the open state"
+           : fit.switched_to_full_closures
+               ? ", perturbed closures warm-started from the base closed state (--fd-warm) until "
+                 "Ceres rejected two steps in a row, then from the open state"
+               : ", perturbed closures warm-started from the base closed state (--fd-warm)")
        << (o.fd_slack_closures ? ", slack-only parameters closed too (--fd-slack-closures)"
                                : std::string())
        << "\n";
+  }
   if (!o.settings_overrides.empty()) {
     md << "- simulator settings over the case's (--set):";
     for (const std::string& item : o.settings_overrides) md << " `" << item << "`";
