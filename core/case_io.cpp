@@ -527,8 +527,16 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
 
   ValveCase c;
   c.name = directory.filename().string();
-  if (const json* name = fields.member(*document, "", "name", false))
-    fields.text(*name, "name", c.name);
+  if (const json* name = fields.member(*document, "", "name", false)) {
+    // The name titles figures (SVG, where a NUL or other control character is not allowed
+    // even escaped) and tables (where a newline ends the row).
+    if (fields.text(*name, "name", c.name) &&
+        std::any_of(c.name.begin(), c.name.end(),
+                    [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; }))
+      fields.error("name",
+                   "contains a control character (a newline, tab or NUL): give a name "
+                   "of printable characters");
+  }
   const bool valve_ok = readValve(*document, directory, fields, c);
   readOptionalParts(*document, directory, fields, c.mesh.V.rows() > 0 && valve_ok, c);
   if (diagnostics.problems().size() != problems_before) return std::nullopt;

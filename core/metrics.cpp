@@ -346,7 +346,19 @@ std::string reconstructedCell(const ValveMetrics& m) {
 
 }  // namespace
 
-std::string table1Row(const std::string& label, const ValveMetrics& m) {
+namespace {
+
+// A '|' in a label would split its Markdown cell.
+std::string markdownCell(const std::string& text) {
+  std::string cell;
+  for (char ch : text) cell += ch == '|' ? std::string("\\|") : std::string(1, ch);
+  return cell;
+}
+
+}  // namespace
+
+std::string table1Row(const std::string& label_text, const ValveMetrics& m) {
+  const std::string label = markdownCell(label_text);
   // The numbers only through snprintf: a label or segment list has no length limit.
   char numbers[160];
   if (m.has_tracings) {

@@ -298,6 +298,12 @@ TEST_F(ValidateCommand, SkipsAByteOrderMarkInACsvCurveAndNamesItInAMesh) {
   expectError("open\\.ply", "starts with a UTF-8 byte-order mark");
 }
 
+// The case's name titles SVG figures (no control characters allowed) and Markdown tables.
+TEST_F(ValidateCommand, ReportsAControlCharacterInTheCaseName) {
+  editCaseJson([](nlohmann::json& j) { j["name"] = "two\nlines"; });
+  expectError("case\\.json", "name: contains a control character");
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
   writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},

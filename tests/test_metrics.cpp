@@ -49,6 +49,23 @@ TEST(OwnLeafletDistance, MeasuresEachPointToItsOwnLeafletOnly) {
   for (int i = 0; i < 4; ++i) EXPECT_GE(own(i), any(i) - kTolerance);
 }
 
+// Table 1's last column says where the planes prolapse (a bare "Yes" on a normal valve read as
+// "it prolapses"), and a '|' in a label does not split its cell.
+TEST(Table1, RowsNameTheProlapseSegmentsAndEscapeABarInTheLabel) {
+  ValveMetrics m;
+  m.has_tracings = true;
+  m.area_mm2 = 900.0;
+  m.deviation.min = m.deviation.median = m.deviation.max = m.deviation.mean = m.deviation.sd = 0.5;
+  m.prolapse_reconstructed = true;
+  EXPECT_EQ(table1Row("normal", m),
+            "| normal | 900 | 0.50 | 0.50 | 0.50 | 0.50 ± 0.50 | Yes (none) |\n");
+  m.prolapse_reconstructed = false;
+  m.section_prolapse.segments = {"P1", "P2"};
+  m.tracing_prolapse.segments = {"P2"};
+  EXPECT_EQ(table1Row("a|b", m),
+            "| a\\|b | 900 | 0.50 | 0.50 | 0.50 | 0.50 ± 0.50 | No (mesh P1, P2; tracings P2) |\n");
+}
+
 TEST(SurfaceArea, OfAUnitSquareIsOne) {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
