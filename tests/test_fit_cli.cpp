@@ -181,6 +181,10 @@ TEST(FitCommand, SkipsThePrefitsWhenEveryFreeCordIsManual) {
   // cords: the seed's closure, then the one written out).
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   EXPECT_EQ(metrics["forward_sims"].get<int>(), 2);
+  EXPECT_FALSE(metrics["prefit_ran"].get<bool>());
+  EXPECT_FALSE(metrics["segment_prefit_ran"].get<bool>());
+  EXPECT_NE(metrics["prefit_skipped"].get<std::string>().find("every free cord is manual"),
+            std::string::npos);
   EXPECT_NE(testing::readText(dir / "fit" / "report.md")
                 .find("- global pre-fit: skipped: every free cord is manual"),
             std::string::npos);

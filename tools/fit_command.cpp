@@ -214,6 +214,11 @@ int runFit(const FitCommandOptions& o) {
   metrics["initial_mean_mm"] = fit.seed_evaluation.mean_deviation_mm;
   metrics["initial_cost"] = fit.seed_evaluation.cost;
   metrics["final_cost"] = fit.final_evaluation.cost;
+  // Whether the cord pre-fits ran (options.prefit says only that they were asked for), and
+  // why not when they were skipped.
+  metrics["prefit_ran"] = fit.prefit_ran;
+  metrics["segment_prefit_ran"] = fit.segment_prefit_ran;
+  if (!fit.prefit_skipped.empty()) metrics["prefit_skipped"] = fit.prefit_skipped;
   metrics["prefit_factor"] = fit.prefit_factor;
   metrics["prefit_primary_factor"] = fit.prefit_primary_factor;
   metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
