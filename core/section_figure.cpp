@@ -17,10 +17,16 @@ constexpr double kPi = 3.14159265358979323846;
 // Okabe & Ito colours, as enface.svg: anterior blue, posterior green (red is enface's open
 // orifice); then for a third leaflet and more.
 const char* const kLeafletColours[] = {"#0072b2", "#009e73", "#d55e00", "#8e44ad", "#b7950b"};
+// Tracing points are hollow rings (SvgSeries::Kind::kRings) with a near-black rim: unlike a
+// dot, a ring stays distinct from a line of any colour under it, compare's black one included.
 constexpr const char* kTracingColour = "#111111";
+constexpr double kTracingRadius = 1.8;  // px, to the middle of the rim
 constexpr const char* kClosedAnnulusColour = "#e67e22";
 constexpr const char* kOpenAnnulusColour = "#f5cba7";
-constexpr const char* kThresholdColour = "#7f7f7f";
+// The prolapse threshold is dotted and thin: the seed closure of fit's figure is a dashed grey
+// line, and the two must not be taken for each other where they cross.
+constexpr const char* kThresholdColour = "#666666";
+constexpr double kThresholdWidth = 1.2;  // px; the seed closure is 1.4
 
 // The hinge line of heightAboveAnnulus raised by `threshold`: in a long-axis plane the height
 // of a point is its w minus the straight line through the two closed ring crossings (sorted
@@ -87,8 +93,12 @@ std::string sectionFigureSvg(const ValveMesh& mesh, const Eigen::MatrixXd& close
       const bool by_leaflet = layer.colour.empty();
       std::vector<SvgSeries> series(by_leaflet ? std::max(leaflets, 1) : 1);
       for (std::size_t k = 0; k < series.size(); ++k) {
-        series[k] = {SvgSeries::Kind::kLine, {},         layer.colour, layer.width,
-                     layer.dashed,           layer.label};
+        series[k] = {SvgSeries::Kind::kLine,
+                     {},
+                     layer.colour,
+                     layer.width,
+                     layer.dashed ? SvgStroke::kDashed : SvgStroke::kSolid,
+                     layer.label};
         if (!by_leaflet) continue;
         series[k].colour = kLeafletColours[k % std::size(kLeafletColours)];
         const std::string name =
@@ -110,19 +120,28 @@ std::string sectionFigureSvg(const ValveMesh& mesh, const Eigen::MatrixXd& close
                               {ringCrossings(plane, open_ring)},
                               kOpenAnnulusColour,
                               3.0,
-                              false,
+                              SvgStroke::kSolid,
                               "open annulus"});
     }
-    panel.series.push_back(
-        {SvgSeries::Kind::kSquares, {hinges}, kClosedAnnulusColour, 3.0, false, "closed annulus"});
+    panel.series.push_back({SvgSeries::Kind::kSquares,
+                            {hinges},
+                            kClosedAnnulusColour,
+                            3.0,
+                            SvgStroke::kSolid,
+                            "closed annulus"});
     const Eigen::MatrixXd threshold = thresholdLine(hinges, options.threshold_mm);
     if (options.prolapse_threshold && threshold.rows() == 2) {
       char label[96];
       std::snprintf(label, sizeof label, "prolapse: hinges + %.0f mm", options.threshold_mm);
-      panel.series.push_back(
-          {SvgSeries::Kind::kLine, {threshold}, kThresholdColour, 1.0, true, label});
+      panel.series.push_back({SvgSeries::Kind::kLine,
+                              {threshold},
+                              kThresholdColour,
+                              kThresholdWidth,
+                              SvgStroke::kDotted,
+                              label});
     }
-    SvgSeries points{SvgSeries::Kind::kDots, {}, kTracingColour, 1.1, false, options.tracing_label};
+    SvgSeries points{SvgSeries::Kind::kRings, {}, kTracingColour, kTracingRadius, SvgStroke::kSolid,
+                     options.tracing_label};
     for (const Tracing& t : tracings) {
       if (tracedOnPlane(t, plane)) points.parts.push_back(projectToPlane(plane, t.points));
     }

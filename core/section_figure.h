@@ -41,8 +41,10 @@ struct SectionFigureOptions {
 };
 
 // The figure: one panel per plane (titled with its angle from the AP axis), each with the
-// layers in order, the annulus points, the threshold line and the tracing points of the plane
-// (tracings whose normal matches the plane's to 1e-9) on top.
+// layers in order, the annulus points (orange squares), the threshold line (thin, grey,
+// dotted: a dashed layer stays distinct from it) and the tracing points of the plane (tracings
+// whose normal matches the plane's to 1e-9) on top, as hollow rings, distinct from any layer's
+// line whatever its colour.
 //   mesh         topology F, vertex leaflet labels and names, and the open ring
 //                (mesh.V(annulus)) of the layers
 //   closed_ring  #ring by 3 closed annulus positions (valve_case.annulus_closed)

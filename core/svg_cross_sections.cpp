@@ -20,11 +20,45 @@ constexpr double kMarginRight = 12.0;
 constexpr double kFigureTitle = 30.0;   // px
 constexpr double kLegendRow = 20.0;     // px per legend row
 constexpr double kLegendEntry = 210.0;  // px per legend entry
+constexpr double kRingRim = 0.9;        // px, the stroke of a hollow ring marker
 
 std::string number(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.2f", value);
   return buffer;
+}
+
+// The stroke-dasharray attribute of a line style, with its leading space ("" when solid).
+std::string dashAttribute(SvgStroke stroke) {
+  switch (stroke) {
+    case SvgStroke::kDashed:
+      return " stroke-dasharray=\"4,3\"";
+    case SvgStroke::kDotted:
+      return " stroke-dasharray=\"1,2\"";
+    case SvgStroke::kSolid:
+      break;
+  }
+  return "";
+}
+
+// A marker centred at (x, y) px: a disc, a square or a hollow ring of radius (half side) r.
+void drawMarker(std::ostringstream& svg, SvgSeries::Kind kind, double x, double y, double r) {
+  if (kind == SvgSeries::Kind::kSquares) {
+    svg << "<rect x=\"" << number(x - r) << "\" y=\"" << number(y - r) << "\" width=\""
+        << number(2 * r) << "\" height=\"" << number(2 * r) << "\"/>\n";
+  } else {
+    svg << "<circle cx=\"" << number(x) << "\" cy=\"" << number(y) << "\" r=\"" << number(r)
+        << "\"/>\n";
+  }
+}
+
+// The group attributes of a marker series: a filled disc or square, or a ring (white inside,
+// so that a line under it does not show through, a rim of the series' colour).
+std::string markerGroup(const SvgSeries& series) {
+  if (series.kind == SvgSeries::Kind::kRings)
+    return "<g fill=\"white\" stroke=\"" + series.colour + "\" stroke-width=\"" + number(kRingRim) +
+           "\">\n";
+  return "<g fill=\"" + series.colour + "\">\n";
 }
 
 struct Bounds {
@@ -109,44 +143,33 @@ void drawSeries(std::ostringstream& svg, const Transform& t, const SvgSeries& se
     if (part.rows() == 0) continue;
     if (series.kind == SvgSeries::Kind::kLine) {
       svg << "<polyline fill=\"none\" stroke=\"" << series.colour << "\" stroke-width=\""
-          << number(series.size) << "\" stroke-linejoin=\"round\"";
-      if (series.dashed) svg << " stroke-dasharray=\"4,3\"";
-      svg << " points=\"";
+          << number(series.size) << "\" stroke-linejoin=\"round\"" << dashAttribute(series.stroke)
+          << " points=\"";
       for (Eigen::Index i = 0; i < part.rows(); ++i) {
         svg << (i ? " " : "") << number(t.x(part(i, 0))) << "," << number(t.y(part(i, 1)));
       }
       svg << "\"/>\n";
       continue;
     }
-    svg << "<g fill=\"" << series.colour << "\">\n";
-    for (Eigen::Index i = 0; i < part.rows(); ++i) {
-      const double x = t.x(part(i, 0)), y = t.y(part(i, 1)), r = series.size;
-      if (series.kind == SvgSeries::Kind::kDots) {
-        svg << "<circle cx=\"" << number(x) << "\" cy=\"" << number(y) << "\" r=\"" << number(r)
-            << "\"/>\n";
-      } else {
-        svg << "<rect x=\"" << number(x - r) << "\" y=\"" << number(y - r) << "\" width=\""
-            << number(2 * r) << "\" height=\"" << number(2 * r) << "\"/>\n";
-      }
-    }
+    svg << markerGroup(series);
+    for (Eigen::Index i = 0; i < part.rows(); ++i)
+      drawMarker(svg, series.kind, t.x(part(i, 0)), t.y(part(i, 1)), series.size);
     svg << "</g>\n";
   }
 }
 
+// A legend entry's sample, as its series is drawn (a marker of 2 px radius at least,
+// so that a small one still reads), and its label.
 void drawLegendEntry(std::ostringstream& svg, double x, double y, const SvgSeries& series) {
   if (series.kind == SvgSeries::Kind::kLine) {
     svg << "<line x1=\"" << number(x) << "\" y1=\"" << number(y) << "\" x2=\"" << number(x + 24)
         << "\" y2=\"" << number(y) << "\" stroke=\"" << series.colour << "\" stroke-width=\""
-        << number(series.size) << "\"" << (series.dashed ? " stroke-dasharray=\"4,3\"" : "")
-        << "/>\n";
-  } else if (series.kind == SvgSeries::Kind::kDots) {
-    svg << "<circle cx=\"" << number(x + 12) << "\" cy=\"" << number(y) << "\" r=\""
-        << number(std::max(2.0, series.size)) << "\" fill=\"" << series.colour << "\"/>\n";
+        << number(series.size) << "\"" << dashAttribute(series.stroke) << "/>\n";
   } else {
-    const double r = std::max(2.5, series.size);
-    svg << "<rect x=\"" << number(x + 12 - r) << "\" y=\"" << number(y - r) << "\" width=\""
-        << number(2 * r) << "\" height=\"" << number(2 * r) << "\" fill=\"" << series.colour
-        << "\"/>\n";
+    const double r = std::max(series.kind == SvgSeries::Kind::kSquares ? 2.5 : 2.0, series.size);
+    svg << markerGroup(series);
+    drawMarker(svg, series.kind, x + 12, y, r);
+    svg << "</g>\n";
   }
   svg << "<text x=\"" << number(x + 30) << "\" y=\"" << number(y + 4)
       << "\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">" << escapeXml(series.label)

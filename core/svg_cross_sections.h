@@ -11,15 +11,21 @@
 
 namespace chordfit {
 
+// How a line is stroked: solid, dashed (4 px dashes, 3 px gaps) or dotted (1 px dots, 2 px
+// gaps): a dotted line stays distinct from a dashed one where the two cross.
+enum class SvgStroke { kSolid, kDashed, kDotted };
+
 struct SvgSeries {
-  enum class Kind { kLine, kDots, kSquares };
+  // kRings: hollow circles (a white centre, a coloured rim), which stay visible on a line of
+  // any colour drawn under them, their own included.
+  enum class Kind { kLine, kDots, kSquares, kRings };
   Kind kind = Kind::kLine;
   // Polylines (kLine) or point sets (markers), each #P by 2 in panel coordinates (mm):
   // column 0 horizontal, column 1 vertical (up).
   std::vector<Eigen::MatrixXd> parts;
   std::string colour = "#000000";
   double size = 1.5;  // stroke width (lines) or marker radius / half side (markers), px
-  bool dashed = false;
+  SvgStroke stroke = SvgStroke::kSolid;  // lines only
   std::string label;  // legend text; series with equal labels share one legend entry
 };
 
@@ -38,7 +44,8 @@ struct SvgFigureOptions {
 };
 
 // The whole figure as an SVG document. All panels share the same bounds (the union of all
-// data, padded) and scale, so shapes compare across planes.
+// data, padded) and scale, so shapes compare across planes. The legend under the title draws
+// each entry as its series is drawn.
 std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigureOptions& options);
 
 }  // namespace chordfit

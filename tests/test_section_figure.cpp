@@ -119,8 +119,14 @@ TEST(SectionFigureSvg, DrawsEveryLayerByLeafletTheHingesTheThresholdAndThePlaneT
   // The plane cuts each leaflet once: 2 seed + 2 fit polylines and the threshold line (legend
   // samples are <line>s).
   EXPECT_EQ(occurrences(svg, "<polyline"), 5u);
-  EXPECT_EQ(occurrences(svg, "<circle"), 3u + 1u) << "3 tracing points and a legend dot";
+  EXPECT_EQ(occurrences(svg, "<circle"), 3u + 1u) << "3 tracing points and a legend ring";
   EXPECT_EQ(occurrences(svg, "stroke=\"#9a9a9a\""), 2u + 1u) << "the seed in its own colour";
+  // The seed is dashed, the threshold dotted (a dashed grey threshold looked like the seed where
+  // the two crossed), each in the panel and in the legend alike.
+  EXPECT_EQ(occurrences(svg, "stroke-dasharray=\"4,3\""), 2u + 1u);
+  EXPECT_EQ(occurrences(svg, "stroke-dasharray=\"1,2\""), 1u + 1u);
+  // Tracing points are hollow rings: a black dot vanished on compare's black line.
+  EXPECT_EQ(occurrences(svg, "<g fill=\"white\" stroke=\"#111111\""), 1u + 1u);
   EXPECT_EQ(svg.find("nan"), std::string::npos);
 }
 

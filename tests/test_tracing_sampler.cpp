@@ -246,11 +246,12 @@ TEST(SampleTracings, SameSeedSameTracingsOtherSeedOtherNoise) {
 }
 
 TEST(CrossSectionsSvg, WritesOnePanelPerPlaneWithLegendAndAxes) {
-  SvgSeries line{SvgSeries::Kind::kLine, {}, "#c0392b", 2.0, false, "closed & anterior"};
+  SvgSeries line{SvgSeries::Kind::kLine, {}, "#c0392b", 2.0, SvgStroke::kSolid,
+                 "closed & anterior"};
   Eigen::MatrixXd P(3, 2);
   P << -10, 0, 0, -5, 10, 2;
   line.parts.push_back(P);
-  SvgSeries dots{SvgSeries::Kind::kDots, {P}, "#000", 1.0, false, "tracings"};
+  SvgSeries dots{SvgSeries::Kind::kDots, {P}, "#000", 1.0, SvgStroke::kSolid, "tracings"};
   std::vector<SvgPanel> panels(4);
   for (int i = 0; i < 4; ++i) {
     panels[i].title = "plane " + std::to_string(i);
