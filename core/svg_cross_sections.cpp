@@ -19,7 +19,10 @@ constexpr double kMarginTop = 24.0;     // px, panel title
 constexpr double kMarginRight = 12.0;
 constexpr double kFigureTitle = 30.0;   // px
 constexpr double kLegendRow = 20.0;     // px per legend row
-constexpr double kLegendEntry = 210.0;  // px per legend entry
+constexpr double kLegendSample = 30.0;  // px, the entry's line or marker and the gap after it
+constexpr double kLegendGap = 22.0;     // px between two entries of a row
+constexpr double kLegendChar = 6.2;     // px per character at 11 px, generously
+constexpr double kLegendSide = 16.0;    // px kept free at each side of the legend
 constexpr double kRingRim = 0.9;        // px, the stroke of a hollow ring marker
 
 std::string number(double value) {
@@ -171,9 +174,48 @@ void drawLegendEntry(std::ostringstream& svg, double x, double y, const SvgSerie
     drawMarker(svg, series.kind, x + 12, y, r);
     svg << "</g>\n";
   }
-  svg << "<text x=\"" << number(x + 30) << "\" y=\"" << number(y + 4)
+  svg << "<text x=\"" << number(x + kLegendSample) << "\" y=\"" << number(y + 4)
       << "\" font-family=\"sans-serif\" font-size=\"11\" fill=\"#222\">" << escapeXml(series.label)
       << "</text>\n";
+}
+
+// The legend's grid: `rows` rows, filled column by column, each column as wide as its widest
+// entry.
+struct LegendLayout {
+  int rows = 0;
+  std::vector<double> column_widths;
+  double width() const {
+    double sum = 0.0;
+    for (double w : column_widths) sum += w;
+    return sum + kLegendGap * std::max<double>(0.0, column_widths.size() - 1.0);
+  }
+};
+
+LegendLayout legendLayout(const std::vector<const SvgSeries*>& legend, int rows) {
+  LegendLayout layout;
+  layout.rows = rows;
+  const int n = static_cast<int>(legend.size());
+  const int columns = (n + rows - 1) / rows;
+  layout.column_widths.assign(columns, 0.0);
+  for (int i = 0; i < n; ++i) {
+    const double entry = kLegendSample + kLegendChar * static_cast<double>(legend[i]->label.size());
+    layout.column_widths[i / rows] = std::max(layout.column_widths[i / rows], entry);
+  }
+  return layout;
+}
+
+// The fewest rows whose grid fits `available` px; with that many rows, as few columns as hold
+// the entries, so the rows are as full as each other (within one entry).
+LegendLayout fitLegend(const std::vector<const SvgSeries*>& legend, double available) {
+  const int n = static_cast<int>(legend.size());
+  if (n == 0) return {};
+  for (int rows = 1; rows < n; ++rows) {
+    const int columns = (n + rows - 1) / rows;
+    if ((n + columns - 1) / columns != rows) continue;  // the same grid as fewer rows
+    const LegendLayout layout = legendLayout(legend, rows);
+    if (layout.width() <= available) return layout;
+  }
+  return legendLayout(legend, n);
 }
 
 }  // namespace
@@ -203,11 +245,9 @@ std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigur
   const double plot_width = options.panel_width_px - kMarginLeft - kMarginRight;
   const double scale = plot_width / (bounds.x1 - bounds.x0);
   const double panel_height = kMarginTop + (bounds.y1 - bounds.y0) * scale + kMarginBottom;
-  const int legend_per_row =
-      std::max(1, static_cast<int>(columns * options.panel_width_px / kLegendEntry));
-  const int legend_rows = (static_cast<int>(legend.size()) + legend_per_row - 1) / legend_per_row;
-  const double header = kFigureTitle + legend_rows * kLegendRow + 6.0;
   const double width = columns * options.panel_width_px;
+  const LegendLayout legend_layout = fitLegend(legend, width - 2.0 * kLegendSide);
+  const double header = kFigureTitle + legend_layout.rows * kLegendRow + 6.0;
   const double height = header + rows * panel_height;
 
   std::ostringstream svg;
@@ -219,10 +259,17 @@ std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigur
       << "\" y=\"20\" font-family=\"sans-serif\" font-size=\"15\" text-anchor=\"middle\" "
          "fill=\"#111\">"
       << escapeXml(options.title) << "</text>\n";
+  // The legend centred under the title (at the left edge when wider than the figure).
+  std::vector<double> column_x(legend_layout.column_widths.size());
+  double x = std::max(kLegendSide, 0.5 * (width - legend_layout.width()));
+  for (std::size_t c = 0; c < column_x.size(); ++c) {
+    column_x[c] = x;
+    x += legend_layout.column_widths[c] + kLegendGap;
+  }
   for (std::size_t i = 0; i < legend.size(); ++i) {
-    const double x = 16.0 + (i % legend_per_row) * kLegendEntry;
-    const double y = kFigureTitle + (i / legend_per_row) * kLegendRow + 6.0;
-    drawLegendEntry(svg, x, y, *legend[i]);
+    const std::size_t rows = static_cast<std::size_t>(legend_layout.rows);
+    const double y = kFigureTitle + static_cast<double>(i % rows) * kLegendRow + 6.0;
+    drawLegendEntry(svg, column_x[i / rows], y, *legend[i]);
   }
   for (std::size_t p = 0; p < panels.size(); ++p) {
     const double left = (p % columns) * options.panel_width_px;

@@ -45,7 +45,9 @@ struct SvgFigureOptions {
 
 // The whole figure as an SVG document. All panels share the same bounds (the union of all
 // data, padded) and scale, so shapes compare across planes. The legend under the title draws
-// each entry as its series is drawn.
+// each entry as its series is drawn, in as few rows as fit the figure's width, its entries
+// spread evenly over the rows (filled column by column) so that none is left alone on a row
+// it could share.
 std::string crossSectionsSvg(const std::vector<SvgPanel>& panels, const SvgFigureOptions& options);
 
 }  // namespace chordfit

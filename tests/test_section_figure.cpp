@@ -2,7 +2,9 @@
 // from tracings, annulus crossings, and the figure's content. Hand-built and parametric meshes,
 // no simulation.
 #include <cmath>
+#include <map>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -128,6 +130,49 @@ TEST(SectionFigureSvg, DrawsEveryLayerByLeafletTheHingesTheThresholdAndThePlaneT
   // Tracing points are hollow rings: a black dot vanished on compare's black line.
   EXPECT_EQ(occurrences(svg, "<g fill=\"white\" stroke=\"#111111\""), 1u + 1u);
   EXPECT_EQ(svg.find("nan"), std::string::npos);
+}
+
+// The y of each legend label (the legend's text is 11 px, #222), in the order drawn.
+std::vector<double> legendRows(const std::string& svg) {
+  std::vector<double> ys;
+  const std::string marker = "font-size=\"11\" fill=\"#222\"";
+  for (std::size_t at = svg.find(marker); at != std::string::npos; at = svg.find(marker, at + 1)) {
+    const std::size_t y = svg.rfind(" y=\"", at) + 4;
+    ys.push_back(std::stod(svg.substr(y, svg.find('"', y) - y)));
+  }
+  return ys;
+}
+
+// The legend takes the fewest rows that fit the figure and spreads its entries evenly over
+// them: "tracing points" was left alone on a second row of fit's figure.
+TEST(SectionFigureSvg, SpreadsTheLegendEvenlyOverTheFewestRowsThatFit) {
+  ValveCase cone = testing::tinyConeCase();
+  Eigen::MatrixXd traced(3, 3);
+  traced << 10, 0, 0, 8, 0, -4, 6, 0, -8;
+  cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0)};
+  Eigen::MatrixXd lowered = cone.mesh.V;
+  lowered.col(2).array() -= 1.0;
+  const std::vector<SectionLayer> layers = {{"seed", lowered, "#9a9a9a", true, 1.4},
+                                            {"fit", cone.mesh.V, "", false, 2.0}};
+  // One plane: a figure 360 px wide, too narrow for the 6 entries in one or two rows.
+  const std::vector<double> narrow = legendRows(caseSectionFigureSvg(cone, layers, {"cone"}));
+  ASSERT_EQ(narrow.size(), 6u);
+  std::map<double, int> per_row;
+  for (double y : narrow) ++per_row[y];
+  EXPECT_EQ(per_row.size(), 3u);
+  for (const auto& [y, entries] : per_row) EXPECT_EQ(entries, 2) << "row at y " << y;
+
+  // Three planes (the width of fit's figure): the 6 entries in one row (fit's own labels, 25
+  // characters at most, fit too).
+  Eigen::MatrixXd on_x(2, 3), on_diagonal(2, 3);
+  on_x << 0, 9, 0, 0, 5, -8;
+  on_diagonal << 5, 5, 0, 3, 3, -6;
+  cone.tracings.push_back(tracingOn({0, 0, 0}, Eigen::Vector3d::UnitX(), on_x, 1));
+  cone.tracings.push_back(
+      tracingOn({0, 0, 0}, Eigen::Vector3d(1, -1, 0).normalized(), on_diagonal, 1));
+  const std::vector<double> wide = legendRows(caseSectionFigureSvg(cone, layers, {"cone"}));
+  ASSERT_EQ(wide.size(), 6u);
+  for (double y : wide) EXPECT_EQ(y, wide.front());
 }
 
 TEST(SectionFigureSvg, EachPanelShowsOnlyTheTracingsOfItsPlane) {
