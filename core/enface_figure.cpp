@@ -38,59 +38,107 @@ std::string shade(int leaflet, double lightness) {
   return colour;
 }
 
-}  // namespace
+// The atrial view's screen coordinates (mm): +a (anterior) up, +l (anterolateral) left.
+Eigen::Vector2d project(const AnnulusFrame& frame, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d d = p - frame.plane.centre;
+  return Eigen::Vector2d(-frame.l.dot(d), -frame.a.dot(d));
+}
 
-std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
-                            const EnfaceFigureOptions& options) {
-  const ValveMesh& mesh = valve_case.mesh;
-  const ClosedAnnulus annulus = closedAnnulus(valve_case);
-  const AnnulusFrame& frame = annulus.frame;
-  const double s = options.pixels_per_mm;
-  // Screen coordinates of the atrial view: +a (anterior) up, +l (anterolateral) left.
-  auto project = [&](const Eigen::Vector3d& p) {
-    const Eigen::Vector3d d = p - frame.plane.centre;
-    return Eigen::Vector2d(-frame.l.dot(d), -frame.a.dot(d));
-  };
-  const Eigen::MatrixXd ring = closed_V(mesh.annulus, Eigen::all);
-  Eigen::Vector2d lo = Eigen::Vector2d::Constant(1e300), hi = -lo;
-  std::vector<Eigen::Vector2d> ring_points;
-  for (Eigen::Index i = 0; i < ring.rows(); ++i) {
-    ring_points.push_back(project(ring.row(i).transpose()));
-    lo = lo.cwiseMin(ring_points.back());
-    hi = hi.cwiseMax(ring_points.back());
-  }
-  if (ring_points.empty()) lo = hi = Eigen::Vector2d::Zero();
-  lo -= Eigen::Vector2d::Constant(kMarginMm);
-  hi += Eigen::Vector2d::Constant(kMarginMm);
-  // Each triangle's depth along the view (its centroid's signed distance from the closed
-  // annulus plane: the drawing order) and its height above the annulus as the prolapse measure
-  // has it (the hinge line, heightAboveAnnulus: the shade), and the scale's top.
-  const Eigen::Index faces = mesh.F.rows();
-  Eigen::MatrixXd centroids(faces, 3);
-  std::vector<double> depths(faces);
-  for (Eigen::Index f = 0; f < faces; ++f) {
-    centroids.row(f) =
-        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2))) /
-        3.0;
-    depths[f] = frame.plane.signedDistance(centroids.row(f).transpose());
-  }
-  const Eigen::VectorXd hinge_heights = heightAboveAnnulus(frame, annulus.ring, centroids);
-  const std::vector<double> heights(hinge_heights.data(), hinge_heights.data() + faces);
-  const double highest = faces > 0 ? *std::max_element(heights.begin(), heights.end()) : 0.0;
-  const double lightest_mm =
-      std::clamp(2.0 * std::ceil(highest / 2.0), kLightestMinMm, kLightestMaxMm);
-  const int steps = static_cast<int>((lightest_mm - kDarkestMm) / 2.0);
+// What the drawing needs of a closure, and what decides the figure's size and scale.
+struct EnfaceLayout {
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();  // frame, mm
+  double lightest_mm = kLightestMinMm;  // the height scale's top
+  double width = 0.0;                   // px
+};
+
+int scaleSteps(double lightest_mm) { return static_cast<int>((lightest_mm - kDarkestMm) / 2.0); }
+
+std::string noteText(double tissue_radius_mm) {
   char note[240];
   std::snprintf(note, sizeof note,
                 "atrial view, anterior up, anterolateral commissure left; leaflets drawn "
                 "\xC2\xB1 %.2g mm (tissue), the highest on top; prolapse: over 2 mm",
-                options.tissue_radius_mm);
-  // Wide enough for the legend's height scale (240 px, 22 per swatch, the leaflet names), the
-  // note under it (about 6 px per character at 11 px) and the title (about 7 px per character
-  // at 13 px).
-  const double width =
-      std::max({500.0, 240.0 + 22.0 * (steps + 1) + 60.0, 20.0 + 6.0 * std::strlen(note),
-                (hi.x() - lo.x()) * s, 7.0 * static_cast<double>(options.title.size())});
+                tissue_radius_mm);
+  return note;
+}
+
+// Wide enough for the drawing, the legend's height scale (240 px, 22 per swatch, the leaflet
+// names, the scale's note), the note under it (about 6 px per character at 11 px) and the
+// title (about 7 px per character at 13 px).
+double figureWidth(const EnfaceLayout& layout, const EnfaceFigureOptions& options) {
+  const double scale_end = 240.0 + 22.0 * (scaleSteps(layout.lightest_mm) + 1) + 60.0 +
+                           6.0 * static_cast<double>(options.scale_note.size());
+  return std::max({500.0, scale_end,
+                   20.0 + 6.0 * static_cast<double>(noteText(options.tissue_radius_mm).size()),
+                   (layout.hi.x() - layout.lo.x()) * options.pixels_per_mm,
+                   7.0 * static_cast<double>(options.title.size())});
+}
+
+// Each triangle's height above the annulus as the prolapse measure has it (the hinge line,
+// heightAboveAnnulus: the shade).
+std::vector<double> triangleHeights(const ValveCase& valve_case, const ClosedAnnulus& annulus,
+                                    const Eigen::MatrixXd& closed_V) {
+  const ValveMesh& mesh = valve_case.mesh;
+  const Eigen::Index faces = mesh.F.rows();
+  Eigen::MatrixXd centroids(faces, 3);
+  for (Eigen::Index f = 0; f < faces; ++f)
+    centroids.row(f) =
+        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2))) /
+        3.0;
+  const Eigen::VectorXd heights = heightAboveAnnulus(annulus.frame, annulus.ring, centroids);
+  return std::vector<double>(heights.data(), heights.data() + faces);
+}
+
+// The closure's own layout: its ring's frame with a margin, its highest tissue rounded up to
+// an even mm within [4, 12] mm as the scale's top.
+EnfaceLayout ownLayout(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                       const EnfaceFigureOptions& options) {
+  const ValveMesh& mesh = valve_case.mesh;
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  EnfaceLayout layout;
+  layout.lo = Eigen::Vector2d::Constant(1e300), layout.hi = -layout.lo;
+  for (Eigen::Index i = 0; i < mesh.annulus.size(); ++i) {
+    const Eigen::Vector2d q = project(annulus.frame, closed_V.row(mesh.annulus(i)).transpose());
+    layout.lo = layout.lo.cwiseMin(q);
+    layout.hi = layout.hi.cwiseMax(q);
+  }
+  if (mesh.annulus.size() == 0) layout.lo = layout.hi = Eigen::Vector2d::Zero();
+  layout.lo -= Eigen::Vector2d::Constant(kMarginMm);
+  layout.hi += Eigen::Vector2d::Constant(kMarginMm);
+  const std::vector<double> heights = triangleHeights(valve_case, annulus, closed_V);
+  const double highest = heights.empty() ? 0.0 : *std::max_element(heights.begin(), heights.end());
+  layout.lightest_mm = std::clamp(2.0 * std::ceil(highest / 2.0), kLightestMinMm, kLightestMaxMm);
+  layout.width = figureWidth(layout, options);
+  return layout;
+}
+
+std::string drawEnface(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                       const EnfaceFigureOptions& options, const EnfaceLayout& layout) {
+  const ValveMesh& mesh = valve_case.mesh;
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  const AnnulusFrame& frame = annulus.frame;
+  const double s = options.pixels_per_mm;
+  const Eigen::MatrixXd ring = closed_V(mesh.annulus, Eigen::all);
+  std::vector<Eigen::Vector2d> ring_points;
+  for (Eigen::Index i = 0; i < ring.rows(); ++i)
+    ring_points.push_back(project(frame, ring.row(i).transpose()));
+  const Eigen::Vector2d &lo = layout.lo, &hi = layout.hi;
+  // Each triangle's depth along the view (its centroid's signed distance from the closed
+  // annulus plane: the drawing order) and its height above the hinge line (the shade).
+  const Eigen::Index faces = mesh.F.rows();
+  std::vector<double> depths(faces);
+  for (Eigen::Index f = 0; f < faces; ++f) {
+    const Eigen::Vector3d centroid =
+        (closed_V.row(mesh.F(f, 0)) + closed_V.row(mesh.F(f, 1)) + closed_V.row(mesh.F(f, 2)))
+            .transpose() /
+        3.0;
+    depths[f] = frame.plane.signedDistance(centroid);
+  }
+  const std::vector<double> heights = triangleHeights(valve_case, annulus, closed_V);
+  const double lightest_mm = layout.lightest_mm;
+  const int steps = scaleSteps(lightest_mm);
+  const std::string note = noteText(options.tissue_radius_mm);
+  const double width = layout.width;
   const double height = (hi.y() - lo.y()) * s;
   const double left = 0.5 * (width - (hi.x() - lo.x()) * s);
   auto px = [&](const Eigen::Vector2d& q) {
@@ -124,7 +172,8 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   svg << "<g class=\"leaflets\" stroke-linejoin=\"round\" stroke-width=\"" << outline_px << "\">\n";
   for (const Eigen::Index f : order) {
     std::vector<Eigen::Vector2d> triangle;
-    for (int k = 0; k < 3; ++k) triangle.push_back(project(closed_V.row(mesh.F(f, k)).transpose()));
+    for (int k = 0; k < 3; ++k)
+      triangle.push_back(project(frame, closed_V.row(mesh.F(f, k)).transpose()));
     const int leaflet = mesh.leaflet(mesh.F(f, 0));
     const std::string colour =
         shade(leaflet, (heights[f] - kDarkestMm) / (lightest_mm - kDarkestMm));
@@ -188,13 +237,25 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   svg << "<text x=\"" << rows_x << "\" y=\"" << y1 - 4 << "\" font-size=\"9\">"
       << escapeXml(anterior) << "</text><text x=\"" << rows_x << "\" y=\"" << y1 + 4
       << "\" font-size=\"9\">" << escapeXml(posterior) << "</text>\n";
+  if (!options.scale_note.empty())
+    svg << "<text x=\"" << rows_x + 56.0 << "\" y=\"" << y1 << "\" font-size=\"11\" fill=\"#444\">"
+        << escapeXml(options.scale_note) << "</text>\n";
   svg << "<text x=\"10\" y=\"" << y1 + 30 << "\" font-size=\"11\" fill=\"#444\">" << note
       << "</text>\n</svg>\n";
   return svg.str();
 }
 
+}  // namespace
+
 std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
-                            const std::string& subject, const ValveMetrics& metrics) {
+                            const EnfaceFigureOptions& options) {
+  return drawEnface(valve_case, closed_V, options, ownLayout(valve_case, closed_V, options));
+}
+
+namespace {
+
+// "<subject>: closed valve from the atrium, orifice N % covered (...); prolapse (tissue): P2".
+EnfaceFigureOptions subjectOptions(const std::string& subject, const ValveMetrics& metrics) {
   const OrificeCoverage& orifice = metrics.orifice;
   char coverage[120];
   std::snprintf(coverage, sizeof coverage,
@@ -205,8 +266,44 @@ std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& 
   for (std::size_t i = 0; i < metrics.mesh_prolapse.segments.size(); ++i)
     prolapse =
         (i == 0 ? "; prolapse (tissue): " : prolapse + ", ") + metrics.mesh_prolapse.segments[i];
-  return enfaceFigureSvg(valve_case, closed_V,
-                         {subject + coverage + prolapse, orifice.tissue_radius_mm});
+  EnfaceFigureOptions options;
+  options.title = subject + coverage + prolapse;
+  options.tissue_radius_mm = orifice.tissue_radius_mm;
+  return options;
+}
+
+}  // namespace
+
+std::string enfaceFigureSvg(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
+                            const std::string& subject, const ValveMetrics& metrics) {
+  return enfaceFigureSvg(valve_case, closed_V, subjectOptions(subject, metrics));
+}
+
+std::vector<std::string> enfaceFiguresSvg(const ValveCase& valve_case,
+                                          const std::vector<EnfaceClosure>& closures) {
+  std::vector<EnfaceFigureOptions> options;
+  EnfaceLayout shared;
+  for (const EnfaceClosure& closure : closures) {
+    options.push_back(subjectOptions(closure.subject, closure.metrics));
+    options.back().scale_note =
+        "(one scale for all " + std::to_string(closures.size()) + " figures)";
+    const EnfaceLayout own = ownLayout(valve_case, closure.closed_V, options.back());
+    if (options.size() == 1) {
+      shared = own;
+      continue;
+    }
+    shared.lo = shared.lo.cwiseMin(own.lo);
+    shared.hi = shared.hi.cwiseMax(own.hi);
+    shared.lightest_mm = std::max(shared.lightest_mm, own.lightest_mm);
+  }
+  // The width of the widest figure at the shared frame and scale.
+  shared.width = 0.0;
+  for (const EnfaceFigureOptions& o : options)
+    shared.width = std::max(shared.width, figureWidth(shared, o));
+  std::vector<std::string> figures;
+  for (std::size_t i = 0; i < closures.size(); ++i)
+    figures.push_back(drawEnface(valve_case, closures[i].closed_V, options[i], shared));
+  return figures;
 }
 
 }  // namespace chordfit

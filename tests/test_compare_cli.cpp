@@ -118,6 +118,15 @@ TEST_F(CompareCommand, TabulatesEveryCordSetInTheTable1LayoutAndWritesMarkdownAn
             std::string::npos);
   EXPECT_NE(readText(out / "enface_2.svg").find(", loose: closed valve from the atrium"),
             std::string::npos);
+  // On one height scale and at one size: their <svg> elements and height scales read alike.
+  auto scaleAndSize = [&](const char* name) {
+    const std::string svg = readText(out / name);
+    const std::size_t top = svg.find("\xE2\x89\xA5 ");
+    return svg.substr(0, svg.find("font-family")) + svg.substr(top, svg.find('<', top) - top);
+  };
+  EXPECT_EQ(scaleAndSize("enface_1.svg"), scaleAndSize("enface_2.svg"));
+  EXPECT_NE(readText(out / "enface_1.svg").find("(one scale for all 2 figures)"),
+            std::string::npos);
 }
 
 // The bundled case is a make-case case: each set is also measured against its truth. The

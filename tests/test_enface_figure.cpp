@@ -1,5 +1,6 @@
 // The atrial (surgeon's) view of a closed valve (core/enface_figure.h) on the open parametric
 // valve: content, drawing order and the tissue outline; and `simulate` writing it.
+#include <cmath>
 #include <string>
 #include <vector>
 
@@ -67,6 +68,52 @@ TEST(EnfaceFigure, DrawsTheHighestTissueLastAsSeenFromTheAtrium) {
   const std::string lightest = fills.back();
   for (int k = 1; k <= incident; ++k) EXPECT_EQ(fills[fills.size() - k], lightest) << k;
   for (std::size_t k = 0; k + incident < fills.size(); ++k) EXPECT_NE(fills[k], lightest) << k;
+}
+
+// The top of a figure's height scale: the number after "≥ ".
+double scaleTop(const std::string& svg) {
+  const std::string at_least = "\xE2\x89\xA5 ";
+  const std::size_t at = svg.find(at_least);
+  if (at == std::string::npos) return NAN;
+  return std::stod(svg.substr(at + at_least.size()));
+}
+
+// The figure's size: its <svg> element's width and height attributes.
+std::string figureSize(const std::string& svg) {
+  const std::size_t from = svg.find("width=\""), to = svg.find("font-family");
+  return svg.substr(from, to - from);
+}
+
+// compare's figures share one height scale (a shade is one height in every file; truth,
+// heuristic and manual topped out at 4, 8 and 10 mm each) and one size; simulate's and fit's
+// single figure keeps its own scale.
+TEST(EnfaceFigure, FiguresDrawnTogetherShareTheHighestScaleAndOneSize) {
+  const ParametricValve valve = coarseValve();
+  const ValveCase& c = valve.valve_case;
+  Eigen::MatrixXd lifted = c.mesh.V;
+  lifted.row(valve.free_edge(valve.free_edge.size() / 4)) +=
+      45.0 * closedAnnulus(c).frame.plane.normal.transpose();
+  ValveMetrics flat_metrics, lifted_metrics;
+  lifted_metrics.mesh_prolapse.segments = {"A1"};  // a longer title
+  const std::string flat_alone = enfaceFigureSvg(c, c.mesh.V, "flat", flat_metrics);
+  const std::string lifted_alone = enfaceFigureSvg(c, lifted, "lifted", lifted_metrics);
+  const double own_top = scaleTop(flat_alone), lifted_top = scaleTop(lifted_alone);
+  ASSERT_LT(own_top, lifted_top) << "the lifted flap raises its own scale";
+  EXPECT_EQ(flat_alone.find("one scale for all"), std::string::npos);
+
+  const std::vector<std::string> figures =
+      enfaceFiguresSvg(c, {{c.mesh.V, "flat", flat_metrics}, {lifted, "lifted", lifted_metrics}});
+  ASSERT_EQ(figures.size(), 2u);
+  for (const std::string& svg : figures) {
+    EXPECT_EQ(scaleTop(svg), lifted_top) << "the highest of the two scales";
+    EXPECT_NE(svg.find(">(one scale for all 2 figures)<"), std::string::npos);
+    EXPECT_EQ(figureSize(svg), figureSize(figures[1]));
+  }
+  EXPECT_NE(figures[0].find(">flat: closed valve from the atrium"), std::string::npos);
+  EXPECT_NE(figures[1].find(">lifted: closed valve from the atrium"), std::string::npos);
+  // On the lifted closure's scale the flat one's shades are darker than on its own.
+  EXPECT_NE(polygonFills(figures[0]), polygonFills(flat_alone));
+  EXPECT_EQ(polygonFills(figures[1]), polygonFills(lifted_alone));
 }
 
 TEST(EnfaceFigure, SimulateWritesItBesideTheClosedMesh) {

@@ -443,13 +443,14 @@ int runCompare(const CompareOptions& options) {
     writeFileAtomically(out / "cords.csv", cordsCsv(*valve_case, sets, truth));
     const std::string sections = sectionsSvg(*valve_case, sets);
     if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
-    // One atrial view per set, numbered in the order given (labels need not be file names).
-    for (std::size_t i = 0; i < sets.size(); ++i) {
-      writeFileAtomically(
-          out / enfaceFigureName(i + 1),
-          enfaceFigureSvg(*valve_case, sets[i].closed_V, valve_case->name + ", " + sets[i].label,
-                          sets[i].metrics));
-    }
+    // One atrial view per set, numbered in the order given (labels need not be file names),
+    // all on one height scale and at one size: a shade means the same height in every file.
+    std::vector<EnfaceClosure> closures;
+    for (const ComparedSet& set : sets)
+      closures.push_back({set.closed_V, valve_case->name + ", " + set.label, set.metrics});
+    const std::vector<std::string> enface = enfaceFiguresSvg(*valve_case, closures);
+    for (std::size_t i = 0; i < sets.size(); ++i)
+      writeFileAtomically(out / enfaceFigureName(i + 1), enface[i]);
     std::cout << wroteLine(options.out_dir, staged.publish())
               << " (enface_K.svg: the K-th cord set given)\n";
   }
