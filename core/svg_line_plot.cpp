@@ -23,6 +23,39 @@ std::string formatTick(double value, double step) {
   return buffer;
 }
 
+// A marker of the given shape and circumradius r at (x, y) px, filled with `colour`; with a
+// white rim above 2.5 px.
+void drawMarker(std::ostringstream& svg, PlotMarker marker, double x, double y, double r,
+                const std::string& colour) {
+  const std::string paint =
+      "fill='" + colour + "'" + (r > 2.5 ? std::string(" stroke='white' stroke-width='1'") : "");
+  char points[160];
+  switch (marker) {
+    case PlotMarker::kCircle:
+      svg << "<circle cx='" << x << "' cy='" << y << "' r='" << r << "' " << paint << "/>\n";
+      return;
+    case PlotMarker::kSquare: {
+      const double h = r / std::sqrt(2.0);
+      svg << "<rect x='" << x - h << "' y='" << y - h << "' width='" << 2 * h << "' height='"
+          << 2 * h << "' " << paint << "/>\n";
+      return;
+    }
+    case PlotMarker::kDiamond:
+      std::snprintf(points, sizeof points, "%.2f,%.2f %.2f,%.2f %.2f,%.2f %.2f,%.2f", x, y - r,
+                    x + r, y, x, y + r, x - r, y);
+      break;
+    case PlotMarker::kTriangleUp:
+    case PlotMarker::kTriangleDown: {
+      const double s = marker == PlotMarker::kTriangleUp ? 1.0 : -1.0;
+      const double half = r * std::sqrt(3.0) / 2.0;
+      std::snprintf(points, sizeof points, "%.2f,%.2f %.2f,%.2f %.2f,%.2f", x, y - s * r, x + half,
+                    y + s * 0.5 * r, x - half, y + s * 0.5 * r);
+      break;
+    }
+  }
+  svg << "<polygon points='" << points << "' " << paint << "/>\n";
+}
+
 struct Range {
   double lo = std::numeric_limits<double>::infinity();
   double hi = -std::numeric_limits<double>::infinity();
@@ -43,7 +76,8 @@ struct Range {
 
 void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, double top,
                double width, double height) {
-  const double margin_left = 70, margin_right = 15, margin_top = 30, margin_bottom = 45;
+  const double margin_left = 70, margin_right = 15 + panel.legend_margin, margin_top = 30,
+               margin_bottom = 45;
   const double plot_w = width - margin_left - margin_right;
   const double plot_h = height - margin_top - margin_bottom;
   auto ty = [&](double y) { return panel.log_y ? (y > 0 ? std::log10(y) : NAN) : y; };
@@ -94,51 +128,59 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
       << ") rotate(-90)' text-anchor='middle' font-size='12'>" << escapeXml(panel.y_label)
       << "</text>\n";
 
-  // The legend's width from its longest label (about 6.2 px per character at 11 px).
+  // The legend's width from its longest label (about 6.2 px per character at 11 px); in the
+  // frame's top right corner, or in the margin right of the frame.
   std::size_t longest_label = 0;
   for (const PlotSeries& s : panel.series) longest_label = std::max(longest_label, s.label.size());
   const double legend_width = 30.0 + 6.2 * static_cast<double>(longest_label);
-  for (std::size_t k = 0; k < panel.series.size(); ++k) {
-    const PlotSeries& s = panel.series[k];
-    const char* colour = kPalette[k % (sizeof kPalette / sizeof *kPalette)];
-    const std::size_t n = std::min(s.x.size(), s.y.size());
-    if (s.line) {
-      std::string path;
-      bool pen_down = false;
-      for (std::size_t i = 0; i < n; ++i) {
-        const double y = ty(s.y[i]);
-        if (!std::isfinite(y) || !std::isfinite(s.x[i])) {
-          pen_down = false;
-          continue;
+  const double legend_x = panel.legend_margin > 0.0 ? left + margin_left + plot_w + 12.0
+                                                    : left + margin_left + plot_w - legend_width;
+  // Every line first, then every marker, so that no line hides a marker.
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t k = 0; k < panel.series.size(); ++k) {
+      const PlotSeries& s = panel.series[k];
+      const std::string colour =
+          s.colour.empty() ? kPalette[k % (sizeof kPalette / sizeof *kPalette)] : s.colour;
+      const std::size_t n = std::min(s.x.size(), s.y.size());
+      if (pass == 0 && s.line) {
+        std::string path;
+        bool pen_down = false;
+        for (std::size_t i = 0; i < n; ++i) {
+          const double y = ty(s.y[i]);
+          if (!std::isfinite(y) || !std::isfinite(s.x[i])) {
+            pen_down = false;
+            continue;
+          }
+          char buffer[64];
+          std::snprintf(buffer, sizeof buffer, "%s%.2f,%.2f ", pen_down ? "L" : "M", px(s.x[i]),
+                        py(y));
+          path += buffer;
+          pen_down = true;
         }
-        char buffer[64];
-        std::snprintf(buffer, sizeof buffer, "%s%.2f,%.2f ", pen_down ? "L" : "M", px(s.x[i]),
-                      py(y));
-        path += buffer;
-        pen_down = true;
+        svg << "<path d='" << path << "' fill='none' stroke='" << colour << "' stroke-width='1.5'"
+            << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
       }
-      svg << "<path d='" << path << "' fill='none' stroke='" << colour << "' stroke-width='1.5'"
-          << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
-    }
-    if (s.markers) {
-      for (std::size_t i = 0; i < n; ++i) {
-        const double y = ty(s.y[i]);
-        if (!std::isfinite(y) || !std::isfinite(s.x[i])) continue;
-        svg << "<circle cx='" << px(s.x[i]) << "' cy='" << py(y) << "' r='2' fill='" << colour
-            << "'/>\n";
+      if (pass == 1 && s.markers) {
+        for (std::size_t i = 0; i < n; ++i) {
+          const double y = ty(s.y[i]);
+          if (!std::isfinite(y) || !std::isfinite(s.x[i])) continue;
+          drawMarker(svg, s.marker, px(s.x[i]), py(y), s.marker_radius, colour);
+        }
       }
+      if (pass == 0) continue;
+      // The legend entry: the line and the marker as drawn (a marker at least 3 px, so that a
+      // small one reads).
+      const double ly = top + margin_top + 14 + 16 * static_cast<double>(k);
+      if (s.line)
+        svg << "<line x1='" << legend_x << "' y1='" << ly - 4 << "' x2='" << legend_x + 18
+            << "' y2='" << ly - 4 << "' stroke='" << colour << "' stroke-width='2'"
+            << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
+      if (s.markers || !s.line)
+        drawMarker(svg, s.marker, legend_x + 9, ly - 4,
+                   std::min(6.0, std::max(3.0, s.marker_radius)), colour);
+      svg << "<text x='" << legend_x + 22 << "' y='" << ly << "' font-size='11'>"
+          << escapeXml(s.label) << "</text>\n";
     }
-    const double ly = top + margin_top + 14 + 16 * static_cast<double>(k);
-    const double lx = left + margin_left + plot_w - legend_width;
-    if (s.line)
-      svg << "<line x1='" << lx << "' y1='" << ly - 4 << "' x2='" << lx + 18 << "' y2='" << ly - 4
-          << "' stroke='" << colour << "' stroke-width='2'"
-          << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
-    else  // markers only: a marker, not a line, in the legend
-      svg << "<circle cx='" << lx + 9 << "' cy='" << ly - 4 << "' r='3' fill='" << colour
-          << "'/>\n";
-    svg << "<text x='" << lx + 22 << "' y='" << ly << "' font-size='11'>" << escapeXml(s.label)
-        << "</text>\n";
   }
 }
 

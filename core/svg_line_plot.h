@@ -8,13 +8,20 @@
 
 namespace chordfit {
 
+enum class PlotMarker { kCircle, kSquare, kDiamond, kTriangleUp, kTriangleDown };
+
 struct PlotSeries {
   std::string label;
   std::vector<double> x;
   std::vector<double> y;  // NaN values break the line
-  bool markers = false;   // draw a small circle at each point
+  bool markers = false;   // draw a marker at each point
   bool line = true;
-  bool dashed = false;  // a dashed line: tells apart a series drawn over another
+  bool dashed = false;      // a dashed line: tells apart a series drawn over another
+  std::string colour = "";  // "" : the palette's colour of the series' place in its panel
+  PlotMarker marker = PlotMarker::kCircle;
+  // Radius of the marker's circumcircle, px. Above 2.5 px a marker gets a white rim, which
+  // keeps it apart from a line or marker under it.
+  double marker_radius = 2.0;
 };
 
 struct PlotPanel {
@@ -23,6 +30,9 @@ struct PlotPanel {
   std::string y_label;
   std::vector<PlotSeries> series;
   bool log_y = false;  // log10 axis; non-positive values are skipped
+  // px kept right of the frame for the legend, which then stands there instead of in the
+  // frame's top right corner (where it may cover data); 0: in the corner.
+  double legend_margin = 0.0;
 };
 
 // An SVG document with the panels laid out in `columns` columns, each panel

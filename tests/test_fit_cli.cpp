@@ -317,6 +317,10 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
                            ">fitted closure, posterior<", ">tracing points<", ">plane 2: "}) {
     EXPECT_NE(sections.find(text), std::string::npos) << text;
   }
+  // Each stage in convergence.svg's legend: the seed and the optimiser's iterations.
+  const std::string convergence = testing::readText(dir / "fit" / "convergence.svg");
+  for (const char* text : {">seed<", ">ceres iterations<"})
+    EXPECT_NE(convergence.find(text), std::string::npos) << text;
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   for (const char* key :
        {"mean_mm", "area_mm2", "prolapse_segments", "optimizer", "forward_sims", "fit_seconds",
@@ -471,6 +475,9 @@ TEST(FitCommand, WarmDifferencesThatMispredictGiveWayToFullClosures) {
   EXPECT_NE(testing::readText(dir / "fit" / "convergence.csv").find("\nceres-full,"),
             std::string::npos)
       << "the full-closure stage has its own rows";
+  EXPECT_NE(testing::readText(dir / "fit" / "convergence.svg").find(">ceres-full: full closures<"),
+            std::string::npos)
+      << "and its own markers and legend entry";
   EXPECT_TRUE(metrics["fd_switched_to_full_closures"].get<bool>());
   EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("until Ceres rejected two steps"),
             std::string::npos);

@@ -47,5 +47,36 @@ TEST(SvgLinePlots, WritesOnePathPerSeriesAndEscapesLabels) {
   EXPECT_NE(svg.find("width='1120'"), std::string::npos);
 }
 
+// Markers of their own shape, colour and size (convergence.svg's stages), each drawn over
+// every line and shown in the legend as drawn; a legend margin puts the legend right of the
+// frame, off the data.
+TEST(SvgLinePlots, DrawsMarkersOfEachShapeOverTheLinesAndTheLegendInItsMargin) {
+  PlotPanel panel{"stages", "x", "y", {}, false, 150.0};
+  panel.series.push_back({"line", {0, 1, 2}, {0, 1, 2}, false, true, false, "#123456"});
+  const PlotMarker shapes[] = {PlotMarker::kCircle, PlotMarker::kSquare, PlotMarker::kDiamond,
+                               PlotMarker::kTriangleUp, PlotMarker::kTriangleDown};
+  for (const PlotMarker shape : shapes) {
+    PlotSeries stage{"stage", {1}, {1}, true, false, false, "#abcdef", shape, 6.0};
+    panel.series.push_back(stage);
+  }
+  const std::string svg = svgLinePlots({panel}, 1, 600, 300);
+  auto count = [&](const std::string& what) {
+    std::size_t n = 0;
+    for (std::size_t at = svg.find(what); at != std::string::npos; at = svg.find(what, at + 1)) ++n;
+    return n;
+  };
+  EXPECT_EQ(count("stroke='#123456'"), 2u) << "the line and its legend sample";
+  // Each shape twice (the point and its legend entry), with a white rim at 6 px.
+  EXPECT_EQ(count("fill='#abcdef' stroke='white'"), 10u);
+  EXPECT_EQ(count("<circle"), 2u);
+  EXPECT_EQ(count("<rect x="), 2u + 1u) << "the squares and the frame";
+  EXPECT_EQ(count("<polygon"), 6u) << "diamonds and triangles";
+  EXPECT_LT(svg.find("<path"), svg.find("<circle")) << "markers over the lines";
+  // The frame ends 15 + 150 px from the right; the legend's text starts beyond it.
+  const std::size_t label = svg.find(">line</text>");
+  const std::size_t x = svg.rfind("x='", label) + 3;
+  EXPECT_GT(std::stod(svg.substr(x, svg.find('\'', x) - x)), 600.0 - 165.0);
+}
+
 }  // namespace
 }  // namespace chordfit

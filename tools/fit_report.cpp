@@ -1,5 +1,6 @@
 #include "tools/fit_report.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <sstream>
 
@@ -123,32 +124,92 @@ std::string convergenceCsv(const std::vector<IterationRecord>& history) {
   return csv.str();
 }
 
+namespace {
+
+// A stage's markers in convergence.svg and its legend text (the stage's name in
+// convergence.csv first). The one-point stages (the seed, the pre-fits, the slack release)
+// are large and of distinct shapes, the optimiser's iterations smaller circles in the cost
+// line's blue, its full-closure iterations after warm-started differences misled
+// ("<optimizer>-full") vermillion squares.
+PlotSeries stageSeries(const std::string& stage, const std::string& optimizer) {
+  struct Style {
+    const char* stage;
+    const char* text;
+    const char* colour;
+    PlotMarker marker;
+    double radius;
+  };
+  static const Style kStyles[] = {
+      {"seed", "seed", "#000000", PlotMarker::kCircle, 5.0},
+      {"prefit", "prefit: global pre-fit", "#CC79A7", PlotMarker::kSquare, 6.5},
+      {"segments", "segments: segment pre-fit", "#009E73", PlotMarker::kDiamond, 6.0},
+      {"tissue", "tissue: tissue pre-fit", "#56B4E9", PlotMarker::kTriangleDown, 6.5},
+      {"release", "release: slack release", "#E69F00", PlotMarker::kTriangleUp, 6.5}};
+  PlotSeries series;
+  series.label = stage;
+  series.markers = true;
+  series.line = false;
+  for (const Style& style : kStyles) {
+    if (stage != style.stage) continue;
+    series.label = style.text;
+    series.colour = style.colour;
+    series.marker = style.marker;
+    series.marker_radius = style.radius;
+    return series;
+  }
+  const std::string full = "-full";
+  if (stage.size() > full.size() &&
+      stage.compare(stage.size() - full.size(), full.size(), full) == 0) {
+    series.label = stage + ": full closures";
+    series.colour = "#D55E00";
+    series.marker = PlotMarker::kSquare;
+    series.marker_radius = 4.5;
+  } else {
+    series.label = stage + (stage == optimizer ? " iterations" : "");
+    series.colour = stage == optimizer ? "#0072B2" : "#56B4E9";
+    series.marker_radius = 3.5;
+  }
+  return series;
+}
+
+}  // namespace
+
 std::string convergenceSvg(const std::vector<IterationRecord>& history, const std::string& name) {
-  // The cost as a line, each stage's points as markers of their own colour (seed, pre-fits,
-  // optimiser, release), the best cost dashed: equal to the cost wherever a step improved,
-  // it would hide under it as a solid line.
-  PlotSeries cost{"cost", {}, {}, false, true};
-  PlotSeries best{"best so far", {}, {}, false, true, true};
-  PlotSeries mean{"mean deviation (AvgD)", {}, {}, true, true};
-  std::vector<PlotSeries> stages;
+  // The cost as a line, the best cost dashed over it (equal to the cost wherever a step
+  // improved, it would hide under it as a solid line), and each stage's points as markers of
+  // their own shape and colour over both, one legend entry per stage.
+  PlotSeries cost{"cost", {}, {}, false, true, false, "#0072B2"};
+  PlotSeries best{"best so far", {}, {}, false, true, true, "#666666"};
+  PlotSeries mean{"mean deviation (AvgD)", {}, {}, true, true, false, "#0072B2"};
+  std::vector<std::string> stage_names;
+  std::vector<PlotSeries> stages;  // in the order they first ran
   for (const IterationRecord& r : history) {
     cost.x.push_back(r.forward_sims), cost.y.push_back(r.cost);
     best.x.push_back(r.forward_sims), best.y.push_back(r.best_cost);
     mean.x.push_back(r.forward_sims), mean.y.push_back(r.mean_deviation_mm);
-    if (stages.empty() || stages.back().label != r.stage)
-      stages.push_back(PlotSeries{r.stage, {}, {}, true, false});
-    stages.back().x.push_back(r.forward_sims), stages.back().y.push_back(r.cost);
+    const std::size_t k =
+        std::find(stage_names.begin(), stage_names.end(), r.stage) - stage_names.begin();
+    if (k == stage_names.size()) {
+      stage_names.push_back(r.stage);
+      stages.push_back(stageSeries(r.stage, name));
+    }
+    stages[k].x.push_back(r.forward_sims), stages[k].y.push_back(r.cost);
   }
   std::vector<PlotSeries> cost_series{cost, best};
   cost_series.insert(cost_series.end(), stages.begin(), stages.end());
-  const std::vector<PlotPanel> panels = {{"Fit cost (" + name + ")", "forward simulations",
-                                          "cost (mm², log scale)", cost_series, true},
-                                         {"Mean deviation to the tracings",
-                                          "forward simulations",
-                                          "mean deviation (mm)",
-                                          {mean},
-                                          false}};
-  return svgLinePlots(panels, 1, 720, 320);
+  // The legends right of the frames, where they cover no point; both frames as wide, so that
+  // the panels' x axes line up.
+  constexpr double kLegendMargin = 190.0;
+  const std::vector<PlotPanel> panels = {
+      {"Fit cost (" + name + ")", "forward simulations", "cost (mm², log scale)", cost_series, true,
+       kLegendMargin},
+      {"Mean deviation to the tracings",
+       "forward simulations",
+       "mean deviation (mm)",
+       {mean},
+       false,
+       kLegendMargin}};
+  return svgLinePlots(panels, 1, 860, 320);
 }
 
 std::string uncertaintyCsv(const inverse::FitOutcome& fit) {
