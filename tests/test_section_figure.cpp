@@ -100,15 +100,25 @@ TEST(RingCrossings, FindTheTwoHingesOfALongAxisPlane) {
   EXPECT_NEAR(hinges(1, 1), 0.0, kTight);
 }
 
-TEST(SectionFigureSvg, DrawsEveryLayerByLeafletTheHingesTheThresholdAndThePlaneTracings) {
-  ValveCase cone = testing::tinyConeCase();
-  Eigen::MatrixXd traced(3, 3);  // on the anterior section (x from 10 to 6 at y = 0)
+// The cone with one tracing on its anterior section (x from 10 to 6 at y = 0) and two layers:
+// a seed closure 1 mm lower (dashed grey) and the fit (leaflet colours).
+struct ConeWithLayers {
+  ValveCase cone;
+  std::vector<SectionLayer> layers;
+};
+ConeWithLayers coneWithATracingAndTwoLayers() {
+  ConeWithLayers c{testing::tinyConeCase(), {}};
+  Eigen::MatrixXd traced(3, 3);
   traced << 10, 0, 0, 8, 0, -4, 6, 0, -8;
-  cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0)};
-  Eigen::MatrixXd lowered = cone.mesh.V;
+  c.cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0)};
+  Eigen::MatrixXd lowered = c.cone.mesh.V;
   lowered.col(2).array() -= 1.0;
-  const std::vector<SectionLayer> layers = {{"seed", lowered, "#9a9a9a", true, 1.4},
-                                            {"fit", cone.mesh.V, "", false, 2.0}};
+  c.layers = {{"seed", lowered, "#9a9a9a", true, 1.4}, {"fit", c.cone.mesh.V, "", false, 2.0}};
+  return c;
+}
+
+TEST(SectionFigureSvg, DrawsEveryLayerByLeafletTheHingesTheThresholdAndThePlaneTracings) {
+  auto [cone, layers] = coneWithATracingAndTwoLayers();
   const std::string svg = caseSectionFigureSvg(cone, layers, {"cone <test>"});
   EXPECT_EQ(svg.rfind("<?xml", 0), 0u);
   EXPECT_NE(svg.find("cone &lt;test&gt;"), std::string::npos);
@@ -146,14 +156,7 @@ std::vector<double> legendRows(const std::string& svg) {
 // The legend takes the fewest rows that fit the figure and spreads its entries evenly over
 // them: "tracing points" was left alone on a second row of fit's figure.
 TEST(SectionFigureSvg, SpreadsTheLegendEvenlyOverTheFewestRowsThatFit) {
-  ValveCase cone = testing::tinyConeCase();
-  Eigen::MatrixXd traced(3, 3);
-  traced << 10, 0, 0, 8, 0, -4, 6, 0, -8;
-  cone.tracings = {tracingOn({0, 0, 0}, Eigen::Vector3d::UnitY(), traced, 0)};
-  Eigen::MatrixXd lowered = cone.mesh.V;
-  lowered.col(2).array() -= 1.0;
-  const std::vector<SectionLayer> layers = {{"seed", lowered, "#9a9a9a", true, 1.4},
-                                            {"fit", cone.mesh.V, "", false, 2.0}};
+  auto [cone, layers] = coneWithATracingAndTwoLayers();
   // One plane: a figure 360 px wide, too narrow for the 6 entries in one or two rows.
   const std::vector<double> narrow = legendRows(caseSectionFigureSvg(cone, layers, {"cone"}));
   ASSERT_EQ(narrow.size(), 6u);
