@@ -421,6 +421,8 @@ TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
   EXPECT_GT(std::stoi(slack[1]), 0) << "the heuristic's small case has slack cords";
   EXPECT_LE(metrics["uncertainty"]["identified_cords"].get<int>(), taut);
   EXPECT_NE(report.find("- slack release: not run with --params groups"), std::string::npos);
+  // A slack cord's SD is its group's, and the table says so.
+  EXPECT_NE(report.find(" (group's; slack) |"), std::string::npos) << report;
 }
 
 // The whole fit (pre-fits, optimiser, slack release, uncertainty, the closure written) gives

@@ -66,8 +66,15 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i) {
     const Cord& s = fit.seed.cords[i];
     const Cord& f = fit.fitted.cords[i];
-    const CordUncertaintyText u = cordUncertainty(fit, i);
+    CordUncertaintyText u = cordUncertainty(fit, i);
     const double span = spans(static_cast<Eigen::Index>(i));
+    // A group factor's SD belongs to the group (--params groups): a cord of it that hangs
+    // slack is not determined by it, however narrow the group's SD.
+    const int p = fit.cord_parameter[i];
+    const bool shared =
+        p >= 0 && std::count(fit.cord_parameter.begin(), fit.cord_parameter.end(), p) > 1;
+    const bool measured = u.sd != "–" && u.sd != "prior only";
+    if (shared && measured && slackAtSpan(span, f.rest_length)) u.sd += " (group's; slack)";
     std::snprintf(line, sizeof line,
                   "| %zu | %s | %s | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
                   groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
