@@ -488,30 +488,29 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
                       fs::exists(directory) ? "not a directory" : "case directory not found");
     return std::nullopt;
   }
-  // A directory without case.json is not a case at all: say what a case is and how one is
-  // made, rather than "case.json: file not found".
+  const fs::path case_file = directory / kCaseFile;
   std::error_code ec;
   // A link that loops, or a directory the user may not search, is not "not found": say why.
-  const fs::file_status case_file_status = fs::status(directory / kCaseFile, ec);
+  const fs::file_status case_file_status = fs::status(case_file, ec);
   if (ec && case_file_status.type() != fs::file_type::not_found) {
-    diagnostics.error((directory / kCaseFile).string(), "",
-                      "cannot be read (" + ec.message() + ")");
+    diagnostics.error(case_file.string(), "", "cannot be read (" + ec.message() + ")");
     return std::nullopt;
   }
-  if (fs::is_symlink(fs::symlink_status(directory / kCaseFile, ec)) &&
-      !fs::exists(case_file_status)) {
-    diagnostics.error((directory / kCaseFile).string(), "",
+  if (fs::is_symlink(fs::symlink_status(case_file, ec)) && !fs::exists(case_file_status)) {
+    diagnostics.error(case_file.string(), "",
                       "is a symbolic link to nothing (a missing target or a loop of links)");
     return std::nullopt;
   }
-  if (!fs::exists(directory / kCaseFile, ec)) {
-    diagnostics.error((directory / kCaseFile).string(), "",
+  // A directory without case.json is not a case at all: say what a case is and how one is
+  // made, rather than "case.json: file not found".
+  if (!fs::exists(case_file_status)) {
+    diagnostics.error(case_file.string(), "",
                       "not found: a case directory holds case.json and the files it names "
                       "(docs/case-format.md; make one with chordfit make-valve, import-mesh or "
                       "make-case)");
     return std::nullopt;
   }
-  const auto document = loadJsonFile(directory / kCaseFile, kCaseFile, diagnostics);
+  const auto document = loadJsonFile(case_file, kCaseFile, diagnostics);
   if (!document) return std::nullopt;
   JsonFields fields(kCaseFile, diagnostics);
   if (!document->is_object()) {

@@ -271,7 +271,9 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
   if (ok) {
     constexpr int kNamed = 3;
     int repeats = 0;
-    std::map<std::tuple<int, int, std::array<int, 3>, std::array<double, 3>>, std::size_t> seen;
+    // The insertion: its point's vertices and weights, or the vertex alone (cord.vertex is
+    // the point's heaviest vertex, so it adds nothing to the key).
+    std::map<std::tuple<int, std::array<int, 3>, std::array<double, 3>>, std::size_t> seen;
     for (std::size_t k = 0; k < set.cords.size(); ++k) {
       const Cord& cord = set.cords[k];
       std::array<int, 3> vertices{cord.vertex, -1, -1};
@@ -280,8 +282,7 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
         vertices = cord.point->vertices;
         weights = {cord.point->weights(0), cord.point->weights(1), cord.point->weights(2)};
       }
-      const auto [it, inserted] =
-          seen.emplace(std::make_tuple(cord.tip, cord.vertex, vertices, weights), k);
+      const auto [it, inserted] = seen.emplace(std::make_tuple(cord.tip, vertices, weights), k);
       if (!inserted && ++repeats <= kNamed)
         fields.error(indexPath("cords", k),
                      "repeats " + indexPath("cords", it->second) +

@@ -344,10 +344,6 @@ std::string reconstructedCell(const ValveMetrics& m) {
          joinSegments(m.tracing_prolapse.segments) + ")";
 }
 
-}  // namespace
-
-namespace {
-
 // A '|' in a label would split its Markdown cell.
 std::string markdownCell(const std::string& text) {
   std::string cell;
