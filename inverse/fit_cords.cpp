@@ -253,6 +253,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.uncertainty.jacobian_sims = jacobian_sims;
     outcome.uncertainty_seconds = seconds() - outcome.seconds;
   }
+  if (options.probe_locked) {
+    LockedCordProbeOptions probe;
+    probe.relative_step = options.finite_difference.scale_step;
+    probe.threads = options.finite_difference.threads;
+    outcome.locked_probes = probeLockedCords(working_case, outcome.fitted, *best,
+                                             outcome.closed_spans, residual, options.bounds, probe);
+  }
   return outcome;
 }
 

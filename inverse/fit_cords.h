@@ -21,6 +21,7 @@
 #include "inverse/fit_uncertainty.h"
 #include "inverse/forward_residual.h"
 #include "inverse/global_prefit.h"
+#include "inverse/locked_cord_probe.h"
 #include "inverse/optimizer.h"
 #include "inverse/segment_prefit.h"
 #include "inverse/slack_release.h"
@@ -46,6 +47,9 @@ struct FitOptions {
   // the best point: the optimiser's when it computed one there, else 2 closures per parameter
   // outside max_sims (FitOutcome::uncertainty.jacobian_sims). `chordfit fit` turns it on.
   bool uncertainty = false;
+  // After the fit, a probe of each taut locked cord (locked_cord_probe.h): 3 closures each,
+  // outside max_sims (FitOutcome::locked_probes). `chordfit fit` turns it on.
+  bool probe_locked = false;
   std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
 };
 
@@ -89,6 +93,7 @@ struct FitOutcome {
   double seconds = 0.0;        // the fit, without the uncertainty
   FitUncertainty uncertainty;  // empty (sd.size() == 0) when not asked for
   double uncertainty_seconds = 0.0;
+  LockedCordProbes locked_probes;  // empty when not asked for or nothing is locked
   std::string termination;
   // Warm-started differences were given up for full closures during the solve (the Ceres
   // driver after rejected steps); the uncertainty then uses full closures too.

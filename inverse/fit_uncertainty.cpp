@@ -4,6 +4,8 @@
 
 #include <Eigen/Cholesky>
 
+#include "inverse/robust_loss.h"
+
 namespace chordfit::inverse {
 
 namespace {
@@ -57,12 +59,7 @@ FitUncertainty fitUncertainty(const Eigen::MatrixXd& J, const Eigen::VectorXd& d
     u.error = "uncertainty: more tracing points than data residuals";
     return u;
   }
-  // IRLS weights of Huber's loss: 1 inside delta, delta / |r| beyond.
-  Eigen::VectorXd weight = Eigen::VectorXd::Ones(m);
-  for (Eigen::Index i = 0; i < point_count; ++i) {
-    const double r = std::abs(data(i));
-    if (r > huber_delta) weight(i) = huber_delta / r;
-  }
+  const Eigen::VectorXd weight = huberWeights(data, point_count, huber_delta);
   const double sigma2 = (weight.array() * data.array().square()).sum() / static_cast<double>(m - n);
   u.sigma_mm = std::sqrt(sigma2);
   const Eigen::VectorXd weighted = weight.cwiseSqrt().cwiseProduct(data);

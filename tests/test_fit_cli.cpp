@@ -368,6 +368,54 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   EXPECT_NE(report.find("Fitted length"), std::string::npos);
 }
 
+// Every cord locked, 20 % short: nothing to fit, so the locked-cord probe (report.md, metrics.json,
+// the terminal) is how the user learns which locks hold the tracings off; --no-uncertainty
+// skips it with the other after-fit diagnostics.
+TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(smallCase()) + " --all 0.8 --lock all --out " +
+                        quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  const std::string fit =
+      "fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") + " --max-sims 3";
+  const auto r = runChordfit(fit + " --out " + quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(r.out.find("note: locked cords hold the fit back: ") != std::string::npos ||
+              r.out.find("locked cords: 32, ") != std::string::npos)
+      << r.out;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  ASSERT_TRUE(metrics.contains("locked_cord_probe"));
+  const auto& probe = metrics["locked_cord_probe"];
+  ASSERT_EQ(probe["cords"].size(), 32u);
+  int taut = 0;
+  for (const auto& cord : probe["cords"]) {
+    if (cord["slack"].get<bool>()) {
+      EXPECT_FALSE(cord.contains("trial")) << cord;
+      continue;
+    }
+    ++taut;
+    ASSERT_TRUE(cord["trial"].contains("data_cost")) << cord;
+    EXPECT_EQ(cord["trial"]["cords"], nlohmann::json::array({cord["cord"]}));
+  }
+  EXPECT_GT(taut, 0);
+  EXPECT_EQ(probe["forward_sims"].get<int>(),
+            3 * taut + static_cast<int>(probe["segments"].size()));
+  EXPECT_EQ(metrics["forward_sims"].get<int>(), 2) << "the probe is outside --max-sims";
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("## Locked cords"), std::string::npos);
+  EXPECT_NE(report.find("| Cord | Group | Segment | Kind | Locked length (mm) |"),
+            std::string::npos);
+
+  const auto skipped = runChordfit(fit + " --no-uncertainty --out " + quoted(dir / "skipped"));
+  ASSERT_EQ(skipped.exit_code, 0) << skipped.err;
+  EXPECT_EQ(skipped.out.find("locked cords"), std::string::npos) << skipped.out;
+  EXPECT_FALSE(nlohmann::json::parse(testing::readText(dir / "skipped" / "metrics.json"))
+                   .contains("locked_cord_probe"));
+  EXPECT_EQ(testing::readText(dir / "skipped" / "report.md").find("## Locked cords"),
+            std::string::npos);
+}
+
 // A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
 // factor: 8 grid + 4 refinement closures fit in 16 runs, 8 more for the kinds do not.
 TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {

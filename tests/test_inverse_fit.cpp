@@ -225,6 +225,71 @@ TEST(InverseFit, GivesBitIdenticalResultsWithOneAndTwoThreads) {
   EXPECT_EQ(one.final_evaluation.cost, two.final_evaluation.cost);
 }
 
+// The user locked every cord, one of them at a wrong length (a perturbed cord at its unperturbed
+// value, against tracings of the truth): the probe (inverse/locked_cord_probe.h) must single it
+// out and move it toward its true length, skip a slack cord, and give the same numbers on one
+// thread or two.
+TEST(InverseFit, LockedCordProbeFindsTheLockThatHoldsTheFitBack) {
+  const RecoveryProblem& p = recoveryProblem();
+  const inverse::ParameterBounds bounds = perCordOptions("ceres", 1, 1).bounds;
+  for (int wrong : p.perturbed) {
+    CordSet locked = p.truth;
+    for (Cord& cord : locked.cords) {
+      cord.locked = true;
+      cord.provenance = Provenance::kManual;
+    }
+    locked.cords[wrong].rest_length = p.base.cords[wrong].rest_length;
+    // One other cord far too long: slack, so not probed.
+    const int slack_cord = wrong == 0 ? 1 : 0;
+    locked.cords[slack_cord].rest_length *= 1.5;
+    const inverse::FitParameterization parameters(p.valve_case, locked,
+                                                  inverse::ParameterMode::kScales, bounds);
+    ASSERT_EQ(parameters.size(), 0);
+    const inverse::ForwardResidual residual(p.valve_case, parameters, p.settings, {});
+    const inverse::ForwardEvaluation fitted = inverse::closeForData(p.valve_case, locked, residual);
+    ASSERT_TRUE(fitted.ok()) << fitted.error;
+    const Eigen::VectorXd spans = closedSpans(locked, residual.cordInsertions(), fitted.closed_V);
+    auto probe = [&](int threads) {
+      inverse::LockedCordProbeOptions options;
+      options.threads = threads;
+      return inverse::probeLockedCords(p.valve_case, locked, fitted, spans, residual, bounds,
+                                       options);
+    };
+    const inverse::LockedCordProbes two = probe(2);
+    ASSERT_EQ(two.cords.size(), locked.cords.size());
+    EXPECT_TRUE(two.cords[slack_cord].slack) << "cord " << slack_cord;
+    EXPECT_TRUE(two.cords[slack_cord].trial.cords.empty()) << "a slack cord is not probed";
+    int taut = 0;
+    for (const inverse::LockedCordProbe& c : two.cords) taut += c.slack ? 0 : 1;
+    EXPECT_EQ(two.forward_sims, 3 * taut + static_cast<int>(two.segments.size()));
+
+    const inverse::LockedCordTrial& trial = two.cords[wrong].trial;
+    ASSERT_TRUE(trial.ok()) << "cord " << wrong << ": " << trial.error;
+    EXPECT_LT(trial.data_cost, 0.5 * two.fit_data_cost) << "cord " << wrong;
+    const double toward = p.truth.cords[wrong].rest_length - locked.cords[wrong].rest_length;
+    EXPECT_GT((trial.lengths_mm[0] - locked.cords[wrong].rest_length) * toward, 0.0)
+        << "cord " << wrong << " moved away from its true length";
+    // No other cord alone explains the tracings as well.
+    for (std::size_t c = 0; c < two.cords.size(); ++c) {
+      if (static_cast<int>(c) == wrong || !two.cords[c].trial.ok()) continue;
+      EXPECT_GT(two.cords[c].trial.data_cost, trial.data_cost) << "cord " << c << " vs " << wrong;
+    }
+    const inverse::LockedCordTrial* best = two.best();
+    ASSERT_NE(best, nullptr);
+    EXPECT_NE(std::find(best->cords.begin(), best->cords.end(), wrong), best->cords.end());
+
+    if (wrong != p.perturbed.front()) continue;
+    const inverse::LockedCordProbes one = probe(1);
+    ASSERT_EQ(one.segments.size(), two.segments.size());
+    for (std::size_t c = 0; c < one.cords.size(); ++c) {
+      EXPECT_EQ(one.cords[c].trial.lengths_mm, two.cords[c].trial.lengths_mm) << c;
+      EXPECT_EQ(one.cords[c].trial.data_cost, two.cords[c].trial.data_cost) << c;
+    }
+    for (std::size_t s = 0; s < one.segments.size(); ++s)
+      EXPECT_EQ(one.segments[s].trial.data_cost, two.segments[s].trial.data_cost) << s;
+  }
+}
+
 TEST(InverseFit, RejectsAnUnknownOptimizer) {
   const RecoveryProblem& p = recoveryProblem();
   const inverse::FitOutcome fit =

@@ -156,6 +156,7 @@ int runFit(const FitCommandOptions& o) {
   options.residual.section_weight = o.section_weight;
   options.residual.weights.tip_per_mm = o.tip_weight;
   options.uncertainty = o.uncertainty;
+  options.probe_locked = o.uncertainty;  // the after-fit diagnostics go together
   if (!o.quiet) {
     std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
                 valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
@@ -257,6 +258,8 @@ int runFit(const FitCommandOptions& o) {
     }
     metrics["uncertainty"] = u;
   }
+  if (!fit.locked_probes.cords.empty())
+    metrics["locked_cord_probe"] = lockedProbeJson(*valve_case, fit);
   metrics["slack_cords"] = slackCords(fit);
   metrics["termination"] = fit.termination;
   metrics["threads"] = o.threads;
@@ -305,6 +308,7 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
+  std::cout << lockedProbeSummary(*valve_case, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
   std::cout << wroteLine(o.out_dir, published) << "\n";

@@ -118,7 +118,167 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
   return line;
 }
 
+// A locked-cord trial's cords as "16" or "14, 16, 17".
+std::string trialCords(const inverse::LockedCordTrial& trial, const std::string& separator = ", ") {
+  std::string text;
+  for (int cord : trial.cords) text += (text.empty() ? "" : separator) + std::to_string(cord);
+  return text;
+}
+
+// The change of a trial's lengths: "+7.2" for one cord, "+3.1..+25.0" for several.
+std::string trialChange(const inverse::FitOutcome& fit, const inverse::LockedCordTrial& trial) {
+  double lo = 0.0, hi = 0.0;
+  for (std::size_t k = 0; k < trial.cords.size(); ++k) {
+    const double change =
+        100.0 * (trial.lengths_mm[k] / fit.fitted.cords[trial.cords[k]].rest_length - 1.0);
+    lo = k == 0 ? change : std::min(lo, change);
+    hi = k == 0 ? change : std::max(hi, change);
+  }
+  char text[64];
+  if (trial.cords.size() == 1 || hi - lo < 0.05)
+    std::snprintf(text, sizeof text, "%+.1f", lo);
+  else
+    std::snprintf(text, sizeof text, "%+.1f..%+.1f", lo, hi);
+  return text;
+}
+
+// "| predicted | data cost | AvgD |" cells of a trial.
+std::string trialCells(const inverse::LockedCordTrial& trial) {
+  if (!trial.error.empty()) return " " + trial.error + " | | |";
+  return " " + formatFixed(100.0 * trial.predicted_drop, 1) + " | " +
+         formatFixed(trial.data_cost, 3) + " | " + formatFixed(trial.mean_deviation_mm, 2) + " |";
+}
+
+// report.md's "Locked cords" section (inverse/locked_cord_probe.h), or "" when no cord is
+// locked or the probe did not run.
+std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit) {
+  const inverse::LockedCordProbes& probes = fit.locked_probes;
+  if (probes.cords.empty()) return "";
+  const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
+  const Eigen::VectorXi segment = openStateSegments(c.mesh);
+  std::ostringstream md;
+  md << "## Locked cords\n\n"
+        "The fit keeps locked cords as they are. Each locked cord taut in the fitted closure "
+        "was probed alone, the other cords as fitted (inverse/locked_cord_probe.h): two "
+        "closures at ± "
+     << formatWeight(100.0 * probes.relative_step)
+     << " % of its length give the derivative of the data cost, the Gauss–Newton step on it "
+        "gives a length (a change of at most ± "
+     << formatWeight(100.0 * probes.max_change)
+     << " %, within the scale bounds), and a full closure there measures it; then the taut "
+        "locked cords of each segment that has two or more, together. A lower data cost there "
+        "means the lock holds the fit back; with the free cords re-fitted too it could only "
+        "fall further. A slack locked cord pulls on nothing in the fitted closure and is not "
+        "probed. Data cost of the fit: "
+     << formatFixed(probes.fit_data_cost, 3) << ", AvgD "
+     << formatFixed(probes.fit_mean_deviation_mm, 2) << " mm; " << probes.forward_sims
+     << " closures, " << formatFixed(probes.seconds, 1) << " s, outside --max-sims.\n\n";
+  md << "| Cord | Group | Segment | Kind | Locked length (mm) | Closed span (mm) | Probe length "
+        "(mm) | Change (%) | Predicted cost drop (%) | Data cost there | AvgD there (mm) |\n"
+        "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
+  for (const inverse::LockedCordProbe& p : probes.cords) {
+    const Cord& cord = fit.fitted.cords[p.cord];
+    const int id = segment(cord.vertex);
+    md << "| " << p.cord << " | " << groups[p.cord] << " | "
+       << (id >= 0 ? segmentName(c.mesh.leaflet_names, id) : "?") << " | " << toString(cord.kind)
+       << " | " << formatFixed(cord.rest_length, 3) << " | " << formatFixed(p.span_mm, 3);
+    if (p.slack)
+      md << " (slack) | – | – | – | – | – |\n";
+    else if (p.trial.cords.empty())  // its difference closures failed
+      md << " | – | – |" << trialCells(p.trial) << "\n";
+    else
+      md << " | " << formatFixed(p.trial.lengths_mm[0], 3) << " | " << trialChange(fit, p.trial)
+         << " |" << trialCells(p.trial) << "\n";
+  }
+  if (!probes.segments.empty()) {
+    md << "\nSegments, their taut locked cords together:\n\n"
+          "| Segment | Cords | Change (%) | Predicted cost drop (%) | Data cost there | AvgD "
+          "there (mm) |\n|---|---|---:|---:|---:|---:|\n";
+    for (const inverse::LockedSegmentProbe& p : probes.segments)
+      md << "| " << segmentName(c.mesh.leaflet_names, p.segment) << " | " << trialCords(p.trial)
+         << " | " << trialChange(fit, p.trial) << " |" << trialCells(p.trial) << "\n";
+  }
+  md << "\n";
+  return md.str();
+}
+
 }  // namespace
+
+std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fit) {
+  const inverse::LockedCordProbes& probes = fit.locked_probes;
+  if (probes.cords.empty()) return "";
+  const auto taut = std::count_if(probes.cords.begin(), probes.cords.end(),
+                                  [](const inverse::LockedCordProbe& p) { return !p.slack; });
+  char line[640];
+  if (taut == 0) {
+    std::snprintf(line, sizeof line,
+                  "locked cords: %zu, all slack in the fitted closure (they hold nothing there)\n",
+                  probes.cords.size());
+    return line;
+  }
+  const inverse::LockedCordTrial* best = probes.best();
+  const double drop =
+      best && probes.fit_data_cost > 0.0 ? 1.0 - best->data_cost / probes.fit_data_cost : 0.0;
+  if (drop < kLockedCordNoteDrop) {
+    std::snprintf(line, sizeof line,
+                  "locked cords: %zu, %td taut; letting them go lowers the data cost by less than "
+                  "%.0f %% (%d extra closures; report.md, \"Locked cords\")\n",
+                  probes.cords.size(), taut, 100.0 * kLockedCordNoteDrop, probes.forward_sims);
+    return line;
+  }
+  const Eigen::VectorXi segment = openStateSegments(c.mesh);
+  const bool one = best->cords.size() == 1;
+  std::string what;
+  if (one) {
+    const Cord& cord = fit.fitted.cords[best->cords[0]];
+    const int id = segment(cord.vertex);
+    what = "cord " + std::to_string(best->cords[0]) + " (" +
+           (id >= 0 ? segmentName(c.mesh.leaflet_names, id) : "?") + " " + toString(cord.kind) +
+           ") alone at " + formatFixed(best->lengths_mm[0], 2) + " mm";
+  } else {
+    what = segmentName(c.mesh.leaflet_names, segment(fit.fitted.cords[best->cords[0]].vertex)) +
+           "'s cords " + trialCords(*best) + " together";
+  }
+  std::snprintf(line, sizeof line,
+                "note: locked cords hold the fit back: %s (%s %%) %s AvgD %.2f -> %.2f mm "
+                "(data cost -%.0f %%); unlock (edit-cords --unlock %s) to let the fit move %s "
+                "(%d extra closures; report.md, \"Locked cords\")\n",
+                what.c_str(), trialChange(fit, *best).c_str(), one ? "lowers" : "lower",
+                probes.fit_mean_deviation_mm, best->mean_deviation_mm, 100.0 * drop,
+                trialCords(*best, ",").c_str(), one ? "it" : "them", probes.forward_sims);
+  return line;
+}
+
+nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fit) {
+  const inverse::LockedCordProbes& probes = fit.locked_probes;
+  auto trialJson = [](const inverse::LockedCordTrial& trial) {
+    nlohmann::json entry = {{"cords", trial.cords}};
+    if (!trial.error.empty()) {
+      entry["error"] = trial.error;
+    } else {
+      entry["rest_lengths_mm"] = trial.lengths_mm;
+      entry["predicted_cost_drop"] = trial.predicted_drop;
+      entry["data_cost"] = trial.data_cost;
+      entry["mean_deviation_mm"] = trial.mean_deviation_mm;
+    }
+    return entry;
+  };
+  nlohmann::json cords = nlohmann::json::array(), segments = nlohmann::json::array();
+  for (const inverse::LockedCordProbe& p : probes.cords) {
+    nlohmann::json entry = {{"cord", p.cord}, {"slack", p.slack}, {"closed_span_mm", p.span_mm}};
+    if (!p.slack) entry["trial"] = trialJson(p.trial);
+    cords.push_back(entry);
+  }
+  for (const inverse::LockedSegmentProbe& p : probes.segments)
+    segments.push_back(
+        {{"segment", segmentName(c.mesh.leaflet_names, p.segment)}, {"trial", trialJson(p.trial)}});
+  return {{"fit_data_cost", probes.fit_data_cost},
+          {"fit_mean_deviation_mm", probes.fit_mean_deviation_mm},
+          {"forward_sims", probes.forward_sims},
+          {"seconds", probes.seconds},
+          {"cords", cords},
+          {"segments", segments}};
+}
 
 std::string convergenceCsv(const std::vector<IterationRecord>& history) {
   std::ostringstream csv;
@@ -417,7 +577,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
              : std::string("How well the data determine the cords was not "
                            "computed."))
      << "\n\n"
-     << cordTable(c, fit);
+     << cordTable(c, fit) << "\n"
+     << lockedCordSection(c, fit);
   return md.str();
 }
 

@@ -6,6 +6,8 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "core/case_data.h"
 #include "core/metrics.h"
 #include "inverse/fit_cords.h"
@@ -28,6 +30,14 @@ int slackCords(const inverse::FitOutcome& fit);
 int identifiedCords(const inverse::FitOutcome& fit);
 // Cords that are fit parameters (not locked).
 int freeCords(const inverse::FitOutcome& fit);
+
+// The summary line of the locked-cord probe (inverse/locked_cord_probe.h) for the terminal,
+// "" when no cord is locked or the probe did not run. It speaks of a cord holding the fit back
+// when unlocking it alone lowers the fit's data cost by at least kLockedCordNoteDrop.
+constexpr double kLockedCordNoteDrop = 0.05;
+std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fit);
+// metrics.json's "locked_cord_probe" (docs/outputs.md).
+nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fit);
 
 // report.md: options, pre-fits, Table 1 rows seed vs fit, prolapse segments, the sections
 // figure, and the per-cord table (lengths, closed span, SD, sensitivity, provenance).

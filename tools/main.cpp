@@ -295,8 +295,9 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
       ->capture_default_str();
   cmd->add_flag_callback(
       "--no-uncertainty", [&o] { o.uncertainty = false; },
-      "Skip the per-parameter uncertainty after the fit (uncertainty.csv; up to 2 "
-      "closures per parameter)");
+      "Skip the diagnostics after the fit: the per-parameter uncertainty (uncertainty.csv; up "
+      "to 2 closures per parameter) and the locked-cord probe (report.md; 3 closures per "
+      "taut locked cord)");
   cmd->add_option("--out", o.out_dir, "Output directory")->required();
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
   addSettingOverrides(cmd, o.settings_overrides);
