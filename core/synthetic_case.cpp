@@ -300,8 +300,12 @@ CordSet trueCordsOnCaseMesh(const CordSet& case_cords, const CordSet& truth_cord
   }
   CordSet cords = case_cords;
   cords.tips = truth_cords.tips;
-  for (std::size_t i = 0; i < cords.cords.size(); ++i)
+  for (std::size_t i = 0; i < cords.cords.size(); ++i) {
+    // The truth's length and provenance: these are not the heuristic's lengths, whatever the
+    // case's cords.json says of its own.
     cords.cords[i].rest_length = truth_cords.cords[i].rest_length;
+    cords.cords[i].provenance = truth_cords.cords[i].provenance;
+  }
   return cords;
 }
 

@@ -349,6 +349,7 @@ TEST_F(MakeCaseRun, WritesALoadableCaseWithTracingsAndTheHeuristicSeedCords) {
   for (std::size_t i = 0; i < on_case.cords.size(); ++i) {
     EXPECT_EQ(on_case.cords[i].vertex, c->cords->cords[i].vertex);
     EXPECT_EQ(on_case.cords[i].rest_length, truth->cords->cords[i].rest_length);
+    EXPECT_EQ(on_case.cords[i].provenance, truth->cords->cords[i].provenance) << i;
   }
   // Each cord's tension at the true closed state: some taut, none negative (a cord only pulls).
   const auto truth_json =
