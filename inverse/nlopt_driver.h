@@ -20,6 +20,7 @@ class NloptDriver : public Optimizer {
   explicit NloptDriver(std::string algorithm) : algorithm_(std::move(algorithm)) {}
   std::string name() const override { return algorithm_; }
   Termination minimize(FitObjective& objective, const OptimizerSettings& settings) override;
+  bool localDerivativeFree() const override { return algorithm_ != "crs2"; }
 
  private:
   std::string algorithm_;

@@ -52,6 +52,10 @@ class Optimizer {
   // ("converged: ...", "budget of N forward runs reached", "nlopt: roundoff limited", ...).
   // Never throws for optimiser trouble: the best point seen stays in the objective.
   virtual Termination minimize(FitObjective& objective, const OptimizerSettings& settings) = 0;
+  // A local derivative-free method that stops on a small relative change of the cost between
+  // evaluations, which a simulator's map can meet far from a minimum (NLopt's bobyqa, cobyla,
+  // sbplx); `chordfit fit` then notes an early stop.
+  virtual bool localDerivativeFree() const { return false; }
 };
 
 // nullptr for an unknown name.

@@ -290,6 +290,18 @@ TEST(InverseFit, LockedCordProbeFindsTheLockThatHoldsTheFitBack) {
   }
 }
 
+// fit's note on an early stop (a relative cost change met far from a minimum) is for NLopt's
+// local derivative-free methods; Ceres and the global crs2 stop otherwise.
+TEST(InverseFit, TheLocalDerivativeFreeDriversSayWhatTheyAre) {
+  for (const std::string& name : inverse::optimizerNames()) {
+    const auto driver = inverse::makeOptimizer(name);
+    ASSERT_TRUE(driver) << name;
+    EXPECT_EQ(driver->localDerivativeFree(),
+              name == "bobyqa" || name == "cobyla" || name == "sbplx")
+        << name;
+  }
+}
+
 TEST(InverseFit, RejectsAnUnknownOptimizer) {
   const RecoveryProblem& p = recoveryProblem();
   const inverse::FitOutcome fit =

@@ -283,9 +283,8 @@ int runFit(const FitCommandOptions& o) {
   // NLopt's local methods stop on a relative cost change between evaluations, which a
   // simulator's map can meet far from a minimum (bobyqa on the quick start's case: AvgD
   // 0.73 mm after 137 of 400 closures, where ceres reaches 0.40).
-  const bool local_nlopt =
-      o.optimizer == "bobyqa" || o.optimizer == "cobyla" || o.optimizer == "sbplx";
-  if (local_nlopt && fit.termination.rfind("converged", 0) == 0 &&
+  const auto driver = inverse::makeOptimizer(o.optimizer);
+  if (driver && driver->localDerivativeFree() && fit.termination.rfind("converged", 0) == 0 &&
       fit.forward_sims < o.max_sims / 2) {
     std::printf(
         "note: %s stopped on its tolerance with %d of --max-sims %d closures unused; a "
