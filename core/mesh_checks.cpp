@@ -7,6 +7,8 @@
 #include <set>
 #include <utility>
 
+#include "core/mesh_topology.h"
+
 namespace chordfit {
 
 namespace {
@@ -178,18 +180,11 @@ bool checkAnnulusRing(const Eigen::MatrixXi& F, int vertex_count, const Eigen::V
   if (out.count() != 0) return false;
   // Every piece of the mesh hangs from the annulus: a piece without a ring vertex has nothing
   // holding it (a stray copy of the leaflets drifted to the step cap, exit 0).
-  std::vector<int> parent(vertex_count);
-  for (int v = 0; v < vertex_count; ++v) parent[v] = v;
-  auto root = [&](int v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  };
-  for (Eigen::Index f = 0; f < F.rows(); ++f)
-    for (int k = 1; k < 3; ++k) parent[root(F(f, k))] = root(F(f, 0));
-  std::vector<bool> anchored(vertex_count, false);
-  for (Eigen::Index i = 0; i < ring.size(); ++i) anchored[root(ring(i))] = true;
+  const Eigen::VectorXi piece = vertexComponents(F, vertex_count);
+  std::vector<bool> anchored(vertex_count, false);  // per piece id
+  for (Eigen::Index i = 0; i < ring.size(); ++i) anchored[piece(ring(i))] = true;
   for (Eigen::Index f = 0; f < F.rows(); ++f) {
-    if (anchored[root(F(f, 0))]) continue;
+    if (anchored[piece(F(f, 0))]) continue;
     diagnostics.error(file, where,
                       "mesh triangle " + std::to_string(f) +
                           " belongs to a piece of the mesh that no ring vertex is on: every "

@@ -234,6 +234,27 @@ Eigen::VectorXi faceComponents(const Eigen::MatrixXi& F) {
   return C;
 }
 
+Eigen::VectorXi vertexComponents(const Eigen::MatrixXi& F, int num_vertices) {
+  // Union-find with path halving (Tarjan 1975).
+  std::vector<int> parent(num_vertices);
+  for (int v = 0; v < num_vertices; ++v) parent[v] = v;
+  auto root = [&](int v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 1; k < 3; ++k) parent[root(F(f, k))] = root(F(f, 0));
+  Eigen::VectorXi C(num_vertices);
+  std::vector<int> id_of_root(num_vertices, -1);
+  int next_id = 0;
+  for (int v = 0; v < num_vertices; ++v) {
+    int& id = id_of_root[root(v)];
+    if (id < 0) id = next_id++;
+    C(v) = id;
+  }
+  return C;
+}
+
 bool orientFacesConsistently(const Eigen::MatrixXi& F, Eigen::MatrixXi& out) {
   out = F;
   const Eigen::MatrixXi N = faceNeighbours(F);

@@ -58,6 +58,13 @@ std::vector<std::vector<int>> vertexFaces(const Eigen::MatrixXi& F, int num_vert
 // component.
 Eigen::VectorXi faceComponents(const Eigen::MatrixXi& F);
 
+// Connected components of vertices through faces: a face joins its three vertices, so pieces
+// that touch at a single vertex (a bowtie) are one component, unlike faceComponents.
+//   F  #F by 3, num_vertices  #V (a vertex in no face is a component of its own)
+// Returns #V component id per vertex, ids 0.. in order of the smallest vertex of each
+// component.
+Eigen::VectorXi vertexComponents(const Eigen::MatrixXi& F, int num_vertices);
+
 // Consistent orientation: flips faces so that within each edge-connected component every
 // interior edge is traversed in opposite directions by its two faces. In each component the
 // face with the smallest index keeps its winding. Returns false if some component is not

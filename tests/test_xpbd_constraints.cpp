@@ -343,6 +343,16 @@ TEST(MeshTopology, TubeHasTwoBoundaryLoopsEvenWithFlippedFaces) {
   EXPECT_EQ(faceComponents(F).maxCoeff(), 0);
 }
 
+// Two triangles sharing only vertex 2 (a bowtie), a separate triangle, a vertex in no face: the
+// bowtie is one piece through its vertex, two through its edges.
+TEST(MeshTopology, VertexComponentsJoinPiecesThatShareAVertex) {
+  Eigen::MatrixXi F(3, 3);
+  F << 0, 1, 2, 2, 3, 4, 5, 6, 7;
+  const Eigen::VectorXi C = vertexComponents(F, 9);
+  EXPECT_EQ(C, (Eigen::VectorXi(9) << 0, 0, 0, 0, 0, 1, 1, 1, 2).finished());
+  EXPECT_EQ(faceComponents(F), (Eigen::VectorXi(3) << 0, 1, 2).finished());
+}
+
 TEST(MeshTopology, VertexAdjacencyListsNeighboursInOrder) {
   const auto adjacency = vertexAdjacency(squareFaces(), 4);
   EXPECT_EQ(adjacency[1], (std::vector<int>{0, 2, 3}));
