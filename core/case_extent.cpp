@@ -214,17 +214,22 @@ bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>&
     if (tips[t].closed_position)
       ok &= valve.check(tips[t].closed_position->transpose(), file, where + ".closed_position",
                         diagnostics);
-    // Tips in one place give every cord one origin (import-mesh refuses them too).
-    for (std::size_t earlier = 0; earlier < t; ++earlier) {
-      if ((tips[t].position - tips[earlier].position).norm() < 1.0) {
-        diagnostics.error(file, where + ".position",
-                          "less than 1 mm from tips[" + std::to_string(earlier) +
-                              "].position: two PM tips in one place");
-        ok = false;
-      }
-    }
+  }
+  if (const auto [earlier, later] = tipsTooClose(tips); later >= 0) {
+    diagnostics.error(file, "tips[" + std::to_string(later) + "].position",
+                      "less than 1 mm from tips[" + std::to_string(earlier) +
+                          "].position: two PM tips in one place");
+    ok = false;
   }
   return ok;
+}
+
+std::pair<int, int> tipsTooClose(const std::vector<PmTip>& tips) {
+  for (std::size_t t = 0; t < tips.size(); ++t)
+    for (std::size_t earlier = 0; earlier < t; ++earlier)
+      if ((tips[t].position - tips[earlier].position).norm() < kMinPmTipSeparationMm)
+        return {static_cast<int>(earlier), static_cast<int>(t)};
+  return {-1, -1};
 }
 
 bool checkTipsBelowAnnulus(const ValveMesh& mesh, const std::vector<PmTip>& tips,

@@ -7,6 +7,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 
 #include <Eigen/Core>
 
@@ -49,6 +50,12 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
 // every other check and then made the closure diverge (exit 3) or pull the ring across.
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
                         const std::string& file, Diagnostics& diagnostics);
+
+// Two PM tips closer than this give every cord one origin: refused wherever tips are read.
+constexpr double kMinPmTipSeparationMm = 1.0;
+// The first pair (earlier, later) of tips whose open positions lie closer than
+// kMinPmTipSeparationMm, in the order the later tip comes; {-1, -1} when none.
+std::pair<int, int> tipsTooClose(const std::vector<PmTip>& tips);
 
 // The same for PM tips: errors (file, "tips[t].position" or "tips[t].closed_position").
 bool checkTipsNearValve(const Eigen::MatrixXd& mesh_V, const std::vector<PmTip>& tips,

@@ -70,11 +70,9 @@ std::string landmarkOrderProblem(const Eigen::MatrixXd& V, const Eigen::MatrixXi
 // valve's lateral axis (annulus_plane.h, +l anterolateral), or "" when they agree. Swapped,
 // every cord's group would name the other muscle.
 std::string pmTipOrderProblem(const ValveMesh& mesh, const std::vector<PmTip>& tips) {
-  for (std::size_t i = 0; i < tips.size(); ++i)
-    for (std::size_t j = i + 1; j < tips.size(); ++j)
-      if ((tips[i].position - tips[j].position).norm() < 1.0)
-        return "points " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
-               " are less than 1 mm apart: each papillary muscle needs its own tip";
+  if (const auto [i, j] = tipsTooClose(tips); j >= 0)
+    return "points " + std::to_string(i + 1) + " and " + std::to_string(j + 1) +
+           " are less than 1 mm apart: each papillary muscle needs its own tip";
   if (tips.size() != 2) return "";
   const AnnulusFrame frame = openAnnulusFrame(mesh);
   const double al = frame.l.dot(tips[0].position - frame.plane.centre);
