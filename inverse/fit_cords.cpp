@@ -232,6 +232,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     int jacobian_sims = 0;
     std::string jacobian_error;
     if (!J) {
+      if (options.on_stage)
+        options.on_stage("uncertainty: the Jacobian at the fit, up to " +
+                         std::to_string(2 * parameters.size()) + " closures");
       // The objective's differences: full closures when the driver gave up warm-started ones.
       JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V,
                                                         objective.finiteDifferences());
@@ -254,6 +257,17 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.uncertainty_seconds = seconds() - outcome.seconds;
   }
   if (options.probe_locked) {
+    int taut = 0, locked = 0;
+    for (std::size_t c = 0; c < outcome.fitted.cords.size(); ++c) {
+      const Cord& cord = outcome.fitted.cords[c];
+      locked += cord.locked ? 1 : 0;
+      taut += cord.locked &&
+              !slackAtSpan(outcome.closed_spans(static_cast<Eigen::Index>(c)), cord.rest_length);
+    }
+    if (taut > 0 && options.on_stage)
+      options.on_stage("locked cords: probing the " + std::to_string(taut) + " taut of " +
+                       std::to_string(locked) + ", up to " + std::to_string(3 * taut + taut / 2) +
+                       " closures");
     LockedCordProbeOptions probe;
     probe.relative_step = options.finite_difference.scale_step;
     probe.threads = options.finite_difference.threads;

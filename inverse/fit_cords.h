@@ -51,6 +51,9 @@ struct FitOptions {
   // outside max_sims (FitOutcome::locked_probes). `chordfit fit` turns it on.
   bool probe_locked = false;
   std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
+  // A line before each after-fit stage that runs closures (the uncertainty's Jacobian, the
+  // locked-cord probe): what it is and how many closures at most (optional).
+  std::function<void(const std::string&)> on_stage;
 };
 
 // Why the cord pre-fits (global and segment) have nothing to do on `seed`, or "": they

@@ -164,6 +164,10 @@ int runFit(const FitCommandOptions& o) {
     const std::string skip_reason = inverse::prefitSkipReason(*seed);
     if (o.prefit && !skip_reason.empty())
       std::printf("pre-fits skipped: %s\n", skip_reason.c_str());
+    options.on_stage = [](const std::string& line) {
+      std::printf("%s\n", line.c_str());
+      std::fflush(stdout);
+    };
     options.on_iteration = [](const IterationRecord& r) {
       std::printf("%-7s iter %4d  cost %10.4f  best %10.4f  mean %7.4f mm  sims %4d  %7.1f s\n",
                   r.stage.c_str(), r.iteration, r.cost, r.best_cost, r.mean_deviation_mm,
