@@ -232,9 +232,15 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     int jacobian_sims = 0;
     std::string jacobian_error;
     if (!J) {
-      if (options.on_stage)
-        options.on_stage("uncertainty: the Jacobian at the fit, up to " +
-                         std::to_string(2 * parameters.size()) + " closures");
+      if (options.on_stage) {
+        const std::vector<bool> slack =
+            slackParameters(parameters, residual.cordInsertions(), best->x, best->closed_V,
+                            objective.finiteDifferences());
+        const auto moving = std::count(slack.begin(), slack.end(), false);
+        options.on_stage("uncertainty: the Jacobian at the fit, " + std::to_string(2 * moving) +
+                         " closures (2 for each of the " + std::to_string(moving) +
+                         " parameters that move a taut cord)");
+      }
       // The objective's differences: full closures when the driver gave up warm-started ones.
       JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V,
                                                         objective.finiteDifferences());

@@ -52,7 +52,7 @@ struct FitOptions {
   bool probe_locked = false;
   std::function<void(const IterationRecord&)> on_iteration;  // progress (optional)
   // A line before each after-fit stage that runs closures (the uncertainty's Jacobian, the
-  // locked-cord probe): what it is and how many closures at most (optional).
+  // locked-cord probe): what it is and how many closures (at most, for the probe) (optional).
   std::function<void(const std::string&)> on_stage;
 };
 
