@@ -53,7 +53,8 @@ struct SimulationSettings {
   // and fits on the 2.5 mm case meshes: the largest step 0.02-0.2 mm at the 5,000-step cap,
   // contacts toggling; measured 2026-11-25). The drag does not change the equilibrium, and
   // closures that settle before the switch are bit-identical: cold closures settle in
-  // 300-1,700 steps up to ~2,000 vertices, warm ones in 40-250. 0 disables it.
+  // under 2,000 steps up to ~2,000 vertices (the bench valves of ~500 and ~2,000 vertices in
+  // 736 and 1,907 with the 10 ms ramp), warm ones in 40-250. 0 disables it.
   int late_drag_after_steps = 2000;
   int late_drag_after_warm_steps = 500;
   double late_drag_time_ms = 0.5;
@@ -96,8 +97,8 @@ struct SimulationSettings {
   double max_step_mm = 0.0;
   double tolerance_mm = 1e-4;
   int window = 10;
-  // Step cap. Closures that settle take 300-1,700 steps up to ~2,000 vertices (measured on
-  // the cohort and bench-sim valves); those that do not settle (a cycle at a cord pulled
+  // Step cap. Closures that settle take under 2,000 steps up to ~2,000 vertices (the bench
+  // valves 736 and 1,907 with the 10 ms ramp); those that do not settle (a cycle at a cord pulled
   // into a tent, a contact pair toggling before contact_impulse_carry; the largest step stays
   // at 0.003-0.1 mm, docs/performance.md) change by less than their own oscillation after a few
   // thousand steps, and a fit runs hundreds of closures, so the cap is 5,000 (it was 20,000: a

@@ -302,8 +302,9 @@ TEST(CohortValveClosure, NormalValveClosesWithoutSelfIntersectionOrProlapse) {
   EXPECT_LT(prolapse.max_height_mm, 2.0);
 }
 
-// DISABLED: fails (coverage 0.966 at edge 2.5 mm with the leaflets counted as 1 mm thick
-// tissue; 0.932 with the clefts of 0.5 and the heuristic's cord placement before 2026-11-25):
+// DISABLED: fails (coverage 0.979 at edge 2.5 mm with the leaflets counted as 1 mm thick
+// tissue; 0.966 with the 6 ms ramp, 0.932 with the clefts of 0.5 and the heuristic's cord
+// placement before 2026-11-25):
 // the P1 and P3 scallops hang almost vertically from the annulus in the closed state instead
 // of swinging in to meet the anterior leaflet, leaving paracommissural gaps
 // (experiments/README.md "Calibration", docs/performance.md "Does the valve close?"). Run
