@@ -416,6 +416,37 @@ TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
             std::string::npos);
 }
 
+// The tracings of the bundled prolapse-P2 case show a P2 flap. A fit that cannot make it says
+// what to try: with every P2 cord at the upper scale bound, a higher bound; with every P2 cord
+// locked, unlocking them.
+TEST(FitCommand, SaysWhatToTryWhenTheTracingsProlapseWhereTheFitDoesNot) {
+  TempDir dir;
+  const std::filesystem::path prolapse_case =
+      std::filesystem::path(CHORDFIT_CASES_DIR) / "prolapse-P2";
+  const auto bounded =
+      runChordfit("fit " + quoted(prolapse_case) +
+                  " --scale-bounds 0.6,0.75 --no-prefit --no-uncertainty --max-sims 3 --out " +
+                  quoted(dir / "bounded"));
+  ASSERT_EQ(bounded.exit_code, 0) << bounded.err;
+  const std::string upper = "the tracings show prolapse in P2, the fitted closure does not: ";
+  EXPECT_NE(bounded.out.find("note: " + upper), std::string::npos) << bounded.out;
+  EXPECT_NE(bounded.out.find("free cords there end at the upper scale bound 0.75; a higher one "
+                             "(--scale-bounds 0.6,HI)"),
+            std::string::npos)
+      << bounded.out;
+  EXPECT_NE(testing::readText(dir / "bounded" / "report.md").find(upper), std::string::npos);
+
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(prolapse_case) +
+                        " --segment P2=0.75 --lock edited --out " + quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  const auto locked =
+      runChordfit("fit " + quoted(prolapse_case) + " --seed-cords " + quoted(dir / "seed.json") +
+                  " --no-prefit --no-uncertainty --max-sims 3 --out " + quoted(dir / "locked"));
+  ASSERT_EQ(locked.exit_code, 0) << locked.err;
+  EXPECT_NE(locked.out.find(upper + "every cord there is locked"), std::string::npos) << locked.out;
+}
+
 // A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
 // factor: 8 grid + 4 refinement closures fit in 16 runs, 8 more for the kinds do not.
 TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {

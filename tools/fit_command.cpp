@@ -314,6 +314,7 @@ int runFit(const FitCommandOptions& o) {
   std::cout << lockedProbeSummary(*valve_case, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
+  std::cout << missedProlapseHint(*valve_case, o, fit, fit_metrics);
   std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;
 }

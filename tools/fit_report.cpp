@@ -249,6 +249,51 @@ std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fi
   return line;
 }
 
+std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
+                               const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics) {
+  if (!fit_metrics.has_tracings || fit_metrics.prolapse_reconstructed) return "";
+  const std::vector<std::string>& fitted = fit_metrics.section_prolapse.segments;
+  std::vector<std::string> missing;  // in the tracings, not in the fit's planes
+  for (const std::string& segment : fit_metrics.tracing_prolapse.segments)
+    if (std::find(fitted.begin(), fitted.end(), segment) == fitted.end())
+      missing.push_back(segment);
+  if (missing.empty()) return "";  // the fit prolapses where the tracings do not: no remedy here
+  const Eigen::VectorXi segment = openStateSegments(c.mesh);
+  int free_cords = 0, at_upper = 0, locked = 0;
+  for (const Cord& cord : fit.fitted.cords) {
+    const int id = segment(cord.vertex);
+    if (id < 0 || std::find(missing.begin(), missing.end(),
+                            segmentName(c.mesh.leaflet_names, id)) == missing.end())
+      continue;
+    if (cord.locked) {
+      ++locked;
+      continue;
+    }
+    ++free_cords;
+    at_upper += cord.scale() >= o.scale_bounds[1] - 1e-9 ? 1 : 0;
+  }
+  std::string hint = "note: the tracings show prolapse in " + joinSegments(missing) +
+                     ", the fitted closure does not: ";
+  const std::string locks = "report.md, \"Locked cords\"";
+  if (free_cords == 0) {
+    hint += "every cord there is locked (" + locks + "); unlock them to let the fit move them";
+  } else if (at_upper > 0) {
+    hint += std::to_string(at_upper) + " of the " + std::to_string(free_cords) +
+            " free cords there end at the upper scale bound " + formatWeight(o.scale_bounds[1]) +
+            "; a higher one (--scale-bounds " + formatWeight(o.scale_bounds[0]) +
+            ",HI) lets them lengthen further";
+  } else if (!o.tissue_prefit) {
+    hint +=
+        "no free cord there reaches the upper scale bound, so the flap may need softer "
+        "tissue: try --tissue-prefit (docs/fitting.md, \"Tissue pre-fit\")";
+  } else {
+    hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
+  }
+  if (locked > 0 && free_cords > 0)
+    hint += "; " + std::to_string(locked) + " cords there are locked (" + locks + ")";
+  return hint + "\n";
+}
+
 nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fit) {
   const inverse::LockedCordProbes& probes = fit.locked_probes;
   auto trialJson = [](const inverse::LockedCordTrial& trial) {
@@ -537,6 +582,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
      << " (Table 1 compares these); tissue: seed "
      << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
+  if (const std::string hint = missedProlapseHint(c, o, fit, fit_metrics); !hint.empty())
+    md << hint.substr(std::string("note: ").size()) << "\n";
   if (seed_metrics.orifice.samples > 0 && fit_metrics.orifice.samples > 0) {
     char line[260];
     std::snprintf(line, sizeof line,
