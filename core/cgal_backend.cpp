@@ -247,9 +247,10 @@ std::string plyItemWhere(const PlyElement& e, unsigned long long item) {
   return "element " + printable(e.name) + " " + std::to_string(item) + ": ";
 }
 
-std::string walkPlyBinary(const std::string& bytes, const PlyHeader& header) {
+// Walks the declared elements; `pos` ends where the last one does.
+std::string walkPlyBinary(const std::string& bytes, const PlyHeader& header, std::size_t& pos) {
   const bool big_endian = header.format == PlyFormat::kBinaryBig;
-  std::size_t pos = header.body_offset;
+  pos = header.body_offset;
   for (const PlyElement& e : header.elements) {
     for (unsigned long long item = 0; item < e.count; ++item) {
       for (const PlyProperty& p : e.properties) {
@@ -284,8 +285,8 @@ std::string nextToken(const std::string& bytes, std::size_t& pos) {
   return bytes.substr(begin, pos - begin);
 }
 
-std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header) {
-  std::size_t pos = header.body_offset;
+std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header, std::size_t& pos) {
+  pos = header.body_offset;
   for (const PlyElement& e : header.elements) {
     for (unsigned long long item = 0; item < e.count; ++item) {
       for (const PlyProperty& p : e.properties) {
@@ -294,7 +295,8 @@ std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header) {
         if (!p.is_list) continue;
         unsigned long long length = 0;
         if (!parseCount(token, length))
-          return plyItemWhere(e, item) + "list length " + quotedWord(token) + " is not a count";
+          return plyItemWhere(e, item) + "list length " + quotedWord(token) +
+                 " is not a count (do the header's element counts match the data?)";
         // Every list entry needs at least one character and one separator.
         if (length > (bytes.size() - pos) / 2 + 1)
           return plyItemWhere(e, item) + "list length " + token + " runs past the end of the file";
@@ -307,13 +309,71 @@ std::string walkPlyAscii(const std::string& bytes, const PlyHeader& header) {
   return "";
 }
 
+// "161 vertices and 254 faces": what the header declares, for a message.
+std::string declaredElements(const PlyHeader& header) {
+  std::string text;
+  for (std::size_t k = 0; k < header.elements.size(); ++k) {
+    const PlyElement& e = header.elements[k];
+    std::string name = printable(e.name);
+    if (e.count != 1) name = name == "vertex" ? "vertices" : name.back() == 's' ? name : name + "s";
+    if (k > 0) text += k + 1 == header.elements.size() ? " and " : ", ";
+    text += std::to_string(e.count) + " " + name;
+  }
+  return text.empty() ? "no elements" : text;
+}
+
+// 1-based number of the line holding bytes[pos].
+std::size_t lineOf(const std::string& bytes, std::size_t pos) {
+  return 1 + static_cast<std::size_t>(
+                 std::count(bytes.begin(), bytes.begin() + static_cast<std::ptrdiff_t>(pos), '\n'));
+}
+
+// Only whitespace (a final newline) may follow the last declared element. CGAL reads the
+// counts the header declares and stops: a header that counts 251 faces of 254 lost three
+// faces without a word, and anything after them (a second mesh pasted in) was ignored.
+std::string checkPlyEnd(const std::string& bytes, const PlyHeader& header, std::size_t end) {
+  std::size_t first = end;
+  while (first < bytes.size() && std::isspace(static_cast<unsigned char>(bytes[first]))) ++first;
+  if (first == bytes.size()) return "";
+  const std::string declared = "the header declares " + declaredElements(header);
+  const std::string match = ": the header's element counts must match the data";
+  if (header.format != PlyFormat::kAscii)
+    return "byte " + std::to_string(end) + ": " + declared + ", but " +
+           std::to_string(bytes.size() - end) + " more bytes follow the last one" + match;
+  // Lines holding data after the last element; the line it ends on counts when data follows
+  // on it.
+  const std::size_t first_line = lineOf(bytes, first);
+  const bool same_line = first_line == lineOf(bytes, end);
+  std::size_t lines = 0;
+  std::size_t pos = first;
+  while (pos < bytes.size()) {
+    std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    if (std::any_of(bytes.begin() + static_cast<std::ptrdiff_t>(pos),
+                    bytes.begin() + static_cast<std::ptrdiff_t>(eol),
+                    [](char c) { return !std::isspace(static_cast<unsigned char>(c)); }))
+      ++lines;
+    pos = eol + 1;
+  }
+  const std::string follow =
+      same_line
+          ? "more values follow on this line" + (lines > 1
+                                                     ? " and on " + std::to_string(lines - 1) +
+                                                           " more line" + (lines > 2 ? "s" : "")
+                                                     : std::string())
+          : std::to_string(lines) + (lines == 1 ? " more line follows" : " more lines follow");
+  return "line " + std::to_string(first_line) + ": " + declared + ", but " + follow + match;
+}
+
 std::string checkPly(const std::string& bytes) {
   PlyHeader header;
   std::string error = parsePlyHeader(bytes, header);
   if (error.empty()) error = checkPlySemantics(header);
   if (!error.empty()) return error;
-  return header.format == PlyFormat::kAscii ? walkPlyAscii(bytes, header)
-                                            : walkPlyBinary(bytes, header);
+  std::size_t end = 0;
+  error = header.format == PlyFormat::kAscii ? walkPlyAscii(bytes, header, end)
+                                             : walkPlyBinary(bytes, header, end);
+  return error.empty() ? checkPlyEnd(bytes, header, end) : error;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -405,7 +465,20 @@ std::string checkOff(const std::string& bytes) {
     unsigned long long corners = 0;
     if (!parseCount(line.words[0], corners) || corners > line.words.size() - 1)
       return "line " + std::to_string(line.number) + ": face " + std::to_string(f) +
-             " does not list the corners it declares";
+             " does not list the corners it declares (do the header's counts match the data?)";
+  }
+  // As in a PLY, CGAL reads the declared counts and ignores the rest: a header counting too
+  // few faces dropped the others without a word.
+  const std::size_t end = first_face + static_cast<std::size_t>(counts[1]);
+  if (end < lines.size()) {
+    const auto counted = [](unsigned long long n, const char* one, const char* many) {
+      return std::to_string(n) + " " + (n == 1 ? one : many);
+    };
+    return "line " + std::to_string(lines[end].number) + ": the header declares " +
+           counted(counts[0], "vertex", "vertices") + " and " +
+           counted(counts[1], "face", "faces") + ", but " +
+           counted(lines.size() - end, "more line follows", "more lines follow") +
+           ": the header's counts must match the data";
   }
   return "";
 }

@@ -477,14 +477,14 @@ bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V, 
   return false;
 }
 
-// cgalReadTriangleSoup's message may start with a location ("line 7: ...",
+// cgalReadTriangleSoup's message may start with a location ("line 7: ...", "byte 880: ...",
 // "element face 3: ...", "facet 12: ...", "face 5: ...", "header: ..."); it belongs in
 // Problem::where.
 void reportSoupError(const std::string& file, const std::string& error, Diagnostics& diagnostics) {
   const std::size_t colon = error.find(": ");
   if (colon != std::string::npos) {
     const std::string prefix = error.substr(0, colon);
-    for (const char* start : {"line ", "element ", "facet ", "face ", "header"}) {
+    for (const char* start : {"line ", "byte ", "element ", "facet ", "face ", "header"}) {
       if (prefix.rfind(start, 0) == 0) {
         diagnostics.error(file, prefix, error.substr(colon + 2));
         return;

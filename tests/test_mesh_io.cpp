@@ -296,6 +296,60 @@ TEST_F(MeshIoTest, TruncatedAndCorruptedBinaryPlyNeverCrash) {
   }
 }
 
+// CGAL reads the counts the header declares and stops: a header counting fewer faces than
+// the file holds lost the rest without a word, and bytes after the last element (a second
+// mesh pasted in) were ignored.
+TEST_F(MeshIoTest, PlyDataBeyondTheHeaderCountsIsRefused) {
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n";
+  const std::string body = std::string(kQuadPositions) + "3 0 1 2\n";
+  const Problem extra_faces = readFails(write("few.ply", header + body + "3 0 2 3\n3 1 2 3\n"));
+  EXPECT_EQ(extra_faces.where, "line 15");
+  EXPECT_EQ(extra_faces.what,
+            "the header declares 4 vertices and 1 face, but 2 more lines follow: the header's "
+            "element counts must match the data");
+  const Problem same_line =
+      readFails(write("extra.ply", header + body.substr(0, body.size() - 1) + " 7\nstray\n"));
+  EXPECT_EQ(same_line.where, "line 14");
+  EXPECT_NE(same_line.what.find("but more values follow on this line and on 1 more line"),
+            std::string::npos)
+      << same_line.what;
+
+  // Binary: writePly's square with one face fewer declared, and with bytes appended.
+  const fs::path good = dir_ / "good.ply";
+  writePly(good, squareVertices(), squareFaces());
+  const std::string bytes = read(good);
+  std::string fewer = bytes;
+  fewer.replace(fewer.find("element face 2"), 14, "element face 1");
+  const Problem binary_faces = readFails(write("fewer.ply", fewer));
+  EXPECT_EQ(binary_faces.where, "byte " + std::to_string(bytes.size() - 13));
+  EXPECT_EQ(binary_faces.what,
+            "the header declares 4 vertices and 1 face, but 13 more bytes follow the last one: "
+            "the header's element counts must match the data");
+  const Problem appended = readFails(write("appended.ply", bytes + bytes));
+  EXPECT_NE(appended.what.find("but " + std::to_string(bytes.size()) + " more bytes follow"),
+            std::string::npos)
+      << appended.what;
+}
+
+TEST_F(MeshIoTest, PlyEndingInWhitespaceStillReads) {
+  const std::string ascii =
+      "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+      "property float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n" +
+      std::string(kQuadPositions) + "4 0 1 2 3";
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  for (const char* tail : {"", "\n", "\r\n", "\n\n  \t\n"}) {
+    readOk(write("ascii.ply", ascii + tail), V, F);
+    EXPECT_EQ(F, squareFaces()) << "tail '" << tail << "'";
+  }
+  const fs::path good = dir_ / "good.ply";
+  writePly(good, squareVertices(), squareFaces());
+  readOk(write("newline.ply", read(good) + "\n"), V, F);
+  EXPECT_EQ(F, squareFaces());
+}
+
 // --- OBJ, OFF -------------------------------------------------------------------------
 
 TEST_F(MeshIoTest, ObjQuadWithNormalsTexturesAndPolylinesReadsAsTwoTriangles) {
@@ -370,6 +424,19 @@ TEST_F(MeshIoTest, OffQuadIsFanTriangulated) {
   readOk(write("quad.off", std::string("OFF\n4 1 0\n") + kQuadPositions + "4 0 1 2 3\n"), V, F);
   EXPECT_EQ(V, quadVertices());
   EXPECT_EQ(F, squareFaces());
+}
+
+TEST_F(MeshIoTest, OffDataBeyondTheHeaderCountsIsRefused) {
+  const std::string off = std::string("OFF\n4 1 0\n") + kQuadPositions + "3 0 1 2\n";
+  const Problem p = readFails(write("few.off", off + "3 0 2 3\n"));
+  EXPECT_EQ(p.where, "line 8");
+  EXPECT_EQ(p.what,
+            "the header declares 4 vertices and 1 face, but 1 more line follows: the header's "
+            "counts must match the data");
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  readOk(write("comment.off", off + "\n# the end\n\n"), V, F);
+  EXPECT_EQ(F.rows(), 1);
 }
 
 TEST_F(MeshIoTest, OffCountsThatCgalWouldAllocateBlindlyAreRefused) {
