@@ -74,6 +74,15 @@ bool parseCount(const std::string& text, unsigned long long& value) {
   return errno == 0 && end != nullptr && *end == '\0';
 }
 
+// A whole word as a signed integer ("-3", "17"); false for anything else ("1.5", "2/1").
+bool parseInteger(const std::string& text, long long& value) {
+  if (text.empty()) return false;
+  char* end = nullptr;
+  errno = 0;
+  value = std::strtoll(text.c_str(), &end, 10);
+  return errno == 0 && end != text.c_str() && *end == '\0';
+}
+
 // ---------------------------------------------------------------------------------------
 // PLY pre-check: walks the header and the body without storing anything, so that every
 // count CGAL will trust has been checked against the bytes that are really there.
@@ -466,6 +475,17 @@ std::string checkOff(const std::string& bytes) {
     if (!parseCount(line.words[0], corners) || corners > line.words.size() - 1)
       return "line " + std::to_string(line.number) + ": face " + std::to_string(f) +
              " does not list the corners it declares (do the header's counts match the data?)";
+    // CGAL refuses an index outside 0..#V-1 with a bare failure. A word that is not an
+    // integer is left to CGAL (and its hint).
+    for (std::size_t k = 1; k <= corners; ++k) {
+      long long index = 0;
+      if (!parseInteger(line.words[k], index)) continue;
+      if (index >= 0 && static_cast<unsigned long long>(index) < counts[0]) continue;
+      return "line " + std::to_string(line.number) + ": face " + std::to_string(f) +
+             ": vertex index " + line.words[k] + " is out of range: the header declares " +
+             std::to_string(counts[0]) + " vertices, numbered 0 to " +
+             std::to_string(static_cast<long long>(counts[0]) - 1);
+    }
   }
   // As in a PLY, CGAL reads the declared counts and ignores the rest: a header counting too
   // few faces dropped the others without a word.
@@ -502,6 +522,60 @@ void dropObjLines(std::string& bytes) {
     pos = eol + 1;
   }
   bytes.swap(kept);
+}
+
+// OBJ face indices count from 1, or back from the latest vertex when negative (-1 is the
+// vertex defined last before the face). CGAL refuses an index beyond the vertex count with a
+// bare failure, lets one just past the end through, and reads 0, which the format does not
+// have, as one past the last vertex: each is refused here, naming the line and the face.
+// Read as CGAL reads them: the integer that starts each word (the vertex of "3/1/2"), until
+// a word that does not start with one (the rest is CGAL's, and shortPolygonProblem's).
+std::string checkObjIndices(const std::string& bytes) {
+  std::vector<std::pair<std::size_t, std::string>> lines;  // (number, text), 'v' and 'f' only
+  long long vertices = 0;
+  std::size_t pos = 0;
+  for (std::size_t number = 1; pos < bytes.size(); ++number) {
+    std::size_t eol = bytes.find('\n', pos);
+    if (eol == std::string::npos) eol = bytes.size();
+    std::string text = bytes.substr(pos, eol - pos);
+    pos = eol + 1;
+    std::istringstream line(text);
+    std::string keyword;
+    line >> keyword;
+    if (keyword == "v") ++vertices;
+    if (keyword == "v" || keyword == "f") lines.emplace_back(number, std::move(text));
+  }
+  const std::string range = "1 to " + std::to_string(vertices) + ", or -1 to -";
+  long long before = 0;  // vertices defined before the line
+  long long face = 0;
+  for (const auto& [number, text] : lines) {
+    std::istringstream line(text);
+    std::string word;
+    line >> word;
+    if (word == "v") {
+      ++before;
+      continue;
+    }
+    const std::string where =
+        "line " + std::to_string(number) + ": face " + std::to_string(face++) + ": vertex index ";
+    while (line >> word) {
+      char* end = nullptr;
+      errno = 0;
+      const long long index = std::strtoll(word.c_str(), &end, 10);
+      if (end == word.c_str() || errno != 0 || index < INT_MIN || index > INT_MAX) break;
+      const std::string shown = word.substr(0, static_cast<std::size_t>(end - word.c_str()));
+      if (index == 0)
+        return where + "0: OBJ numbers vertices from 1 (here " + range + std::to_string(before) +
+               " counting back)";
+      if (index > vertices)
+        return where + shown + " is out of range: the file has " + std::to_string(vertices) +
+               " vertices (" + range + std::to_string(before) + " counting back)";
+      if (-index > before)
+        return where + shown + " counts back past the first vertex: " + std::to_string(before) +
+               " vertices precede this line (" + range + std::to_string(before) + ")";
+    }
+  }
+  return "";
 }
 
 // True when some whitespace-separated word reads as a non-finite number ("nan", "-inf").
@@ -635,7 +709,10 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
   if (extension == ".ply") error = checkPly(bytes);
   if (extension == ".off") error = checkOff(bytes);
   if (extension == ".stl") error = prepareStl(bytes);
-  if (extension == ".obj") dropObjLines(bytes);
+  if (extension == ".obj") {
+    dropObjLines(bytes);
+    error = checkObjIndices(bytes);
+  }
   if (!error.empty()) return false;
 
   std::vector<DoublePoint> points;

@@ -102,6 +102,23 @@ TEST_F(ValidateCommand, ReportsAFaceIndexOutOfRange) {
   expectError("open\\.vtk", "face 0: vertex index 99 out of range");
 }
 
+// CGAL refused an OBJ index past the vertex count with "could not parse the file".
+TEST_F(ValidateCommand, ReportsAnObjFaceIndexOutOfRangeWithItsLineAndTheValidRange) {
+  std::string obj;
+  for (Eigen::Index i = 0; i < valve_.mesh.V.rows(); ++i)
+    obj += "v " + std::to_string(valve_.mesh.V(i, 0)) + " " + std::to_string(valve_.mesh.V(i, 1)) +
+           " " + std::to_string(valve_.mesh.V(i, 2)) + "\n";
+  for (Eigen::Index f = 0; f < valve_.mesh.F.rows(); ++f)
+    obj += "f " + std::to_string(valve_.mesh.F(f, 0) + 1) + " " +
+           std::to_string(valve_.mesh.F(f, 1) + 1) + " " +
+           std::to_string(f == 2 ? 99 : valve_.mesh.F(f, 2) + 1) + "\n";
+  writeText(dir_ / "open.obj", obj);
+  editCaseJson([](nlohmann::json& j) { j["mesh"] = "open.obj"; });
+  expectError("open\\.obj",
+              "line 19: face 2: vertex index 99 is out of range: the file has 16 vertices \\(1 to "
+              "16, or -1 to -16 counting back\\)");
+}
+
 TEST_F(ValidateCommand, ReportsADegenerateTriangle) {
   valve_.mesh.V.row(8) = valve_.mesh.V.row(0);  // face 0 = (0, 1, 8) collapses
   writePly(dir_ / "open.ply", valve_.mesh.V, valve_.mesh.F);

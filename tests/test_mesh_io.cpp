@@ -365,13 +365,36 @@ TEST_F(MeshIoTest, ObjQuadWithNormalsTexturesAndPolylinesReadsAsTwoTriangles) {
   EXPECT_EQ(F, squareFaces());
 }
 
-TEST_F(MeshIoTest, ObjIndexJustPastTheEndSlipsThroughCgalAndReachesTheValidator) {
-  // CGAL's check is "max index > #points", one too lenient; larger indices are refused.
+// CGAL let an index one past the end through (its check is "max index > #points"), read 0 as
+// that same index, and refused anything farther with a bare "could not parse".
+TEST_F(MeshIoTest, ObjIndexOutOfRangeIsRefusedNamingTheLineFaceAndRange) {
+  const std::string square = "v 0 0 0\nv 1 0 0\nv 0 1 0\n# a comment\nf 1 2 3\n";
+  const Problem past = readFails(write("one_past.obj", square + "f 1 3 4\n"));
+  EXPECT_EQ(past.where, "line 6");
+  EXPECT_EQ(past.what,
+            "face 1: vertex index 4 is out of range: the file has 3 vertices (1 to 3, or -1 to -3 "
+            "counting back)");
+  EXPECT_EQ(readFails(write("far_past.obj", square + "f 1/1/1 2/1/1 999/1/1\n")).what,
+            "face 1: vertex index 999 is out of range: the file has 3 vertices (1 to 3, or -1 to "
+            "-3 counting back)");
+  EXPECT_EQ(readFails(write("zero.obj", square + "f 0 1 2\n")).what,
+            "face 1: vertex index 0: OBJ numbers vertices from 1 (here 1 to 3, or -1 to -3 "
+            "counting back)");
+  // Counting back is relative to the vertices defined before the face, not to the file's.
+  const Problem back = readFails(write("back.obj", "v 0 0 0\nv 1 0 0\nf -1 -2 -3\nv 0 1 0\n"));
+  EXPECT_EQ(back.where, "line 3");
+  EXPECT_EQ(back.what,
+            "face 0: vertex index -3 counts back past the first vertex: 2 vertices precede this "
+            "line (1 to 3, or -1 to -2)");
+}
+
+TEST_F(MeshIoTest, ObjNegativeIndicesCountBackFromTheLatestVertex) {
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
-  readOk(write("one_past.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n"), V, F);
-  EXPECT_EQ(F, (Eigen::MatrixXi{{0, 1, 3}}));
-  readFails(write("far_past.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n"));
+  readOk(write("relative.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf -3 -2 -1\nv 0 1 0\nf 1 -2 -1\n"), V,
+         F);
+  EXPECT_EQ(V, quadVertices());
+  EXPECT_EQ(F, squareFaces());
 }
 
 // A face with fewer than 3 corners used to be dropped, leaving a hole in a mesh that then
@@ -437,6 +460,17 @@ TEST_F(MeshIoTest, OffDataBeyondTheHeaderCountsIsRefused) {
   Eigen::MatrixXi F;
   readOk(write("comment.off", off + "\n# the end\n\n"), V, F);
   EXPECT_EQ(F.rows(), 1);
+}
+
+// CGAL refused these with a bare "could not parse".
+TEST_F(MeshIoTest, OffIndexOutOfRangeIsRefusedNamingTheLineFaceAndRange) {
+  const std::string off = std::string("OFF\n4 2 0\n") + kQuadPositions + "3 0 1 2\n";
+  for (const char* index : {"4", "-1", "99999999999"}) {
+    const Problem p = readFails(write("range.off", off + "3 0 2 " + index + "\n"));
+    EXPECT_EQ(p.where, "line 8");
+    EXPECT_EQ(p.what, "face 1: vertex index " + std::string(index) +
+                          " is out of range: the header declares 4 vertices, numbered 0 to 3");
+  }
 }
 
 TEST_F(MeshIoTest, OffCountsThatCgalWouldAllocateBlindlyAreRefused) {
