@@ -54,10 +54,15 @@ bool readCordPoint(const json& value, const std::string& where, JsonFields& fiel
   return keys_known;
 }
 
-// Upper bounds of a cord's values: beyond them (1e308 was accepted) the closure diverges,
-// exit 3, without naming the cord. Chordae are 10-40 mm long on valves spanning 30-60 mm, and
+// Bounds of a cord's values: beyond them (1e308 was accepted) the closure diverges, exit 3,
+// without naming the cord. Chordae are 10-40 mm long on valves spanning 30-60 mm, and
 // make-case models a ruptured cord as ten times its length (truth/cords.json of the flail
-// cases: up to ~300 mm), so a rest length above 1000 mm is a typo or a unit slip. A real
+// cases: up to ~300 mm), so a rest length above 1000 mm is a typo or a unit slip. Below 1 mm
+// (1e-300 was accepted) a cord would pin its insertion to the PM tip, which lies 15 mm or more
+// below the leaflets, and a seed that small turns every scale (rest / seed) into nonsense; it
+// is a unit slip (metres) or a typo. The shortest of the 450,000 rest lengths in the 940 cord
+// sets on the development machine (bundled, benchmark, fitted) is 15.6 mm, and the fit's
+// default lower scale bound 0.7 keeps such a cord above 10 mm. A real
 // chord (E ~50 MPa, 0.5 mm², 20 mm: L / EA = 0.8 mm/N) has a compliance near 1 mm/N and the
 // bundled cases use 0 (inextensible); at 10 mm/N (kMaxCordComplianceMmPerN) a systolic load of
 // ~1 N would stretch a cord by a centimetre.
@@ -73,6 +78,18 @@ bool atMost(double value, double maximum, const char* unit, const char* why,
   text << "must be at most " << maximum << " " << unit << " (" << why << "), got " << value;
   fields.error(where, text.str());
   return false;
+}
+
+// A rest length read from `where` within [kMinCordRestLengthMm, kMaxCordRestLengthMm].
+bool restLengthInRange(double value, const std::string& where, JsonFields& fields) {
+  if (value < kMinCordRestLengthMm) {
+    std::ostringstream text;
+    text << "must be at least " << kMinCordRestLengthMm << " mm (" << kRestLengthWhy << "), got "
+         << value;
+    fields.error(where, text.str());
+    return false;
+  }
+  return atMost(value, kMaxCordRestLengthMm, "mm", kRestLengthWhy, where, fields);
 }
 
 bool readCord(const json& value, const std::string& where, int tip_count, JsonFields& fields,
@@ -128,24 +145,15 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
   }
   if (const json* rest = fields.member(value, where, "rest_length_mm", true)) {
     ok &= fields.number(*rest, fieldPath(where, "rest_length_mm"), cord.rest_length);
-    if (ok && cord.rest_length <= 0.0) {
-      fields.error(fieldPath(where, "rest_length_mm"), "rest length must be positive");
-      ok = false;
-    }
-    ok = ok && atMost(cord.rest_length, kMaxCordRestLengthMm, "mm", kRestLengthWhy,
-                      fieldPath(where, "rest_length_mm"), fields);
+    ok = ok && restLengthInRange(cord.rest_length, fieldPath(where, "rest_length_mm"), fields);
   } else {
     ok = false;
   }
   cord.seed_rest_length = cord.rest_length;
   if (const json* seed = fields.member(value, where, "seed_rest_length_mm", false)) {
     ok &= fields.number(*seed, fieldPath(where, "seed_rest_length_mm"), cord.seed_rest_length);
-    if (ok && cord.seed_rest_length <= 0.0) {
-      fields.error(fieldPath(where, "seed_rest_length_mm"), "seed rest length must be positive");
-      ok = false;
-    }
-    ok = ok && atMost(cord.seed_rest_length, kMaxCordRestLengthMm, "mm", kRestLengthWhy,
-                      fieldPath(where, "seed_rest_length_mm"), fields);
+    ok = ok &&
+         restLengthInRange(cord.seed_rest_length, fieldPath(where, "seed_rest_length_mm"), fields);
   }
   if (const json* compliance = fields.member(value, where, "compliance_mm_per_N", false)) {
     ok &= fields.number(*compliance, fieldPath(where, "compliance_mm_per_N"), cord.compliance);

@@ -18,8 +18,9 @@ class JsonFields;
 
 constexpr int kCordSetFormatVersion = 1;
 
-// The longest rest length a cord set may hold, mm (cordset_io.cpp says why: chordae are
-// 10-40 mm, make-case's ruptured cords ten times that).
+// The shortest and longest rest length a cord set may hold, mm (cordset_io.cpp says why:
+// chordae are 10-40 mm, make-case's ruptured cords ten times that).
+constexpr double kMinCordRestLengthMm = 1.0;
 constexpr double kMaxCordRestLengthMm = 1000.0;
 // The largest cord compliance a cord set may hold, mm/N (cordset_io.cpp says why).
 constexpr double kMaxCordComplianceMmPerN = 10.0;

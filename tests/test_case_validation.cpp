@@ -4,6 +4,7 @@
 #include <cmath>
 #include <functional>
 #include <regex>
+#include <sstream>
 #include <utility>
 
 #include <gtest/gtest.h>
@@ -574,6 +575,32 @@ TEST_F(ValidateCommand, ReportsAnAbsurdCordRestLengthOrComplianceNamingTheCord) 
     writeText(dir_ / "cords.json", cords.dump());
     editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
     expectError("cords\\.json", message);
+  }
+}
+
+// 1e-300 mm (a seed that makes every scale nonsense) and 0.5 mm used to validate: a cord that
+// short would pin its insertion to the PM tip.
+TEST_F(ValidateCommand, ReportsACordRestLengthBelowOneMillimetreNamingTheCord) {
+  const std::pair<const char*, double> cases[] = {
+      {"seed_rest_length_mm", 1e-300}, {"rest_length_mm", 0.5}, {"rest_length_mm", -5.0}};
+  for (const auto& [field, length] : cases) {
+    CordSet set;
+    set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+    Cord cord;
+    cord.vertex = 9;
+    cord.rest_length = cord.seed_rest_length = 20.0;
+    set.cords = {cord, cord};
+    writeCordSet(dir_ / "cords.json", set);
+    nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
+    cords["cords"][1][field] = length;
+    writeText(dir_ / "cords.json", cords.dump());
+    editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+    std::ostringstream got;
+    got << length;
+    expectError("cords\\.json",
+                std::string("cords\\[1\\]\\.") + field +
+                    ": must be at least 1 mm \\(chordae are 10-40 mm long.*\\), got " + got.str() +
+                    "\n");
   }
 }
 

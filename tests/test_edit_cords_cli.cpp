@@ -143,6 +143,9 @@ TEST(EditCordsCli, MoveTipShiftsTheTipAndKeepsTheRestLengths) {
 TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
   TempDir dir;
   const auto out = dir / "out.json";
+  CordSet long_cord = readCords(kSmallCase / "cords.json");
+  long_cord.cords[0].seed_rest_length = long_cord.cords[0].rest_length = 300.0;
+  writeCordSet(dir / "long.json", long_cord);
   for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
            {"", "nothing to do"},
            {"--segment P4=1.1", "--segment P4=1.1: no cord in segment \"P4\""},
@@ -152,6 +155,11 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--cord 9999=1", "--cord 9999=1: \"9999\" is not a cord index"},
            {"--all 1 --lock 1,z", "--lock 1,z: \"z\" is not a cord index"},
            {"--all nan", "--all nan: the scale must be a number"},
+           // 0.001 of a 16 mm seed: a cord set the readers refuse (at least 1 mm).
+           {"--all 0.001", "cord 0: the scalings give it a rest length of 0.0"},
+           {"--cords " + quoted(dir / "long.json") + " --cord 0=10",
+            "cord 0: the scalings give it a rest length of 3000 mm (its seed 300 mm times 10); a "
+            "cord set holds 1 to 1000 mm"},
            {"--move-tip elsewhere=1,2,3", "--move-tip elsewhere=1,2,3: expected NAME=DX,DY,DZ"},
            {"--move-tip anterolateral=1,2", "the offset must be three finite numbers"},
            {"--move-tip anterolateral=1e9,0,0", "--move-tip: tips[0].position: (1e+09, "},

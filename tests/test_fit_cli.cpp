@@ -124,6 +124,19 @@ TEST(FitCommand, RejectsAnUpperScaleBoundNoCordSetCanHoldBeforeFitting) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit"));
 }
 
+// The same for a lower bound that lets a cord shrink below the 1 mm a cord set must hold.
+TEST(FitCommand, RejectsALowerScaleBoundNoCordSetCanHoldBeforeFitting) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 0.02,1.5 --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the lower bound 0.02 lets a cord of "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("a cord set holds at least 1 mm"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit"));
+}
+
 TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
   const std::string err = refusedFitMessage("--distance nearest");
   EXPECT_NE(err.find("--distance"), std::string::npos) << err;

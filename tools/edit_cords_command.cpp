@@ -245,6 +245,19 @@ int runEditCords(const EditCordsOptions& options) {
     if (locked > 0) std::printf(", %d locked left alone", locked);
     std::printf("\n");
   }
+  // A scaled rest length must be one a cord set holds (cordset_io.h); written, the set would
+  // be refused by every command that reads it (a scale of 0.001 gave 0.02 mm cords).
+  for (const int i : edited) {
+    const Cord& cord = set.cords[i];
+    if (cord.rest_length >= kMinCordRestLengthMm && cord.rest_length <= kMaxCordRestLengthMm)
+      continue;
+    std::ostringstream problem;
+    problem << "cord " << i << ": the scalings give it a rest length of " << cord.rest_length
+            << " mm (its seed " << cord.seed_rest_length << " mm times " << cord.scale()
+            << "); a cord set holds " << kMinCordRestLengthMm << " to " << kMaxCordRestLengthMm
+            << " mm";
+    return usage(problem.str());
+  }
   for (const auto& [tip, offset] : moves) {
     set.tips[tip].position += offset;
     if (set.tips[tip].closed_position) *set.tips[tip].closed_position += offset;

@@ -120,16 +120,26 @@ int runFit(const FitCommandOptions& o) {
               << ": nothing to fit\n";
     return kExitBadInput;
   }
-  // A scale at the upper bound must leave a cord set the readers take (cords.json is read
+  // A scale at either bound must leave a cord set the readers take (cords.json is read
   // back for the fitted closure); found after the fit, it would cost the whole run.
   for (const Cord& cord : seed->cords) {
+    if (cord.locked) continue;
     const double length = std::max(cord.seed_rest_length, cord.rest_length);
     const double reach = length * o.scale_bounds[1];
-    if (cord.locked || reach <= kMaxCordRestLengthMm) continue;
-    std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
-              << " lets a cord of " << length << " mm reach " << reach
-              << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
-    return kExitBadInput;
+    if (reach > kMaxCordRestLengthMm) {
+      std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
+                << " lets a cord of " << length << " mm reach " << reach
+                << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
+      return kExitBadInput;
+    }
+    const double shortest = std::min(cord.seed_rest_length, cord.rest_length);
+    const double shrunk = shortest * o.scale_bounds[0];
+    if (shrunk < kMinCordRestLengthMm) {
+      std::cerr << "error: fit: --scale-bounds: the lower bound " << o.scale_bounds[0]
+                << " lets a cord of " << shortest << " mm shrink to " << shrunk
+                << " mm; a cord set holds at least " << kMinCordRestLengthMm << " mm\n";
+      return kExitBadInput;
+    }
   }
   const auto case_settings = caseSettingsOrReport(*valve_case, o.case_dir, SettingsUse::kClose,
                                                   "fit", o.settings_overrides);
