@@ -168,6 +168,26 @@ bool readTracingLeaflet(const json& value, const std::string& where,
 // image slice's thickness.
 constexpr double kTracingPlaneToleranceMm = 1.0;
 
+// A tracing whose points all lie within this of its first one is a point, not a polyline:
+// no image resolves 1 µm. Repeated points inside a tracing are harmless (each is measured as
+// a point, and the section residual's distance to a zero-length segment is the distance to
+// its point), so only the tracing as a whole is checked.
+constexpr double kTracingMinExtentMm = 1e-3;
+
+// "" when the tracing's points span more than kTracingMinExtentMm; else the problem, naming
+// `source` (the curve file) when the points came from one.
+std::string zeroLengthTracingProblem(const Eigen::MatrixXd& points, const std::string& source) {
+  for (Eigen::Index k = 1; k < points.rows(); ++k)
+    if ((points.row(k) - points.row(0)).norm() > kTracingMinExtentMm) return "";
+  char what[240];
+  std::snprintf(what, sizeof what,
+                "the tracing has no length: its %ld points all lie at (%.6g, %.6g, %.6g) (within "
+                "%g mm of the first); a tracing needs at least 2 distinct points",
+                static_cast<long>(points.rows()), points(0, 0), points(0, 1), points(0, 2),
+                kTracingMinExtentMm);
+  return (source.empty() ? "" : source + ": ") + what;
+}
+
 // `source`: the curve file the points came from (how it was read decides the advice), or
 // nullptr for points inline in the tracings file (LPS).
 bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, JsonFields& fields,
@@ -252,11 +272,11 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     fields.error(where, "give \"points\" or \"file\", not both");
     return false;
   }
-  Curve curve;  // the file's, when the points come from one
+  Curve curve;       // the file's, when the points come from one
+  std::string name;  // that file's name
   if (points != nullptr) {
     ok &= fields.points(*points, fieldPath(where, "points"), tracing.points);
   } else if (file != nullptr) {
-    std::string name;
     if (fields.text(*file, fieldPath(where, "file"), name) &&
         fileFieldUsable(name, dir / name, fieldPath(where, "file"), fields) &&
         readCurve(dir / name, curve, fields.diagnostics(), name)) {
@@ -273,6 +293,13 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     fields.error(points_where,
                  "a tracing needs at least 2 points, got " + std::to_string(tracing.points.rows()));
     ok = false;
+  }
+  if (ok) {
+    if (const std::string problem = zeroLengthTracingProblem(tracing.points, name);
+        !problem.empty()) {
+      fields.error(points_where, problem);
+      ok = false;
+    }
   }
   if (ok)
     ok =

@@ -343,6 +343,30 @@ TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
   expectError("tracings\\.json", "tracings\\[0\\]\\.points: a tracing needs at least 2 points");
 }
 
+// Two or more points all in one place used to pass as a tracing of no length, inline or in a
+// curve file.
+TEST_F(ValidateCommand, ReportsATracingWithoutLengthNamingItsFile) {
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "points": [[1, 0, -2], [1, 0, -2], [1, 0, -2]]}]})");
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.points: the tracing has no length: its 3 points all lie at "
+              "\\(1, 0, -2\\) \\(within 0\\.001 mm of the first\\); a tracing needs at least 2 "
+              "distinct points\n");
+  writeText(dir_ / "tracing_01.csv", "x,y,z\n1,0,-2\n1.0000001,0,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "file": "tracing_01.csv"}]})");
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.file: tracing_01\\.csv: the tracing has no length: its 2 points");
+}
+
+// Repeated points inside a tracing of some length stay accepted: each is measured as a point.
+TEST_F(ValidateCommand, AcceptsATracingThatRepeatsAPoint) {
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "points": [[1, 0, -2], [1, 0, -2], [2, 0, -2], [2, 0, -2]]}]})");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+}
+
 // Finite but absurd coordinates pass the format checks and then break the computation (a
 // figure's axis looping, a resampling allocating without bound): case_extent.h.
 TEST_F(ValidateCommand, ReportsATracingPointFarFromTheValve) {
