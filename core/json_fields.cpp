@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <vector>
 
 #include "core/atomic_file.h"
@@ -53,12 +54,80 @@ std::size_t editDistance(const std::string& a, const std::string& b) {
   return row[b.size()];
 }
 
+// Finds keys given twice in one object, from nlohmann's parse events. JSON leaves duplicates
+// to the reader and nlohmann keeps the last one without a word: a case.json with two "mesh"
+// keys simulated the second mesh, a cord with two "rest_length_mm" the second length.
+class DuplicateKeys {
+ public:
+  bool operator()(int /*depth*/, nlohmann::json::parse_event_t event, nlohmann::json& parsed) {
+    using Event = nlohmann::json::parse_event_t;
+    switch (event) {
+      case Event::object_start:
+      case Event::array_start:
+        stack_.push_back(Frame{event == Event::object_start, {}, {}, 0});
+        break;
+      case Event::key:
+        if (!stack_.empty() && stack_.back().object) {
+          Frame& object = stack_.back();
+          object.key = parsed.get<std::string>();
+          if (++object.seen[object.key] == 2) found_.push_back(fieldPath(objectPath(), object.key));
+        }
+        break;
+      case Event::value:
+        if (!stack_.empty() && !stack_.back().object) ++stack_.back().index;
+        break;
+      case Event::object_end:
+      case Event::array_end:
+        if (!stack_.empty()) stack_.pop_back();
+        if (!stack_.empty() && !stack_.back().object) ++stack_.back().index;
+        break;
+    }
+    return true;
+  }
+
+  // "cords[1].rest_length_mm" of each key given twice (or more) in its object, in file order.
+  const std::vector<std::string>& found() const { return found_; }
+
+ private:
+  struct Frame {
+    bool object = false;
+    std::map<std::string, int> seen;  // an object's keys so far, with their counts
+    std::string key;                  // an object's current key
+    std::size_t index = 0;            // an array's current element
+  };
+
+  // The path of the innermost object, the one whose key was just read.
+  std::string objectPath() const {
+    std::string path;
+    for (std::size_t k = 0; k + 1 < stack_.size(); ++k)
+      path = stack_[k].object ? fieldPath(path, stack_[k].key) : indexPath(path, stack_[k].index);
+    return path;
+  }
+
+  std::vector<Frame> stack_;
+  std::vector<std::string> found_;
+};
+
 }  // namespace
 
 std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
                                         Diagnostics& diagnostics) {
   try {
-    return nlohmann::json::parse(text);
+    DuplicateKeys duplicates;
+    nlohmann::json document = nlohmann::json::parse(
+        text, [&duplicates](int depth, nlohmann::json::parse_event_t event,
+                            nlohmann::json& parsed) { return duplicates(depth, event, parsed); });
+    constexpr std::size_t kMaxReported = 10;
+    const std::vector<std::string>& found = duplicates.found();
+    for (std::size_t k = 0; k < found.size() && k < kMaxReported; ++k)
+      diagnostics.error(file, found[k],
+                        "duplicate key: given more than once in this object, and only one of "
+                        "its values would be read: keep one");
+    if (found.size() > kMaxReported)
+      diagnostics.error(file, "",
+                        std::to_string(found.size() - kMaxReported) + " more duplicate keys");
+    if (!found.empty()) return std::nullopt;
+    return document;
   } catch (const nlohmann::json::parse_error& e) {
     diagnostics.error(file, lineColumn(text, e.byte), "malformed JSON: " + parseReason(e.what()));
   } catch (const nlohmann::json::exception& e) {

@@ -17,7 +17,9 @@
 
 namespace chordfit {
 
-// Parses JSON text; on a syntax error adds "line L, column C: <reason>" and returns nullopt.
+// Parses JSON text; on a syntax error adds "line L, column C: <reason>" and returns nullopt,
+// and so on a key given twice in one object ("<path>.<key>: duplicate key: ..."; nlohmann
+// would keep the last value without a word). Every JSON input goes through here.
 std::optional<nlohmann::json> parseJson(const std::string& text, const std::string& file,
                                         Diagnostics& diagnostics);
 

@@ -487,6 +487,22 @@ TEST_F(ValidateCommand, ReportsAnUnknownCordKeySuggestingTheNearestKnownOne) {
               "\"compliance_mm_per_N\"\\?");
 }
 
+// A key given twice used to keep its last value without a word: two "rest_length_mm" of one
+// cord read the second, two "mesh" keys the second mesh.
+TEST_F(ValidateCommand, ReportsADuplicateKeyNamingTheFileAndItsPath) {
+  writeText(dir_ / "cords.json", R"({"format": "chordfit-cordset", "version": 1,
+      "tips": [{"name": "anterolateral", "position": [0, 5, -20]}],
+      "cords": [{"tip": 0, "vertex": 9, "rest_length_mm": 18.0, "rest_length_mm": 1e-300}]})");
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json",
+              "cords\\[0\\]\\.rest_length_mm: duplicate key: given more than once in this "
+              "object, and only one of its values would be read: keep one");
+  std::string text = testing::readText(dir_ / "case.json");
+  text.replace(text.find('{'), 1, R"({"mesh": "elsewhere.ply",)");
+  writeText(dir_ / "case.json", text);
+  expectError("case\\.json", "mesh: duplicate key");
+}
+
 // A misspelt "closed_position" used to leave the tip static without a word, in pm_tips.json
 // as in a cord set's tips.
 TEST_F(ValidateCommand, ReportsAnUnknownTipKeySuggestingTheNearestKnownOne) {

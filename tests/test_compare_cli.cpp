@@ -198,6 +198,24 @@ TEST_F(CompareCommand, LabelsDefaultToTheFileNames) {
   EXPECT_TRUE(r.err.empty()) << "--quiet: " << r.err;
 }
 
+// The truth is context: a truth.json with a key given twice (which one is the truth?) is set
+// aside with a warning naming the key, not read with its last value.
+TEST_F(CompareCommand, ATruthWithADuplicateKeyIsSetAsideNamingTheKey) {
+  const fs::path case_copy = *dir_ / "duplicate-truth";
+  fs::copy(caseDir(), case_copy, fs::copy_options::recursive);
+  std::string truth = readText(case_copy / "truth" / "truth.json");
+  truth.replace(truth.find('{'), 1, R"({"cords": [], )");
+  testing::writeText(case_copy / "truth" / "truth.json", truth);
+  const auto r = runChordfit("compare " + quoted(case_copy) + " " +
+                             quoted(case_copy / "cords.json") + " --out " + quoted(*dir_ / "dt"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("truth.json: cords: duplicate key: given more than once in this object, "
+                       "and only one of its values would be read: keep one; compared without "
+                       "the truth\n"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST_F(CompareCommand, RemovesTheFiguresOfCordSetsAnEarlierCompareHadAndKeepsOtherFiles) {
   // An earlier compare of two cord sets into the same directory left enface_2.svg; beside
   // this run's one figure it would read as its own. Files no run recorded stay.

@@ -30,6 +30,53 @@ TEST(ParseJson, ReportsMalformedJsonWithItsPosition) {
   EXPECT_NE(printed.str().find("tracings.json: line 3"), std::string::npos) << printed.str();
 }
 
+// nlohmann keeps the last of a key given twice without a word: a case.json with two "mesh"
+// keys read the second mesh.
+TEST(ParseJson, RefusesADuplicateKeyNamingItsPath) {
+  const std::pair<const char*, const char*> cases[] = {
+      {R"({"mesh": "a.ply", "version": 1, "mesh": "b.ply"})", "mesh"},
+      {R"({"tips": [], "cords": [{"tip": 0}, {"tip": 0, "rest_length_mm": 20,
+          "point": {"weights": [1, 0, 0]}, "rest_length_mm": 1e-300}]})",
+       "cords[1].rest_length_mm"},
+      {R"({"tracings": [[1, {"a": 1}], [[2], {"plane": {"normal": [0, 1, 0], "origin": [],
+          "normal": [1, 0, 0]}}]]})",
+       "tracings[1][1].plane.normal"},
+      {R"([{"x": 1}, {"y": {"z": 1, "z": 2, "z": 3}}])", "[1].y.z"}};
+  for (const auto& [text, where] : cases) {
+    Diagnostics diagnostics;
+    EXPECT_FALSE(parseJson(text, "case.json", diagnostics)) << text;
+    ASSERT_EQ(diagnostics.problems().size(), 1u) << text;
+    const Problem& p = diagnostics.problems().front();
+    EXPECT_EQ(p.file, "case.json");
+    EXPECT_EQ(p.where, where);
+    EXPECT_EQ(p.what,
+              "duplicate key: given more than once in this object, and only one of its values "
+              "would be read: keep one");
+  }
+}
+
+TEST(ParseJson, AcceptsTheSameKeyInDifferentObjects) {
+  Diagnostics diagnostics;
+  const auto document = parseJson(
+      R"({"a": {"x": 1}, "b": {"x": 2, "a": {"x": 3}}, "c": [{"x": 4}, {"x": 5}], "x": 6})",
+      "case.json", diagnostics);
+  ASSERT_TRUE(document);
+  EXPECT_TRUE(diagnostics.ok());
+  EXPECT_EQ((*document)["c"][1]["x"], 5);
+}
+
+TEST(ParseJson, CapsTheDuplicateKeysItNames) {
+  std::string text = "{";
+  for (int k = 0; k < 25; ++k)
+    text += "\"k" + std::to_string(k) + "\": 1, \"k" + std::to_string(k) + "\": 2, ";
+  text += "\"end\": 0}";
+  Diagnostics diagnostics;
+  EXPECT_FALSE(parseJson(text, "cords.json", diagnostics));
+  ASSERT_EQ(diagnostics.problems().size(), 11u);
+  EXPECT_EQ(diagnostics.problems().front().where, "k0");
+  EXPECT_EQ(diagnostics.problems().back().what, "15 more duplicate keys");
+}
+
 // A directory used to be opened and "parsed" (line 1, column 1: malformed JSON) and a device
 // such as /dev/zero read until the machine ran out of memory.
 TEST(LoadJsonFile, RefusesAnEmptyPathADirectoryADeviceAndAHugeFileNamingTheFile) {

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/json_fields.h"
 #include "core/metrics.h"
 
 namespace chordfit::cli {
@@ -28,8 +29,13 @@ std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
   if (!std::filesystem::exists(file, ec)) return std::nullopt;
   std::string text;
   if (!readWholeFile(file, text)) return ignoreTruth(file, "cannot be read");
-  const nlohmann::json truth = nlohmann::json::parse(text, nullptr, false);
-  if (truth.is_discarded()) return ignoreTruth(file, "unreadable JSON");
+  Diagnostics diagnostics;  // the first problem (a syntax error, a duplicate key) is named
+  const std::optional<nlohmann::json> parsed = parseJson(text, file.string(), diagnostics);
+  if (!parsed) {
+    const Problem& p = diagnostics.problems().front();
+    return ignoreTruth(file, (p.where.empty() ? "" : p.where + ": ") + p.what);
+  }
+  const nlohmann::json& truth = *parsed;
   const auto number = [](const nlohmann::json& j, const char* key) {
     return j.is_object() && j.contains(key) && j[key].is_number();
   };
