@@ -356,6 +356,17 @@ class Merger {
     std::string csv = sensitivityCsvHeader();
     std::vector<PlotPanel> panels;
     std::set<std::string> cases;
+    // Each sweep value is its own case (the variant ids of makePlan: "_noise0.6", "_planes3";
+    // the plan's own noise and plane count are the base case). A value whose case the plan
+    // does not hold (--cases, --presets, --seeds, --methods) has no row: it once took the base
+    // case's numbers, so every row of a one-case merge showed the same fit.
+    const std::string base_id = baseCaseId(config_.sensitivity_preset, config_.seeds.front());
+    auto inPlan = [&](const std::string& id) {
+      return std::any_of(plan_.cases.begin(), plan_.cases.end(),
+                         [&](const CaseSpec& c) { return c.id == id; });
+    };
+    std::vector<std::string> left_out;  // "noise σ 0.6 (prolapse-P2_s1_noise0.6)"
+    int rows = 0;
     auto sweep = [&](const std::string& name, const std::string& unit,
                      const std::vector<double>& values, auto case_of) {
       PlotPanel avg_panel{"AvgD against " + name, name + unit, "AvgD (mm)", {}, false};
@@ -366,6 +377,12 @@ class Merger {
           rec_near{"≤ 3 mm from a plane", {}, {}, true, true};
       for (double value : values) {
         const std::string case_id = case_of(value);
+        const std::string v = fixed(value, name == "planes" ? 0 : 1);
+        if (!inPlan(case_id)) {
+          left_out.push_back(name + " " + v + " (" + case_id + ")");
+          continue;
+        }
+        ++rows;
         cases.insert(case_id);
         const json* h = result(case_id, "heuristic");
         const json* f = result(case_id, "fit_scales_ceres");
@@ -377,7 +394,6 @@ class Merger {
             t && t->contains("noise_floor") ? number(t->at("noise_floor"), "mean_mm") : kNaN;
         const double all = f ? 100.0 * quantile(cordErrors(*f), 0.5) : kNaN;
         const double close = f ? 100.0 * quantile(cordErrors(*f, 3.0), 0.5) : kNaN;
-        const std::string v = fixed(value, name == "planes" ? 0 : 1);
         md += "| " + name + " | " + v + " | " + mdNumber(h_avg) + " | " + mdNumber(f_avg) + " | " +
               mdNumber(f_max) + " | " + mdNumber(floor_avg) + " | " + mdNumber(all, 1) + " | " +
               mdNumber(close, 1) + " |\n";
@@ -397,36 +413,32 @@ class Merger {
       panels.push_back(avg_panel);
       panels.push_back(rec_panel);
     };
-    const std::string base_id = baseCaseId(config_.sensitivity_preset, config_.seeds.front());
-    if (std::none_of(plan_.cases.begin(), plan_.cases.end(),
-                     [&](const CaseSpec& c) { return c.id == base_id; })) {
-      // A plan restricted to other cases (--presets, --cases, --seeds): no sweep to tabulate.
-      write("sensitivity.md",
-            md + "\nNo rows: the plan does not hold the sweeps' base case " + base_id + ".\n");
-      write("sensitivity.csv", csv);
-      write("sensitivity.svg", svgLinePlots({}, 2));
-      return;
-    }
-    const CaseSpec base = findCase(plan_, base_id);
-    auto variant = [&](const std::string& suffix) {
-      const std::string id = base.id + suffix;
-      for (const CaseSpec& c : plan_.cases) {
-        if (c.id == id) return id;
-      }
-      return base.id;
-    };
     sweep("noise σ", " (mm)", config_.noise_sweep, [&](double sigma) {
       char s[32];
       std::snprintf(s, sizeof s, "_noise%g", sigma);
-      return sigma == config_.noise_mm ? base.id : variant(s);
+      return sigma == config_.noise_mm ? base_id : base_id + s;
     });
     std::vector<double> planes(config_.plane_sweep.begin(), config_.plane_sweep.end());
     sweep("planes", "", planes, [&](double k) {
       return static_cast<int>(k) == config_.planes
-                 ? base.id
-                 : variant("_planes" + std::to_string(static_cast<int>(k)));
+                 ? base_id
+                 : base_id + "_planes" + std::to_string(static_cast<int>(k));
     });
+    if (rows == 0) {
+      // A plan restricted to other cases: no sweep to tabulate.
+      write("sensitivity.md", md + "\nNo rows: the plan does not hold the sweeps' cases (" +
+                                  base_id + " and its variants).\n");
+      write("sensitivity.csv", csv);
+      write("sensitivity.svg", svgLinePlots({}, 2));
+      return;
+    }
     md += missingSection(cases);
+    if (!left_out.empty()) {
+      md +=
+          "\n**Not in the plan** (rows left out; the run's --cases, --presets, --seeds or "
+          "--methods chose other cases): " +
+          joined(left_out, ", ") + ".\n";
+    }
     md += "\nPlot: `sensitivity.svg`.\n";
     write("sensitivity.md", md);
     write("sensitivity.csv", csv);

@@ -201,8 +201,16 @@ TEST_F(ExperimentsPipeline, CasesAndEdgeSelectWhatRuns) {
   EXPECT_EQ(jobs, 6);  // the Table 1 methods of one case, with the tissue pre-fit
 }
 
+// The case options a job result records (experiment_jobs.cpp): the smoke plan's case by default.
+struct FixtureCase {
+  std::string id = "normal-1_s2";
+  double edge_mm = 3.0;
+  int planes = 3;
+  double noise_mm = 0.3;
+};
+
 // A job result as run_experiments writes it, with made-up numbers (test fixture).
-nlohmann::json fixtureResult(const std::string& method, double mean_mm,
+nlohmann::json fixtureResult(const FixtureCase& c, const std::string& method, double mean_mm,
                              const std::vector<std::pair<double, double>>& cords) {
   nlohmann::json metrics = {{"area_mm2", 900.0},
                             {"min_mm", 0.0},
@@ -225,20 +233,38 @@ nlohmann::json fixtureResult(const std::string& method, double mean_mm,
                     {"relative_error", cords[i].second},
                     {"taut_in_truth", i % 2 == 0}});  // every other cord taut
   }
-  nlohmann::json r = {{"job", "normal-1_s2__" + method},
-                      {"case", "normal-1_s2"},
+  nlohmann::json r = {{"job", c.id + "__" + method},
+                      {"case", c.id},
                       {"method", method},
                       {"metrics", metrics},
                       {"forward_sims", 1},
                       {"wall_seconds", 1.5},
                       {"cords", rows},
                       {"revision", "abc1234"},
-                      {"edge_mm", 3.0},
-                      {"planes", 3},
-                      {"noise_mm", 0.3},
+                      {"edge_mm", c.edge_mm},
+                      {"planes", c.planes},
+                      {"noise_mm", c.noise_mm},
                       {"dropout", 0.1}};
   if (method == "truth") r["noise_floor"] = metrics;
   return r;
+}
+
+nlohmann::json fixtureResult(const std::string& method, double mean_mm,
+                             const std::vector<std::pair<double, double>>& cords) {
+  return fixtureResult(FixtureCase{}, method, mean_mm, cords);
+}
+
+// The heuristic, per-cord fit and truth results of a sensitivity case of the full plan (edge
+// 2.5 mm), the fit's AvgD `fit_mm`, in dir/jobs.
+void writeSweepCase(const fs::path& dir, const FixtureCase& c, double fit_mm) {
+  writeText(dir / "jobs" / (c.id + "__heuristic.json"),
+            fixtureResult(c, "heuristic", 2.0, {{0.5, 0.2}}).dump());
+  nlohmann::json fit = fixtureResult(c, "fit_scales_ceres", fit_mm, {{0.5, 0.05}});
+  fit["max_sims"] = 300;
+  fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {2.0, fit_mm}}};
+  writeText(dir / "jobs" / (c.id + "__fit_scales_ceres.json"), fit.dump());
+  writeText(dir / "jobs" / (c.id + "__truth.json"),
+            fixtureResult(c, "truth", 0.2, {{0.5, 0.0}}).dump());
 }
 
 TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissingOnes) {
@@ -290,6 +316,51 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
             std::string::npos);
   r = runRunner("check" + subset + "--results " + quoted(dir.path()));
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
+}
+
+// The sensitivity variants are cases of their own (prolapse-P2_s1_noise0, ..._planes3): a merge
+// of a subset without them used to fill all seven rows with the base case's numbers.
+TEST_F(ExperimentsPipeline, SensitivityRowsComeOnlyFromTheirOwnCases) {
+  TempDir dir;
+  writeSweepCase(dir.path(), {"prolapse-P2_s1", 2.5, 6, 0.3}, 0.46);
+  writeSweepCase(dir.path(), {"prolapse-P2_s1_noise0", 2.5, 6, 0.0}, 0.38);
+  auto r = runRunner("merge --allow-missing --no-timing --cases prolapse-P2_s1 --results " +
+                     quoted(dir.path()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  auto rows = lines(readText(dir / "sensitivity.csv"));
+  ASSERT_EQ(rows.size(), 3u) << "header, noise 0.3 and planes 6: the base case's own values\n"
+                             << readText(dir / "sensitivity.csv");
+  EXPECT_EQ(rows[1].rfind("noise σ,0.3,prolapse-P2_s1,2.0000,0.4600,", 0), 0u) << rows[1];
+  EXPECT_EQ(rows[2].rfind("planes,6,prolapse-P2_s1,", 0), 0u) << rows[2];
+  std::string md = readText(dir / "sensitivity.md");
+  EXPECT_NE(md.find("**Not in the plan** (rows left out"), std::string::npos) << md;
+  EXPECT_NE(md.find("noise σ 0.0 (prolapse-P2_s1_noise0)"), std::string::npos) << md;
+  EXPECT_NE(md.find("planes 12 (prolapse-P2_s1_planes12)"), std::string::npos) << md;
+  EXPECT_EQ(md.find("| noise σ | 0.0 |"), std::string::npos) << md;
+
+  // With the variant selected, its row has its own fit (0.38, not the base case's 0.46); a
+  // variant of the plan without results is a row marked missing.
+  r = runRunner(
+      "merge --allow-missing --no-timing --cases prolapse-P2_s1,prolapse-P2_s1_noise0,"
+      "prolapse-P2_s1_noise0.6 --results " +
+      quoted(dir.path()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  rows = lines(readText(dir / "sensitivity.csv"));
+  ASSERT_EQ(rows.size(), 5u) << readText(dir / "sensitivity.csv");
+  EXPECT_EQ(rows[1].rfind("noise σ,0.0,prolapse-P2_s1_noise0,2.0000,0.3800,", 0), 0u) << rows[1];
+  EXPECT_EQ(rows[3], "noise σ,0.6,prolapse-P2_s1_noise0.6,,,,,,") << "no numbers of another case";
+  md = readText(dir / "sensitivity.md");
+  EXPECT_NE(md.find("| noise σ | 0.6 | – | – | – | – | – | – |"), std::string::npos) << md;
+  EXPECT_NE(md.find("`prolapse-P2_s1_noise0.6__fit_scales_ceres`"), std::string::npos)
+      << "the missing jobs are named: " << md;
+
+  // A variant alone: its row, though the plan does not hold the base case.
+  r = runRunner("merge --allow-missing --no-timing --cases prolapse-P2_s1_noise0 --results " +
+                quoted(dir.path()));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  rows = lines(readText(dir / "sensitivity.csv"));
+  ASSERT_EQ(rows.size(), 2u) << readText(dir / "sensitivity.csv");
+  EXPECT_EQ(rows[1].rfind("noise σ,0.0,prolapse-P2_s1_noise0,", 0), 0u) << rows[1];
 }
 
 TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
