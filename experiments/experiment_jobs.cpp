@@ -271,29 +271,93 @@ fs::path matchingSourceCase(const CaseSpec& spec, const fs::path& source) {
   for (const auto& entry : fs::directory_iterator(source)) candidates.push_back(entry.path());
   std::sort(candidates.begin(), candidates.end());
   for (const fs::path& dir : candidates) {
-    std::string text;
-    if (!fs::exists(dir / "case.json") || !readWholeFile(dir / "truth" / "truth.json", text)) {
-      continue;
-    }
-    const json truth = json::parse(text, nullptr, false);
-    if (truth.is_discarded() || !truth.contains("generation")) continue;
-    const json& g = truth.at("generation");
-    auto same = [](const json& value, double wanted) {
-      return value.is_number() && std::abs(value.get<double>() - wanted) < 1e-12;
-    };
-    if (truth.value("preset", "") == spec.preset && truth.value("seed", -1) == spec.seed &&
-        same(g.value("case_edge_mm", json()), spec.edge_mm) &&
-        same(g.value("planes", json()), spec.planes) &&
-        same(g.value("noise_mm", json()), spec.noise_mm) &&
-        same(g.value("dropout_fraction", json()), spec.dropout) &&
-        same(g.value("truth_edge_mm", json()), spec.edge_mm / 2)) {
-      return dir;
-    }
+    if (fs::exists(dir / "case.json") && !caseOptionMismatch(spec, dir)) return dir;
   }
   return {};
 }
 
 }  // namespace
+
+std::optional<OptionMismatch> resultOptionMismatch(const json& result, const JobSpec& job,
+                                                   const CaseSpec& spec,
+                                                   const ExperimentConfig& config) {
+  auto differs = [&](const char* key, double wanted) {
+    return result.contains(key) &&
+           !(result.at(key).is_number() && std::abs(result.at(key).get<double>() - wanted) < 1e-12);
+  };
+  auto shown = [&](const char* key) {
+    const json& v = result.at(key);
+    return v.is_number() ? formatNumber(v.get<double>()) : v.dump();
+  };
+  const struct {
+    const char* key;
+    const char* option;
+    double wanted;
+  } case_options[] = {{"edge_mm", "--edge", spec.edge_mm},
+                      {"planes", "--plan", static_cast<double>(spec.planes)},
+                      {"noise_mm", "--plan", spec.noise_mm},
+                      {"dropout", "--plan", spec.dropout}};
+  for (const auto& o : case_options) {
+    if (differs(o.key, o.wanted))
+      return OptionMismatch{o.key, o.option, shown(o.key), formatNumber(o.wanted)};
+  }
+  if (job.method != Method::kFit) return std::nullopt;
+  if (differs("max_sims", config.max_sims)) {
+    return OptionMismatch{"max_sims", "--max-sims", shown("max_sims"),
+                          std::to_string(config.max_sims)};
+  }
+  // The fit's default bounds are not written down here: no scale_bounds in the result is the
+  // default, and only the default matches it (an explicit 0.7,1.5 is refused, to be safe).
+  const std::string default_bounds = "the fit's default";
+  std::string recorded = default_bounds;
+  if (result.contains("scale_bounds")) {
+    const json& b = result.at("scale_bounds");
+    recorded = b.is_array() && b.size() == 2 && b[0].is_number() && b[1].is_number()
+                   ? formatNumber(b[0].get<double>()) + "," + formatNumber(b[1].get<double>())
+                   : b.dump();
+  }
+  const std::string requested = config.scale_bounds ? scaleBoundsArgument(config) : default_bounds;
+  if (recorded != requested)
+    return OptionMismatch{"scale_bounds", "--scale-bounds", recorded, requested};
+  return std::nullopt;
+}
+
+std::optional<OptionMismatch> caseOptionMismatch(const CaseSpec& spec, const fs::path& case_dir) {
+  std::string text;
+  if (!readWholeFile(case_dir / "truth" / "truth.json", text)) {
+    return OptionMismatch{"truth/truth.json", "--work", "missing", "a case made by make-case"};
+  }
+  const json truth = json::parse(text, nullptr, false);
+  if (truth.is_discarded() || !truth.is_object()) {
+    return OptionMismatch{"truth/truth.json", "--work", "not JSON", "a case made by make-case"};
+  }
+  const json generation = truth.value("generation", json::object());
+  if (truth.value("preset", "") != spec.preset) {
+    return OptionMismatch{"preset", "--presets", truth.value("preset", json()).dump(), spec.preset};
+  }
+  if (truth.value("seed", json()) != json(spec.seed)) {
+    return OptionMismatch{"seed", "--seeds", truth.value("seed", json()).dump(),
+                          std::to_string(spec.seed)};
+  }
+  const struct {
+    const char* key;
+    const char* option;
+    double wanted;
+  } options[] = {{"case_edge_mm", "--edge", spec.edge_mm},
+                 {"truth_edge_mm", "--edge", spec.edge_mm / 2},
+                 {"planes", "--plan", static_cast<double>(spec.planes)},
+                 {"noise_mm", "--plan", spec.noise_mm},
+                 {"dropout_fraction", "--plan", spec.dropout}};
+  for (const auto& o : options) {
+    const json value = generation.value(o.key, json());
+    if (value.is_number() && std::abs(value.get<double>() - o.wanted) < 1e-12) continue;
+    return OptionMismatch{
+        std::string("generation.") + o.key, o.option,
+        value.is_number() ? formatNumber(value.get<double>()) : std::string("not recorded"),
+        formatNumber(o.wanted)};
+  }
+  return std::nullopt;
+}
 
 fs::path caseDirectory(const RunPaths& paths, const std::string& case_id) {
   return paths.work / "cases" / case_id;

@@ -9,7 +9,10 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
+
+#include <nlohmann/json.hpp>
 
 #include "experiments/experiment_plan.h"
 
@@ -35,13 +38,40 @@ struct StepOutcome {
   std::string summary;   // one line for the progress output when ok
 };
 
+// An option a job result or a case records that differs from what the run asks of it.
+struct OptionMismatch {
+  std::string field;      // the recorded key: "max_sims", "edge_mm", "generation.planes", ...
+  std::string option;     // what sets it: "--max-sims", "--edge", "--scale-bounds", "--plan"
+  std::string recorded;   // "300"; "the fit's default" for a fit without scale_bounds
+  std::string requested;  // the same for this run's options
+};
+
+// The first option a job result records that differs from what `spec` and `config` ask of
+// `job`: the case's edge_mm, planes, noise_mm and dropout, and a fit's max_sims and
+// scale_bounds (absent: the fit's default bounds). A key an older result does not record is not
+// compared. nullopt when every recorded option agrees.
+std::optional<OptionMismatch> resultOptionMismatch(const nlohmann::json& result, const JobSpec& job,
+                                                   const CaseSpec& spec,
+                                                   const ExperimentConfig& config);
+
+// The first generation option of the case in `case_dir` (truth/truth.json: preset, seed,
+// case_edge_mm, planes, noise_mm, dropout_fraction, truth_edge_mm) that differs from `spec`;
+// a truth.json that is missing, not JSON or without the key is a mismatch too. nullopt when the
+// case was made with `spec`'s options.
+std::optional<OptionMismatch> caseOptionMismatch(const CaseSpec& spec,
+                                                 const std::filesystem::path& case_dir);
+
 std::filesystem::path caseDirectory(const RunPaths& paths, const std::string& case_id);
 std::filesystem::path jobResultPath(const RunPaths& paths, const std::string& job_id);
 
-// Generates (or copies from case_source) the case unless <work>/cases/<id>/case.json exists.
+// Generates (or copies from case_source) the case unless <work>/cases/<id>/case.json exists
+// (run_experiments refuses, before it starts, a present case made with other options:
+// caseOptionMismatch).
 StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths);
 
-// Runs the job unless its result exists (or `force`), generating its case when missing.
+// Runs the job unless its result exists (or `force`), generating its case when missing
+// (run_experiments refuses, before it starts, a present result made with other options unless
+// `force`: resultOptionMismatch).
 StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, const JobSpec& job,
                    const RunPaths& paths, bool force);
 

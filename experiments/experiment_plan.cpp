@@ -181,10 +181,24 @@ std::string baseCaseId(const std::string& preset, int seed) {
   return preset + "_s" + std::to_string(seed);
 }
 
-std::string planId(const ExperimentPlan& plan) {
+std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults) {
+  std::string text;
+  auto add = [&](const std::string& option) { text += (text.empty() ? "" : " ") + option; };
+  if (config.edge_mm != defaults.edge_mm) add("--edge " + shortNumber(config.edge_mm));
+  if (config.max_sims != defaults.max_sims) add("--max-sims " + std::to_string(config.max_sims));
+  if (config.scale_bounds && config.scale_bounds != defaults.scale_bounds) {
+    add("--scale-bounds " + shortNumber(config.scale_bounds->first) + "," +
+        shortNumber(config.scale_bounds->second));
+  }
+  return text;
+}
+
+std::string planId(const ExperimentPlan& plan, const std::string& option_values) {
   std::vector<std::string> ids;
   for (const JobSpec& job : plan.jobs) ids.push_back(job.id);
   std::sort(ids.begin(), ids.end());
+  // After the ids, so that the default options hash exactly as before they were part of it.
+  if (!option_values.empty()) ids.push_back("options " + option_values);
   std::uint64_t hash = 14695981039346656037ull;  // FNV-1a, 64 bit
   for (const std::string& id : ids) {
     for (const char c : id + "\n") {

@@ -82,9 +82,16 @@ const CaseSpec& findCase(const ExperimentPlan& plan, const std::string& case_id)
 // sweep variants add a suffix to it.
 std::string baseCaseId(const std::string& preset, int seed);
 
+// The options that change a plan's numbers but not its job ids, where `config` differs from the
+// plan's `defaults`: "--edge 2 --max-sims 150 --scale-bounds 0.6,1.5" (each only when it
+// differs; "" for the defaults).
+std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults);
+
 // What identifies a plan's jobs whatever options chose them: 16 hex digits of the FNV-1a hash of
-// its sorted job ids ("--seeds 1,2,3" and no --seeds give the same plan id).
-std::string planId(const ExperimentPlan& plan);
+// its sorted job ids ("--seeds 1,2,3" and no --seeds give the same plan id), and of
+// `option_values` (nonDefaultOptions) when not empty, so that a plan run with another budget,
+// edge or scale bounds has another id while the defaults keep the id they always had.
+std::string planId(const ExperimentPlan& plan, const std::string& option_values = "");
 
 // "i/N" with 1 <= i <= N. Returns false on malformed text.
 struct Shard {

@@ -47,7 +47,8 @@ class Merger {
         config_(config),
         results_(results),
         timing_(!options.no_timing),
-        plan_options_(options.plan_options) {
+        plan_options_(options.plan_options),
+        plan_id_(options.plan_id.empty() ? planId(plan) : options.plan_id) {
     for (const JobSpec& job : plan.jobs) {
       std::string text;
       if (readWholeFile(results / "jobs" / (job.id + ".json"), text)) {
@@ -469,7 +470,7 @@ class Merger {
                      " cases. See experiments/README.md, "
                      "\"Benchmark experiments\".\n\n";
     if (!plan_options_.empty())
-      md += kPlanOptionsLine + ("`" + plan_options_ + "`") + kPlanIdMark + planId(plan_) + "`\n\n";
+      md += kPlanOptionsLine + ("`" + plan_options_ + "`") + kPlanIdMark + plan_id_ + "`\n\n";
     md += "Revision(s) of the chordfit that made the results: " + recordedValues("revision", "");
     // Wall times compare only within one machine (docs/performance.md); results made before
     // jobs recorded their machine have none.
@@ -490,6 +491,7 @@ class Merger {
   fs::path results_;
   bool timing_;
   std::string plan_options_;
+  std::string plan_id_;
   std::map<std::string, json> results_by_job_;
   MergeSummary summary_;
 };

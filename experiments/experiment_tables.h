@@ -28,6 +28,8 @@ struct MergeOptions {
   // recorded in index.md with the plan's id (planId) so that `check` can tell results of
   // another plan from missing rows.
   std::string plan_options;
+  // planId(plan, the options' non-default values) recorded beside them; "" for planId(plan).
+  std::string plan_id;
 };
 
 // index.md's line recording MergeOptions::plan_options and the plan id:

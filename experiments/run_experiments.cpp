@@ -18,6 +18,9 @@
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "core/atomic_file.h"
 #include "core/csv_text.h"
 #include "core/synthetic_case.h"
 #include "experiments/acceptance_table.h"
@@ -94,6 +97,9 @@ struct Arguments {
   bool force = false;
   bool no_timing = false;
   bool allow_missing = false;
+  // --edge, --max-sims, --scale-bounds where they differ from the plan's defaults
+  // (nonDefaultOptions): part of the plan options and plan id index.md records.
+  std::string option_values;
 };
 
 int usageError(const std::string& message) {
@@ -298,6 +304,78 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
   return kept;
 }
 
+// The first of `jobs` whose result in `results` records other options than this run asks
+// (resultOptionMismatch), with how many of them do.
+struct StaleResult {
+  const JobSpec* job = nullptr;
+  fs::path file;
+  OptionMismatch mismatch;
+  int count = 0;
+};
+StaleResult staleResults(const ExperimentPlan& plan, const ExperimentConfig& config,
+                         const std::vector<const JobSpec*>& jobs, const fs::path& results) {
+  StaleResult stale;
+  for (const JobSpec* job : jobs) {
+    const fs::path file = results / "jobs" / (job->id + ".json");
+    std::string text;
+    if (!chordfit::readWholeFile(file, text)) continue;
+    const auto result = nlohmann::json::parse(text, nullptr, false);
+    if (result.is_discarded()) continue;  // merge names the file it cannot read
+    const auto mismatch = resultOptionMismatch(result, *job, findCase(plan, job->case_id), config);
+    if (!mismatch) continue;
+    if (stale.count++ == 0) stale = {job, file, *mismatch, 1};
+  }
+  return stale;
+}
+
+// "max_sims 300, the run asks for 150 (--max-sims)".
+std::string describe(const OptionMismatch& m, const char* who) {
+  return m.field + " " + m.recorded + ", " + who + " " + m.requested + " (" + m.option + ")";
+}
+
+std::string moreLikeIt(int count, const char* what) {
+  if (count < 2) return "";
+  return " (" + std::to_string(count - 1) + " more " + what + (count > 2 ? "s" : "") + " like it)";
+}
+
+// Before a run starts: a present case or result made with other options than this run's would
+// be reused as if it were made with them (a case whatever --force says, a result unless
+// --force). Returns the message refusing the run, or "".
+std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig& config,
+                              const Arguments& a, const RunPaths& paths,
+                              const std::vector<const CaseSpec*>& cases,
+                              const std::vector<const JobSpec*>& jobs) {
+  std::vector<const CaseSpec*> used = cases;
+  for (const JobSpec* job : jobs) {
+    const CaseSpec* c = &findCase(plan, job->case_id);
+    if (std::find(used.begin(), used.end(), c) == used.end()) used.push_back(c);
+  }
+  int stale_cases = 0;
+  std::string first;
+  for (const CaseSpec* c : used) {
+    const fs::path dir = caseDirectory(paths, c->id);
+    if (!fs::exists(dir / "case.json")) continue;
+    const auto mismatch = caseOptionMismatch(*c, dir);
+    if (mismatch && stale_cases++ == 0) {
+      first = "case " + c->id + " in " + dir.string() + " was made with " +
+              describe(*mismatch, "this run asks for");
+    }
+  }
+  if (stale_cases > 0) {
+    return first + moreLikeIt(stale_cases, "case") +
+           ". Give another --work (and --results) for these options, or remove the case "
+           "directory (--force reruns jobs, it does not remake cases)";
+  }
+  if (a.force) return "";
+  const StaleResult stale = staleResults(plan, config, jobs, a.results);
+  if (stale.count == 0) return "";
+  return "job " + stale.job->id + " has a result made with other options: " + stale.file.string() +
+         " records " + describe(stale.mismatch, "this run asks for") +
+         moreLikeIt(stale.count, "job") +
+         ". Rerun them with --force (their results are replaced), or give another --results "
+         "(and --work) for these options";
+}
+
 int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
   const RunPaths paths{a.chordfit,           a.results,    a.work, chordfitRevision(a.chordfit),
                        machineDescription(), a.case_source};
@@ -312,6 +390,11 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
   std::vector<const JobSpec*> jobs;
   for (std::size_t k = 0; k < plan.jobs.size(); ++k) {
     if (inShard(k, a.shard)) jobs.push_back(&plan.jobs[k]);
+  }
+  if (const std::string refusal = refuseStaleInputs(plan, config, a, paths, cases, jobs);
+      !refusal.empty()) {
+    std::fprintf(stderr, "run_experiments: error: %s\n", refusal.c_str());
+    return kExitUsage;
   }
   std::fprintf(stderr,
                "run_experiments: shard %d/%d: %zu of %zu cases, %zu of %zu jobs; results "
@@ -353,8 +436,9 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
   return failures.empty() ? kExitOk : kExitJobsFailed;
 }
 
-// The options that choose the plan's cases and jobs, as given on the command line (the
-// budget, edge and bounds change the numbers, not which rows exist).
+// The options that chose the plan's cases and jobs, as given on the command line, then the
+// budget, edge and bounds where they are not the plan's defaults (nonDefaultOptions,
+// Arguments::option_values: they change the numbers, not which rows exist).
 std::string planOptions(const Arguments& a) {
   std::string text = "--plan " + a.plan;
   auto list = [&](const char* option, const std::vector<std::string>& items) {
@@ -368,6 +452,7 @@ std::string planOptions(const Arguments& a) {
   list("--seeds", seeds);
   list("--presets", a.presets);
   list("--cases", a.cases);
+  if (!a.option_values.empty()) text += " " + a.option_values;
   return text;
 }
 
@@ -398,7 +483,22 @@ int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
                  (a.results / "jobs").string().c_str());
     return kExitUsage;
   }
-  const MergeSummary s = mergeResults(plan, config, a.results, {a.no_timing, planOptions(a)});
+  // Tables labelled with options the jobs were not run with (a --max-sims 150 merge of jobs
+  // that used 300) used to be written without a word.
+  std::vector<const JobSpec*> jobs;
+  for (const JobSpec& job : plan.jobs) jobs.push_back(&job);
+  if (const StaleResult stale = staleResults(plan, config, jobs, a.results); stale.count > 0) {
+    std::fprintf(stderr,
+                 "run_experiments: error: merge: job %s was run with other options: %s records "
+                 "%s%s. Merge with the options the jobs were run with, or rerun them with these "
+                 "(run --force); nothing was written\n",
+                 stale.job->id.c_str(), stale.file.string().c_str(),
+                 describe(stale.mismatch, "the merge asks for").c_str(),
+                 moreLikeIt(stale.count, "job").c_str());
+    return kExitUsage;
+  }
+  const MergeSummary s = mergeResults(plan, config, a.results,
+                                      {a.no_timing, planOptions(a), planId(plan, a.option_values)});
   std::printf("merged %d of %zu job results into %s:", s.jobs_found, plan.jobs.size(),
               a.results.string().c_str());
   for (const std::string& f : s.written_files) std::printf(" %s", f.c_str());
@@ -432,12 +532,25 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     return kExitJobsFailed;
   }
   std::vector<std::string> problems;
+  // Job results made with other options than the check's (the tables would be of those).
+  std::vector<const JobSpec*> jobs;
+  for (const JobSpec& job : plan.jobs) jobs.push_back(&job);
+  if (const StaleResult stale = staleResults(plan, config, jobs, a.results); stale.count > 0) {
+    std::fprintf(stderr,
+                 "check: job %s was run with other options: %s records %s%s: give check the "
+                 "options the jobs were run with\n",
+                 stale.job->id.c_str(), stale.file.string().c_str(),
+                 describe(stale.mismatch, "the check asks for").c_str(),
+                 moreLikeIt(stale.count, "job").c_str());
+    std::printf("check: FAILED (%s)\n", a.results.string().c_str());
+    return kExitJobsFailed;
+  }
   // Results of another plan (the smoke run's, checked against the full plan) would list every
   // job of this plan as missing: say so once instead.
   // The plans are compared by their jobs, not by the options' text: "--seeds 1,2,3" is the full
   // plan, and the order of names does not matter.
   if (const RecordedPlan made = recordedPlan(a.results);
-      !made.id.empty() && made.id != planId(plan)) {
+      !made.id.empty() && made.id != planId(plan, a.option_values)) {
     std::fprintf(stderr,
                  "check: %s was merged with `%s`, another plan than this check's `%s`: give "
                  "check the options of the merge\n",
@@ -558,12 +671,14 @@ int list(const ExperimentPlan& plan, const Arguments& a) {
 int main(int argc, char** argv) {
   Arguments a;
   if (const int code = parseArguments(argc, argv, a); code != kExitOk) return code;
-  ExperimentConfig config = a.plan == "smoke"     ? smokeConfig()
-                            : a.plan == "reduced" ? reducedConfig()
-                                                  : fullConfig();
+  const ExperimentConfig defaults = a.plan == "smoke"     ? smokeConfig()
+                                    : a.plan == "reduced" ? reducedConfig()
+                                                          : fullConfig();
+  ExperimentConfig config = defaults;
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
   if (a.scale_bounds) config.scale_bounds = a.scale_bounds;
+  a.option_values = nonDefaultOptions(config, defaults);
   ExperimentPlan plan;
   try {
     plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);

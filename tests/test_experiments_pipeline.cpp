@@ -308,7 +308,13 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   EXPECT_EQ(readText(dir / "table1.csv").find("wall_seconds"), std::string::npos);
 
   // A subset of the full plan without the sensitivity sweeps' base case (prolapse-P2_s1) and
-  // the optimiser cases: merged and checked (it stopped with "no case prolapse-P2_s1").
+  // the optimiser cases: merged and checked (it stopped with "no case prolapse-P2_s1"). The
+  // full plan's normal-1_s2 is another case than the smoke plan's (edge 2.5 mm, 6 planes).
+  const FixtureCase full_case{"normal-1_s2", 2.5, 6, 0.3};
+  writeText(dir / "jobs" / "normal-1_s2__heuristic.json",
+            fixtureResult(full_case, "heuristic", 1.25, {{0.5, 0.10}}).dump());
+  writeText(dir / "jobs" / "normal-1_s2__truth.json",
+            fixtureResult(full_case, "truth", 0.40, {{0.5, 0.0}}).dump());
   const std::string subset = " --presets normal-1 --seeds 2 --methods heuristic,truth ";
   r = runRunner("merge --allow-missing" + subset + "--results " + quoted(dir.path()));
   EXPECT_EQ(r.exit_code, 0) << r.err;
@@ -361,6 +367,110 @@ TEST_F(ExperimentsPipeline, SensitivityRowsComeOnlyFromTheirOwnCases) {
   rows = lines(readText(dir / "sensitivity.csv"));
   ASSERT_EQ(rows.size(), 2u) << readText(dir / "sensitivity.csv");
   EXPECT_EQ(rows[1].rfind("noise σ,0.0,prolapse-P2_s1_noise0,", 0), 0u) << rows[1];
+}
+
+// Job results record the options they were made with (max_sims, scale_bounds, edge_mm, ...):
+// a run with other options used to skip them as "result present", and a merge with other
+// options labelled the tables with them.
+TEST_F(ExperimentsPipeline, ResultsMadeWithOtherOptionsAreRefusedNotReused) {
+  TempDir dir;
+  const fs::path results = dir / "results";
+  writeText(results / "jobs" / "normal-1_s2__heuristic.json",
+            fixtureResult("heuristic", 1.25, {{0.5, 0.1}}).dump());
+  writeText(results / "jobs" / "normal-1_s2__truth.json",
+            fixtureResult("truth", 0.40, {{0.5, 0.0}}).dump());
+  nlohmann::json fit = fixtureResult("fit_scales_ceres", 0.30, {{0.5, 0.02}});
+  fit["max_sims"] = 80;  // the smoke plan's budget
+  fit["convergence"] = {{"forward_sims", {1, 2}}, {"mean_mm", {1.25, 0.30}}};
+  writeText(results / "jobs" / "normal-1_s2__fit_scales_ceres.json", fit.dump());
+  const std::string where = " --results " + quoted(results) + " --work " + quoted(dir / "work") +
+                            " --chordfit " + quoted(dir / "no-chordfit");
+
+  // run: refused before anything runs, naming the job, both values and the ways out.
+  auto r = runRunner("run --smoke --methods fit_scales_ceres --max-sims 150" + where);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("job normal-1_s2__fit_scales_ceres has a result made with other options"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("records max_sims 80, this run asks for 150 (--max-sims)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("--force"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("another --results"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "work")) << "nothing ran";
+  r = runRunner("run --smoke --methods fit_scales_ceres --scale-bounds 0.6,1.5" + where);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("records scale_bounds the fit's default, this run asks for 0.6,1.5"),
+            std::string::npos)
+      << r.err;
+  r = runRunner("run --smoke --methods heuristic --edge 2" + where);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("records edge_mm 3, this run asks for 2 (--edge)"), std::string::npos)
+      << r.err;
+
+  // merge: refused, nothing written; with the jobs' options it merges.
+  r = runRunner("merge --smoke --allow-missing --max-sims 150" + where);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("merge: job normal-1_s2__fit_scales_ceres was run with other options"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("records max_sims 80, the merge asks for 150 (--max-sims)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(results / "table1.csv"));
+  r = runRunner("merge --smoke --allow-missing" + where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string index = readText(results / "index.md");
+  EXPECT_NE(index.find("Plan options: `--plan smoke`; plan id `"), std::string::npos) << index;
+
+  // check: the same, naming the first job and field.
+  r = runRunner("check --smoke --scale-bounds 0.6,1.5" + where);
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("check: job normal-1_s2__fit_scales_ceres was run with other options"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("scale_bounds the fit's default, the check asks for 0.6,1.5"),
+            std::string::npos)
+      << r.err;
+
+  // The plan options and id name a budget, edge or bounds other than the plan's defaults.
+  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth --max-sims 150" + where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string other = readText(results / "index.md");
+  EXPECT_NE(other.find("Plan options: `--plan smoke --methods heuristic,truth --max-sims 150`"),
+            std::string::npos)
+      << other;
+  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth" + where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string plain = readText(results / "index.md");
+  const auto id = [](const std::string& text) {
+    const std::size_t at = text.find("plan id `");
+    return at == std::string::npos ? std::string() : text.substr(at, 26);
+  };
+  EXPECT_NE(id(other), id(plain)) << other << plain;
+  r = runRunner("check --smoke --methods heuristic,truth --max-sims 150" + where);
+  EXPECT_EQ(r.exit_code, 1) << "merged with the default budget: " << r.err;
+  EXPECT_NE(r.err.find("another plan than this check's `--plan smoke --methods heuristic,truth "
+                       "--max-sims 150`"),
+            std::string::npos)
+      << r.err;
+  r = runRunner("check --smoke --methods heuristic,truth --edge 3 --max-sims 80" + where);
+  EXPECT_EQ(r.exit_code, 0) << "the plan's defaults given explicitly: " << r.err;
+
+  // A case in --work made with other options is refused even with --force (which reruns jobs,
+  // it does not remake cases): its jobs would be labelled with options it was not made with.
+  const fs::path bundled = fs::path(CHORDFIT_EXE).parent_path().parent_path() / "cases";
+  ASSERT_TRUE(fs::exists(bundled / "small-normal" / "case.json")) << "build target cohort_cases";
+  fs::create_directories(dir / "work" / "cases");
+  fs::copy(bundled / "small-normal", dir / "work" / "cases" / "normal-1_s2",
+           fs::copy_options::recursive);
+  r = runRunner("run --smoke --methods heuristic --force --edge 2.5" + where);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("case normal-1_s2 in "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("was made with generation.case_edge_mm 3, this run asks for 2.5 (--edge)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("another --work"), std::string::npos) << r.err;
 }
 
 TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
