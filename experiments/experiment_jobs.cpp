@@ -1,6 +1,7 @@
 #include "experiments/experiment_jobs.h"
 
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -9,7 +10,10 @@
 #include <sstream>
 #include <vector>
 
+#include <csignal>
+
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -56,9 +60,24 @@ std::string commandLine(const std::vector<std::string>& args) {
   return line;
 }
 
+// The stop request and the running child, shared with the signal handler.
+volatile std::sig_atomic_t g_stop_signal = 0;
+volatile std::sig_atomic_t g_child_pid = 0;
+
+// Ctrl-C reaches the running chordfit through the terminal's process group, but a `kill` of
+// run_experiments alone would leave it running as an orphan: forward the signal. Only
+// async-signal-safe calls here.
+extern "C" void forwardStopSignal(int signal_number) {
+  g_stop_signal = signal_number;
+  const pid_t child = static_cast<pid_t>(g_child_pid);
+  if (child > 0) ::kill(child, signal_number);
+}
+
 // Runs args[0] with stdout and stderr appended to `log`. Returns the exit code, or -1 when
-// the program could not be started (e.g. missing executable), 128 + signal when killed.
+// the program could not be started (e.g. missing executable), 128 + signal when killed; does
+// not start it (128 + signal) when a stop was requested.
 int runProgram(const std::vector<std::string>& args, const fs::path& log) {
+  if (g_stop_signal != 0) return 128 + g_stop_signal;
   fs::create_directories(log.parent_path());
   posix_spawn_file_actions_t actions;
   posix_spawn_file_actions_init(&actions);
@@ -68,14 +87,43 @@ int runProgram(const std::vector<std::string>& args, const fs::path& log) {
   std::vector<char*> argv;
   for (const std::string& a : args) argv.push_back(const_cast<char*>(a.c_str()));
   argv.push_back(nullptr);
+  // The stop signals stay blocked from before the spawn until the child's pid is recorded, so
+  // the handler never misses a child it should forward to; the child starts with them unblocked
+  // and at their default action (even when run_experiments was started ignoring SIGINT).
+  sigset_t stop_signals, previous;
+  sigemptyset(&stop_signals);
+  sigaddset(&stop_signals, SIGINT);
+  sigaddset(&stop_signals, SIGTERM);
+  sigprocmask(SIG_BLOCK, &stop_signals, &previous);
+  posix_spawnattr_t attributes;
+  posix_spawnattr_init(&attributes);
+  posix_spawnattr_setsigmask(&attributes, &previous);
+  posix_spawnattr_setsigdefault(&attributes, &stop_signals);
+  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
   pid_t pid = 0;
-  const int spawned = posix_spawn(&pid, argv[0], &actions, nullptr, argv.data(), environ);
+  const int spawned = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
+  posix_spawnattr_destroy(&attributes);
   posix_spawn_file_actions_destroy(&actions);
+  if (spawned == 0) g_child_pid = pid;
+  sigprocmask(SIG_SETMASK, &previous, nullptr);  // a pending stop is forwarded here
   if (spawned != 0) return -1;
+  if (g_stop_signal != 0) ::kill(pid, g_stop_signal);  // requested before the child existed
   int status = 0;
-  if (waitpid(pid, &status, 0) < 0) return -1;
+  pid_t waited = 0;
+  while ((waited = waitpid(pid, &status, 0)) < 0 && errno == EINTR) {
+  }
+  g_child_pid = 0;
+  if (waited < 0) return -1;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
+}
+
+// The stop signal a child's exit code means (chordfit dies of SIGINT / SIGTERM, so 130 / 143),
+// or the one run_experiments received; 0 when the run goes on.
+int stopSignalOf(int exit_code) {
+  if (exit_code == 128 + SIGINT) return SIGINT;
+  if (exit_code == 128 + SIGTERM) return SIGTERM;
+  return g_stop_signal;
 }
 
 std::string logTail(const fs::path& log, std::size_t lines = 6) {
@@ -89,11 +137,14 @@ std::string logTail(const fs::path& log, std::size_t lines = 6) {
   return tail;
 }
 
-StepOutcome failure(const std::string& what) { return {false, false, what, ""}; }
+StepOutcome failure(const std::string& what, int stop_signal = 0) {
+  return {false, false, what, "", stop_signal};
+}
 
-// Runs a chordfit subcommand; on failure describes it with the log's last lines.
+// Runs a chordfit subcommand; on failure describes it with the log's last lines and sets
+// `stop_signal` when the run is to stop (stopSignalOf).
 bool runChordfit(const RunPaths& paths, std::vector<std::string> args, const fs::path& log,
-                 std::string& error, std::string* command_out = nullptr) {
+                 std::string& error, int& stop_signal, std::string* command_out = nullptr) {
   args.insert(args.begin(), paths.chordfit.string());
   if (command_out) *command_out = commandLine(args);
   if (!fs::exists(paths.chordfit)) {
@@ -102,6 +153,7 @@ bool runChordfit(const RunPaths& paths, std::vector<std::string> args, const fs:
   }
   const int code = runProgram(args, log);
   if (code == 0) return true;
+  stop_signal = stopSignalOf(code);
   error = (code < 0 ? "could not start: " : "exit code " + std::to_string(code) + ": ") +
           commandLine(args) + " (log " + log.string() + ")" + logTail(log);
   return false;
@@ -359,6 +411,17 @@ std::optional<OptionMismatch> caseOptionMismatch(const CaseSpec& spec, const fs:
   return std::nullopt;
 }
 
+void installStopHandlers() {
+  struct sigaction action = {};
+  action.sa_handler = forwardStopSignal;
+  sigemptyset(&action.sa_mask);
+  action.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &action, nullptr);
+  sigaction(SIGTERM, &action, nullptr);
+}
+
+int stopSignal() { return g_stop_signal; }
+
 fs::path caseDirectory(const RunPaths& paths, const std::string& case_id) {
   return paths.work / "cases" / case_id;
 }
@@ -375,6 +438,7 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
   fs::remove_all(staging);
   const fs::path log = paths.work / "logs" / ("case_" + spec.id + ".txt");
   std::string error;
+  int stop_signal = 0;
   const auto start = Clock::now();
   std::string how = "generated";
   if (const fs::path source = matchingSourceCase(spec, paths.case_source); !source.empty()) {
@@ -387,9 +451,9 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
                   "--edge", formatNumber(spec.edge_mm), "--planes", std::to_string(spec.planes),
                   "--noise", formatNumber(spec.noise_mm), "--dropout", formatNumber(spec.dropout),
                   "--threads", "1", "--out", staging.string(), "--quiet"},
-                 log, error)) {
+                 log, error, stop_signal)) {
     fs::remove_all(staging);
-    return failure("case " + spec.id + ": " + error);
+    return failure("case " + spec.id + ": " + error, stop_signal);
   }
   std::error_code ec;
   fs::rename(staging, dir, ec);  // fails when another shard was first: same files, keep theirs
@@ -417,6 +481,7 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
   fs::remove_all(run_dir);
   fs::create_directories(run_dir);
   std::string error, command;
+  int stop_signal = 0;
   json result = {{"job", job.id},           {"case", spec.id},         {"preset", spec.preset},
                  {"seed", spec.seed},       {"planes", spec.planes},   {"noise_mm", spec.noise_mm},
                  {"dropout", spec.dropout}, {"edge_mm", spec.edge_mm}, {"method", methodTag(job)},
@@ -437,8 +502,8 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
         fit_args.insert(fit_args.end(), {"--scale-bounds", scaleBoundsArgument(config)});
       }
       fit_args.insert(fit_args.end(), {"--out", run_dir.string()});
-      if (!runChordfit(paths, fit_args, log, error, &command)) {
-        return failure("job " + job.id + ": " + error);
+      if (!runChordfit(paths, fit_args, log, error, stop_signal, &command)) {
+        return failure("job " + job.id + ": " + error, stop_signal);
       }
       cords_file = run_dir / "cords.json";
       result["params"] = job.params;
@@ -460,8 +525,8 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       if (!runChordfit(paths,
                        {"simulate", case_dir.string(), "--cords", cords_file.string(), "--quiet",
                         "--threads", "1", "--out", run_dir.string()},
-                       log, error, &command)) {
-        return failure("job " + job.id + ": " + error);
+                       log, error, stop_signal, &command)) {
+        return failure("job " + job.id + ": " + error, stop_signal);
       }
     }
     const double wall = std::chrono::duration<double>(Clock::now() - start).count();

@@ -36,7 +36,17 @@ struct StepOutcome {
   bool skipped = false;  // already done (case present, result present)
   std::string error;     // when !ok: what failed and where its log is
   std::string summary;   // one line for the progress output when ok
+  // When !ok because the run is to stop: SIGINT or SIGTERM, which its chordfit died of (or
+  // exit code 130 / 143, chordfit's own way of dying of them) or run_experiments received.
+  int stop_signal = 0;
 };
+
+// Stopping a run (Ctrl-C, `kill`): SIGINT and SIGTERM are forwarded to the running chordfit,
+// which writes nothing when interrupted; its step then fails with stop_signal set, no result is
+// written, and stopSignal() tells the caller to start nothing more. Call once, before running.
+void installStopHandlers();
+// 0, or the SIGINT / SIGTERM run_experiments received since installStopHandlers.
+int stopSignal();
 
 // An option a job result or a case records that differs from what the run asks of it.
 struct OptionMismatch {

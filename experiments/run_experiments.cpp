@@ -5,6 +5,7 @@
 // confined to tools/main.cpp for build time).
 #include <algorithm>
 #include <chrono>
+#include <csignal>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -37,6 +38,8 @@ using Clock = std::chrono::steady_clock;
 constexpr int kExitOk = 0;
 constexpr int kExitJobsFailed = 1;
 constexpr int kExitUsage = 2;
+// A run stopped by a signal exits 128 + the signal, as a shell reports a process it killed.
+constexpr int kExitSignalBase = 128;
 // Jobs named one by one in merge's and check's messages; beyond, a count (index.md lists all).
 constexpr std::size_t kListedAtMost = 10;
 
@@ -79,6 +82,10 @@ options:
   --force            rerun jobs whose result exists
   --no-timing        merge: leave out wall-time columns (to diff two runs)
   --allow-missing    merge/all: exit 0 even when some jobs have no result
+
+Ctrl-C (SIGINT) or SIGTERM stops the whole run: the running chordfit gets the signal and is
+waited for, nothing half-made is kept, and the exit code is 130 / 143; rerun the same command
+(without --force) to resume.
 )";
 
 struct Arguments {
@@ -100,6 +107,7 @@ struct Arguments {
   // --edge, --max-sims, --scale-bounds where they differ from the plan's defaults
   // (nonDefaultOptions): part of the plan options and plan id index.md records.
   std::string option_values;
+  std::vector<std::string> command_line;  // argv as given, for the resume line of a stopped run
 };
 
 int usageError(const std::string& message) {
@@ -110,6 +118,7 @@ int usageError(const std::string& message) {
 // Returns kExitOk, or the exit code to stop with.
 int parseArguments(int argc, char** argv, Arguments& a) {
   std::vector<std::string> args(argv + 1, argv + argc);
+  a.command_line.assign(argv, argv + argc);
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     auto value = [&](std::string& out) {
@@ -376,6 +385,46 @@ std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig
          "(and --work) for these options";
 }
 
+const char* signalName(int signal_number) {
+  return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
+}
+
+// The command that resumes a stopped run: this one without --force (jobs with a result are
+// kept, so what finished is not run again).
+std::string resumeCommand(const Arguments& a) {
+  std::string line;
+  for (const std::string& arg : a.command_line) {
+    if (arg == "--force") continue;
+    const bool plain = !arg.empty() && arg.find_first_of(" '\"\\$*?&;|<>()") == std::string::npos;
+    line += (line.empty() ? "" : " ") + (plain ? arg : "'" + arg + "'");
+  }
+  return line;
+}
+
+// Ends a run that was asked to stop: says what finished and how to resume. Returns the exit
+// code, 128 + the signal (130 for SIGINT, 143 for SIGTERM), as a shell reports a process killed
+// by it.
+int stopRun(const Arguments& a, int signal_number, const std::string& during,
+            const std::vector<std::string>& finished, int present, std::size_t jobs,
+            std::size_t failures, double seconds) {
+  const std::size_t done = finished.size() + static_cast<std::size_t>(present);
+  std::fprintf(stderr,
+               "run_experiments: stopped by %s %s after %.0f s; a step stopped midway writes "
+               "nothing (its chordfit was stopped and waited for; results are written whole or "
+               "not at all)\n",
+               signalName(signal_number), during.c_str(), seconds);
+  std::fprintf(stderr,
+               "run_experiments: this run finished %zu job(s) with a result (%d were there "
+               "already), %zu failed, %zu of the shard's %zu not done\n",
+               finished.size(), present, failures, jobs - std::min(jobs, done + failures), jobs);
+  for (std::size_t i = 0; i < finished.size() && i < kListedAtMost; ++i)
+    std::fprintf(stderr, "  finished: %s\n", finished[i].c_str());
+  if (finished.size() > kListedAtMost)
+    std::fprintf(stderr, "  ... and %zu more\n", finished.size() - kListedAtMost);
+  std::fprintf(stderr, "run_experiments: resume with: %s\n", resumeCommand(a).c_str());
+  return kExitSignalBase + signal_number;
+}
+
 int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const Arguments& a) {
   const RunPaths paths{a.chordfit,           a.results,    a.work, chordfitRevision(a.chordfit),
                        machineDescription(), a.case_source};
@@ -406,29 +455,51 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
                  "run_experiments: note: shard %d/%d holds none of the plan's %zu job(s) (fewer "
                  "jobs than shards); nothing to run here\n",
                  a.shard.index, a.shard.count, plan.jobs.size());
+  // A stop (Ctrl-C, kill, or a chordfit that died of SIGINT / SIGTERM) ends the whole run: it
+  // used to be logged as one failed job, and the next job started.
+  std::vector<std::string> finished;  // jobs that ran to a result in this run
+  int present = 0;
+  auto stopped = [&](const StepOutcome* o, const std::string& during) {
+    const int signal_number = o && o->stop_signal ? o->stop_signal : stopSignal();
+    return signal_number == 0 ? kExitOk
+                              : stopRun(a, signal_number, during, finished, present, jobs.size(),
+                                        failures.size(), elapsed());
+  };
   for (std::size_t k = 0; k < cases.size(); ++k) {
+    const std::string step = "case " + std::to_string(k + 1) + "/" + std::to_string(cases.size()) +
+                             " (" + cases[k]->id + ")";
+    if (const int code = stopped(nullptr, "before " + step)) return code;
     std::fprintf(stderr, "[case %zu/%zu] %s: generating unless present...\n", k + 1, cases.size(),
                  cases[k]->id.c_str());
     const StepOutcome o = ensureCase(*cases[k], paths);
     if (o.ok) {
       std::fprintf(stderr, "[case %zu/%zu] %s: %s (%.0f s elapsed)\n", k + 1, cases.size(),
                    cases[k]->id.c_str(), o.summary.c_str(), elapsed());
-    } else {
+    } else if (o.stop_signal == 0) {
       std::fprintf(stderr, "[case %zu/%zu] FAILED %s\n", k + 1, cases.size(), o.error.c_str());
       failures.push_back(o.error);
     }
+    if (const int code = stopped(&o, (o.ok ? "after " : "during ") + step)) return code;
   }
   for (std::size_t k = 0; k < jobs.size(); ++k) {
     const JobSpec& job = *jobs[k];
+    const std::string step =
+        "job " + std::to_string(k + 1) + "/" + std::to_string(jobs.size()) + " (" + job.id + ")";
+    if (const int code = stopped(nullptr, "before " + step)) return code;
     std::fprintf(stderr, "[job %zu/%zu] %s: running...\n", k + 1, jobs.size(), job.id.c_str());
     const StepOutcome o = runJob(plan, config, job, paths, a.force);
     if (o.ok) {
       std::fprintf(stderr, "[job %zu/%zu] %s: %s (%.0f s elapsed)\n", k + 1, jobs.size(),
                    job.id.c_str(), o.summary.c_str(), elapsed());
-    } else {
+      if (o.skipped)
+        ++present;
+      else
+        finished.push_back(job.id);
+    } else if (o.stop_signal == 0) {
       std::fprintf(stderr, "[job %zu/%zu] FAILED %s\n", k + 1, jobs.size(), o.error.c_str());
       failures.push_back(o.error);
     }
+    if (const int code = stopped(&o, (o.ok ? "after " : "during ") + step)) return code;
   }
   std::fprintf(stderr, "run_experiments: shard %d/%d done in %.0f s, %zu failure(s)\n",
                a.shard.index, a.shard.count, elapsed(), failures.size());
@@ -689,8 +760,9 @@ int main(int argc, char** argv) {
     if (a.command == "list") return list(plan, a);
     if (a.command == "merge") return merge(plan, config, a);
     if (a.command == "check") return check(plan, config, a);
+    installStopHandlers();
     const int ran = runShard(plan, config, a);
-    if (a.command == "run") return ran;
+    if (a.command == "run" || ran > kExitSignalBase) return ran;  // stopped: no merge
     const int merged = merge(plan, config, a);
     if (a.smoke) {
       const int checked = check(plan, config, a);

@@ -1,16 +1,22 @@
 // The benchmark pipeline (experiments/run_experiments, issue "Benchmark experiments"): the
 // plan and its shards, merge from per-job results, and a small real run (heuristic and truth
 // closures of the smoke case) that must give the same tables in one piece and in two shards.
+#include <chrono>
 #include <cstdlib>
 #include <filesystem>
 #include <set>
 #include <sstream>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include "tests/test_support.h"
 
@@ -562,6 +568,131 @@ TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
   EXPECT_NE(index.find("Machine(s) the jobs ran on: `" + job.at("machine").get<std::string>()),
             std::string::npos)
       << index;
+}
+
+// A stand-in for chordfit (run_experiments --chordfit): answers --version, appends each other
+// command's name to dir/calls and its pid to dir/child.pid, then runs `then` ("exec sleep 60":
+// the same pid, sleeping; "exit 130": chordfit's exit after Ctrl-C).
+fs::path writeFakeChordfit(const fs::path& dir, const std::string& then) {
+  const fs::path fake = dir / "chordfit";
+  writeText(fake,
+            "#!/bin/sh\ncase \"$1\" in --version) echo 'chordfit 0.1.0 (revision fake)'; "
+            "exit 0;; esac\necho \"$1\" >> " +
+                quoted(dir / "calls") + "\necho $$ > " + quoted(dir / "child.pid") + "\n" + then +
+                "\n");
+  fs::permissions(fake, fs::perms::owner_all);
+  return fake;
+}
+
+// Starts the runner in the background (stderr to `err`), in a process group of its own when
+// `own_group` (as a shell with job control starts a command, so that Ctrl-C reaches the group).
+pid_t startRunner(const std::string& arguments, const fs::path& err, bool own_group) {
+  const std::string command =
+      "exec " + quoted(runnerPath()) + " " + arguments + " >/dev/null 2>" + quoted(err);
+  const pid_t pid = fork();
+  if (pid == 0) {
+    if (own_group) setpgid(0, 0);
+    execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
+    _exit(127);
+  }
+  if (own_group && pid > 0) setpgid(pid, pid);  // either side may win the race; both set it
+  return pid;
+}
+
+// The pid the fake chordfit recorded, waiting up to 30 s for it; 0 when it never started.
+pid_t waitForFakeChild(const fs::path& dir) {
+  for (int k = 0; k < 300; ++k) {
+    if (fs::exists(dir / "child.pid")) {
+      const std::string text = readText(dir / "child.pid");
+      if (!text.empty() && text.back() == '\n') return static_cast<pid_t>(std::stol(text));
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return 0;
+}
+
+// The runner's wait status, waiting up to 30 s (then killed: -1).
+int waitForRunner(pid_t pid) {
+  int status = 0;
+  for (int k = 0; k < 300; ++k) {
+    if (waitpid(pid, &status, WNOHANG) == pid) return status;
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  kill(pid, SIGKILL);
+  waitpid(pid, &status, 0);
+  return -1;
+}
+
+// Whether `pid` is still running; kills it when it is (an orphan the test must not leave).
+bool stillRunning(pid_t pid) {
+  if (pid <= 0 || kill(pid, 0) != 0) return false;
+  kill(pid, SIGKILL);
+  return true;
+}
+
+// Ctrl-C or a kill stops the whole run (SIGINT to the process group used to kill only the
+// running chordfit, and run_experiments logged "FAILED ... exit code 130" and started the next
+// job; SIGTERM to run_experiments alone left its chordfit running as an orphan).
+TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult) {
+  const fs::path bundled = fs::path(CHORDFIT_EXE).parent_path().parent_path() / "cases";
+  ASSERT_TRUE(fs::exists(bundled / "small-normal" / "case.json")) << "build target cohort_cases";
+  auto options = [&](const TempDir& dir, const fs::path& fake) {
+    return " --smoke --methods heuristic,truth --case-source " + quoted(bundled) + " --chordfit " +
+           quoted(fake) + " --work " + quoted(dir / "work") + " --results " +
+           quoted(dir / "results");
+  };
+  auto calls = [](const TempDir& dir) { return lines(readText(dir / "calls")).size(); };
+  {  // The job's chordfit died of Ctrl-C (exit 130): the run stops, the next job never starts.
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(dir.path(), "exit 130");
+    const auto r = runRunner("run" + options(dir, fake));
+    EXPECT_EQ(r.exit_code, 130) << r.err;
+    EXPECT_EQ(calls(dir), 1u) << "the truth job did not start: " << r.err;
+    EXPECT_NE(r.err.find("stopped by SIGINT during job 1/2 (normal-1_s2__heuristic)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("FAILED"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("run_experiments: resume with: "), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "results" / "jobs" / "normal-1_s2__heuristic.json"));
+  }
+  {  // kill -TERM run_experiments: forwarded to its chordfit, waited for, exit 143.
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
+    const pid_t runner = startRunner("run --force" + options(dir, fake), dir / "err", false);
+    ASSERT_GT(runner, 0);
+    const pid_t child = waitForFakeChild(dir.path());
+    ASSERT_GT(child, 0) << readText(dir / "err");
+    kill(runner, SIGTERM);
+    const int status = waitForRunner(runner);
+    const std::string err = readText(dir / "err");
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << "status " << status << err;
+    EXPECT_FALSE(stillRunning(child)) << "the chordfit of the job was left running";
+    EXPECT_EQ(calls(dir), 1u) << err;
+    EXPECT_NE(err.find("stopped by SIGTERM during job 1/2 (normal-1_s2__heuristic)"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("this run finished 0 job(s) with a result"), std::string::npos) << err;
+    EXPECT_NE(err.find("resume with: "), std::string::npos) << err;
+    EXPECT_EQ(err.find("--force", err.find("resume with: ")), std::string::npos)
+        << "resuming keeps the finished jobs: " << err;
+    EXPECT_FALSE(fs::exists(dir / "results" / "jobs" / "normal-1_s2__heuristic.json"));
+  }
+  {  // Ctrl-C: SIGINT to the whole process group during `all`: exit 130, no merge.
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
+    const pid_t runner = startRunner("all" + options(dir, fake), dir / "err", true);
+    ASSERT_GT(runner, 0);
+    const pid_t child = waitForFakeChild(dir.path());
+    ASSERT_GT(child, 0) << readText(dir / "err");
+    kill(-runner, SIGINT);
+    const int status = waitForRunner(runner);
+    const std::string err = readText(dir / "err");
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 130) << "status " << status << err;
+    EXPECT_FALSE(stillRunning(child));
+    EXPECT_EQ(calls(dir), 1u) << err;
+    EXPECT_NE(err.find("stopped by SIGINT during job 1/2"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "results" / "table1.csv")) << "a stopped `all` does not merge";
+  }
 }
 
 // calibrate_cohort (experiments/README.md "Calibration"): one preset and seed at a coarse edge,
