@@ -66,7 +66,9 @@ options:
   --work DIR         cases and run directories     (default: experiments/work)
   --chordfit PATH    chordfit executable           (default: the one built with this program)
   --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
-                     options (e.g. the bundled build/cases) instead of generating it
+                     options (e.g. the bundled build/cases) instead of generating it; a case
+                     without a match there is generated (its progress line says which). DIR
+                     must exist
   --edge MM          case mesh edge length in [1, 5] (default 2.5; the truth mesh is half
                      of it). Case ids do not name the edge: use separate --work and --results
   --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 80)
@@ -208,6 +210,12 @@ int parseArguments(int argc, char** argv, Arguments& a) {
   }
   if (a.shard.count > 1 && a.command != "run" && a.command != "list") {
     return usageError("--shard applies to run and list; merge reads every shard's results");
+  }
+  // A mistyped --case-source used to be ignored without a word (every case generated).
+  if (std::error_code ec; !a.case_source.empty() && !fs::is_directory(a.case_source, ec)) {
+    return usageError("--case-source " + a.case_source.string() + ": " +
+                      (fs::exists(a.case_source, ec) ? "not a directory" : "no such directory") +
+                      " (the directory of generated cases to copy, e.g. build/cases)");
   }
   const fs::path base = a.smoke ? fs::path(CHORDFIT_BINARY_DIR) / "experiments" / "smoke"
                                 : fs::path(CHORDFIT_SOURCE_DIR) / "experiments";

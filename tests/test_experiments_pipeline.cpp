@@ -186,6 +186,18 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
     EXPECT_EQ(r.exit_code, 2) << bounds;
     EXPECT_NE(r.err.find("--scale-bounds: expected LO,HI"), std::string::npos) << r.err;
   }
+  // A case source that does not exist used to be ignored (every case generated, exit 0).
+  r = runRunner("run --smoke --methods heuristic --case-source " + quoted(empty / "no-cases") +
+                " --work " + quoted(empty / "work") + " --results " + quoted(empty / "results"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--case-source " + (empty / "no-cases").string() + ": no such directory"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(empty / "work")) << "nothing ran";
+  writeText(empty / "a-file", "");
+  r = runRunner("list --case-source " + quoted(empty / "a-file"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("a-file: not a directory"), std::string::npos) << r.err;
   r = runRunner("list --cases no-such-case_s1");
   EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.err.find("--cases"), std::string::npos) << r.err;
