@@ -8,6 +8,7 @@
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <iostream>
 #include <optional>
@@ -43,6 +44,30 @@ constexpr int kExitSignalBase = 128;
 // Jobs named one by one in merge's and check's messages; beyond, a count (index.md lists all).
 constexpr std::size_t kListedAtMost = 10;
 
+// The default directories: deliberately those of the source tree this program was built from
+// (its committed experiments/results), whatever the working directory, and for --plan smoke the
+// build tree's. A copied binary run elsewhere still writes there, so --help and the start of a
+// run print them in full.
+fs::path defaultBase(bool smoke) {
+  return smoke ? fs::path(CHORDFIT_BINARY_DIR) / "experiments" / "smoke"
+               : fs::path(CHORDFIT_SOURCE_DIR) / "experiments";
+}
+
+// kUsage with its @RESULTS@, @WORK@, @SMOKE_RESULTS@, @SMOKE_WORK@ and @CHORDFIT@ replaced.
+std::string usageText(std::string text) {
+  const std::pair<const char*, std::string> paths[] = {
+      {"@SMOKE_RESULTS@", (defaultBase(true) / "results").string()},
+      {"@SMOKE_WORK@", (defaultBase(true) / "work").string()},
+      {"@RESULTS@", (defaultBase(false) / "results").string()},
+      {"@WORK@", (defaultBase(false) / "work").string()},
+      {"@CHORDFIT@", CHORDFIT_EXE}};
+  for (const auto& [key, value] : paths) {
+    for (std::size_t at = text.find(key); at != std::string::npos; at = text.find(key, at))
+      text.replace(at, std::strlen(key), value);
+  }
+  return text;
+}
+
 const char* kUsage = R"(usage: run_experiments COMMAND [options]
 
 commands:
@@ -62,9 +87,15 @@ options:
                      BUILD/experiments/smoke/)
   --smoke            the same as --plan smoke
   --shard i/N        run only items i, i+N, i+2N, ... of the plan (1 <= i <= N)
-  --results DIR      tables, plots, jobs/*.json   (default: experiments/results)
-  --work DIR         cases and run directories     (default: experiments/work)
-  --chordfit PATH    chordfit executable           (default: the one built with this program)
+  --results DIR      tables, plots, jobs/*.json; default, whatever the working directory,
+                     the source tree this program was built from:
+                       @RESULTS@
+                     (--plan smoke: @SMOKE_RESULTS@)
+  --work DIR         cases and run directories; default
+                       @WORK@
+                     (--plan smoke: @SMOKE_WORK@)
+  --chordfit PATH    chordfit executable; default, the one built with this program:
+                       @CHORDFIT@
   --case-source DIR  copy a case from DIR/* when its truth.json has the same generation
                      options (e.g. the bundled build/cases) instead of generating it; a case
                      without a match there is generated (its progress line says which). DIR
@@ -130,7 +161,7 @@ int parseArguments(int argc, char** argv, Arguments& a) {
     };
     std::string text;
     if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
+      std::cout << usageText(kUsage);
       std::exit(kExitOk);
     } else if (arg == "--smoke") {
       a.smoke = true;
@@ -217,8 +248,7 @@ int parseArguments(int argc, char** argv, Arguments& a) {
                       (fs::exists(a.case_source, ec) ? "not a directory" : "no such directory") +
                       " (the directory of generated cases to copy, e.g. build/cases)");
   }
-  const fs::path base = a.smoke ? fs::path(CHORDFIT_BINARY_DIR) / "experiments" / "smoke"
-                                : fs::path(CHORDFIT_SOURCE_DIR) / "experiments";
+  const fs::path base = defaultBase(a.smoke);
   if (a.results.empty()) a.results = base / "results";
   if (a.work.empty()) a.work = base / "work";
   if (a.chordfit.empty()) a.chordfit = CHORDFIT_EXE;
@@ -453,11 +483,18 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
     std::fprintf(stderr, "run_experiments: error: %s\n", refusal.c_str());
     return kExitUsage;
   }
-  std::fprintf(stderr,
-               "run_experiments: shard %d/%d: %zu of %zu cases, %zu of %zu jobs; results "
-               "in %s\n",
+  std::fprintf(stderr, "run_experiments: shard %d/%d: %zu of %zu cases, %zu of %zu jobs\n",
                a.shard.index, a.shard.count, cases.size(), plan.cases.size(), jobs.size(),
-               plan.jobs.size(), a.results.string().c_str());
+               plan.jobs.size());
+  // In full: the defaults are the build's source tree, not the working directory.
+  auto full = [](const fs::path& p) {
+    std::error_code ec;
+    const fs::path absolute = fs::absolute(p, ec);
+    return (ec ? p : absolute.lexically_normal()).string();
+  };
+  std::fprintf(stderr, "run_experiments: results in %s, work in %s, chordfit %s (revision %s)\n",
+               full(a.results).c_str(), full(a.work).c_str(), full(a.chordfit).c_str(),
+               paths.revision.c_str());
   if (jobs.empty())
     std::fprintf(stderr,
                  "run_experiments: note: shard %d/%d holds none of the plan's %zu job(s) (fewer "

@@ -203,6 +203,19 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   EXPECT_NE(r.err.find("--cases"), std::string::npos) << r.err;
 }
 
+// The default results are the build's source tree, not the working directory: --help used to
+// say "experiments/results", which a copied binary run elsewhere does not write to.
+TEST_F(ExperimentsPipeline, HelpPrintsTheDefaultPathsInFull) {
+  const auto r = runRunner("--help");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const fs::path source = CHORDFIT_SOURCE_DIR;
+  EXPECT_NE(r.out.find((source / "experiments" / "results").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find((source / "experiments" / "work").string()), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find(std::string(CHORDFIT_EXE)), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("smoke/results"), std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("(default: experiments/results)"), std::string::npos) << r.out;
+}
+
 TEST_F(ExperimentsPipeline, CasesAndEdgeSelectWhatRuns) {
   const auto r = runRunner("list --cases prolapse-P2_s2 --edge 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
@@ -550,6 +563,11 @@ TEST_F(ExperimentsPipeline, ShardedRunGivesTheSameTablesAsOneRun) {
                              " --work " + quoted(dir / "work");
   auto r = runRunner("all" + common + " --results " + quoted(dir / "whole"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  // The start of a run names, in full, the directories and the chordfit it uses.
+  EXPECT_NE(r.err.find("run_experiments: results in " + (dir / "whole").string() + ", work in " +
+                       (dir / "work").string() + ", chordfit " + CHORDFIT_EXE + " (revision "),
+            std::string::npos)
+      << r.err;
   EXPECT_NE(r.err.find("[job 1/2] normal-1_s2__heuristic: AvgD"), std::string::npos) << r.err;
   for (int i = 1; i <= 2; ++i) {
     r = runRunner("run" + common + " --shard " + std::to_string(i) + "/2 --results " +
