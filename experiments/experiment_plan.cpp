@@ -108,8 +108,8 @@ std::string methodTag(const JobSpec& job) {
   for (char& ch : params) {
     if (ch == '+') ch = '-';
   }
-  // "-tissue" inside the params part, so that a --methods prefix such as fit_scales_ceres
-  // does not also select the tissue jobs.
+  // "-tissue" inside the params part, so that the optimisers of the per-cord fit
+  // (`--methods 'fit_scales_*'`) do not take the tissue jobs with them.
   if (job.tissue_prefit) params += "-tissue";
   return "fit_" + params + "_" + job.optimizer;
 }

@@ -29,6 +29,7 @@
 #include "experiments/experiment_jobs.h"
 #include "experiments/experiment_plan.h"
 #include "experiments/experiment_tables.h"
+#include "experiments/result_fields.h"
 
 namespace {
 
@@ -105,8 +106,12 @@ options:
   --max-sims N       forward-simulation budget of every fit (full, reduced: 300; smoke: 80)
   --scale-bounds LO,HI  scale bounds of every fit (fit --scale-bounds; default the fit's
                      [0.7, 1.5]); use separate --work and --results
-  --methods LIST     only jobs whose method starts with one of these comma-separated
-                     names: heuristic, truth, fit, fit_groups, fit_scales_ceres, ...
+  --methods LIST     only jobs of these methods (comma-separated, exact names: heuristic,
+                     truth, fit_groups_ceres, fit_scales_ceres, fit_scales-tips_ceres,
+                     fit_scales-tissue_ceres, fit_scales_bobyqa, ...; a Ceres fit also
+                     without its optimiser: fit_scales is fit_scales_ceres). NAME* selects
+                     every method starting with NAME (fit*, fit_scales_*). The methods chosen
+                     are printed
   --seeds LIST       only the cases of these patient seeds (comma-separated, e.g. 1)
   --presets LIST     only the cases of these presets (comma-separated)
   --cases LIST       only these cases (comma-separated ids, e.g. prolapse-P2_s1)
@@ -289,6 +294,16 @@ std::string machineDescription() {
          std::to_string(std::thread::hardware_concurrency()) + " logical CPUs";
 }
 
+// Whether --methods' `name` selects the method `tag`: the tag itself; a Ceres fit's tag without
+// its optimiser ("fit_scales" for "fit_scales_ceres", the Table 1 fits' short names the
+// documented commands use); "NAME*" every tag starting with NAME. A bare name was a prefix
+// until it selected seven methods for "fit_scales" (tips, tissue and the NLopt optimisers too).
+bool methodSelected(const std::string& name, const std::string& tag) {
+  if (!name.empty() && name.back() == '*')
+    return tag.rfind(name.substr(0, name.size() - 1), 0) == 0;
+  return tag == name || (tag.rfind("fit_", 0) == 0 && tag == name + "_ceres");
+}
+
 // The plan restricted to the jobs of the chosen methods and seeds, and the cases they use.
 ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::string>& methods,
                             const std::vector<int>& seeds, const std::vector<std::string>& presets,
@@ -304,17 +319,20 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
   }
   for (const JobSpec& job : plan.jobs) known_methods.insert(methodTag(job));
   auto refuseUnknown = [](const char* option, const std::vector<std::string>& given,
-                          const std::set<std::string>& known, bool prefix) {
+                          const std::set<std::string>& known, bool methods) {
     for (const std::string& name : given) {
       const bool found =
-          prefix ? std::any_of(known.begin(), known.end(),
-                               [&](const std::string& k) { return k.rfind(name, 0) == 0; })
-                 : known.count(name) > 0;
+          methods ? std::any_of(known.begin(), known.end(),
+                                [&](const std::string& k) { return methodSelected(name, k); })
+                  : known.count(name) > 0;
       if (found) continue;
       std::string list;
       for (const std::string& k : known) list += (list.empty() ? "" : ", ") + k;
-      throw std::invalid_argument(std::string(option) + ": \"" + name + "\" is not " +
-                                  (prefix ? "the start of " : "") + "one of the plan's: " + list);
+      throw std::invalid_argument(
+          std::string(option) + ": \"" + name + "\" is not one of the plan's: " + list +
+          (methods ? " (a Ceres fit also without _ceres; NAME* selects every method starting "
+                     "with NAME)"
+                   : ""));
     }
   };
   std::vector<std::string> seed_names;
@@ -332,7 +350,7 @@ ExperimentPlan restrictPlan(const ExperimentPlan& plan, const std::vector<std::s
     }
     if (!cases.empty() && std::find(cases.begin(), cases.end(), c.id) == cases.end()) continue;
     bool method = methods.empty();
-    for (const std::string& m : methods) method |= methodTag(job).rfind(m, 0) == 0;
+    for (const std::string& m : methods) method |= methodSelected(m, methodTag(job));
     if (method) kept.jobs.push_back(job);
   }
   for (const CaseSpec& c : plan.cases) {
@@ -800,6 +818,16 @@ int main(int argc, char** argv) {
     plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
   } catch (const std::invalid_argument& e) {  // a filter that matches nothing: usage
     return usageError(e.what());
+  }
+  if (!a.methods.empty()) {
+    std::vector<std::string> selected;
+    for (const JobSpec& job : plan.jobs) {
+      const std::string tag = methodTag(job);
+      if (std::find(selected.begin(), selected.end(), tag) == selected.end())
+        selected.push_back(tag);
+    }
+    std::fprintf(stderr, "run_experiments: --methods selects %zu method(s): %s\n", selected.size(),
+                 joined(selected, ", ").c_str());
   }
   try {
     if (a.command == "list") return list(plan, a);

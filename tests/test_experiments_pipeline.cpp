@@ -121,13 +121,58 @@ TEST_F(ExperimentsPipeline, ReducedPlanCoversEveryPresetAtSeedOne) {
   EXPECT_EQ(runRunner("list --plan most").exit_code, 2);
   const auto none = runRunner("list --methods nosuch");
   EXPECT_EQ(none.exit_code, 2) << "a filter matching no job is a usage error";
-  EXPECT_NE(none.err.find("--methods: \"nosuch\" is not the start of one of the plan's"),
-            std::string::npos)
+  EXPECT_NE(none.err.find("--methods: \"nosuch\" is not one of the plan's"), std::string::npos)
       << none.err;
   const auto disjoint = runRunner("list --presets normal-1 --cases prolapse-P2_s1");
   EXPECT_EQ(disjoint.exit_code, 2);
   EXPECT_NE(disjoint.err.find("no job matches all of them together"), std::string::npos)
       << disjoint.err;
+}
+
+// --methods names methods exactly (a bare name was a prefix: fit_scales selected seven methods,
+// the tips, tissue and NLopt fits too); a Ceres fit may leave out its _ceres, and NAME* is the
+// prefix. The run says which methods it selected.
+TEST_F(ExperimentsPipeline, MethodsAreExactNamesOrAnExplicitPrefix) {
+  auto methodsOf = [](const std::string& out) {
+    std::set<std::string> methods;
+    for (const std::string& line : lines(out)) {
+      if (line.rfind("job  ", 0) == 0) methods.insert(line.substr(line.find("__") + 2));
+    }
+    return methods;
+  };
+  auto r = runRunner("list --methods fit_scales");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(methodsOf(r.out), std::set<std::string>{"fit_scales_ceres"});
+  EXPECT_NE(r.err.find("--methods selects 1 method(s): fit_scales_ceres\n"), std::string::npos)
+      << r.err;
+  r = runRunner("list --methods fit_scales_ceres");
+  EXPECT_EQ(methodsOf(r.out), std::set<std::string>{"fit_scales_ceres"});
+  r = runRunner("list --methods 'fit_scales_*'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(methodsOf(r.out),
+            (std::set<std::string>{"fit_scales_ceres", "fit_scales_bobyqa", "fit_scales_cobyla",
+                                   "fit_scales_sbplx", "fit_scales_crs2"}));
+  EXPECT_NE(r.err.find("--methods selects 5 method(s): "), std::string::npos) << r.err;
+  r = runRunner("list --methods 'fit*'");
+  EXPECT_EQ(methodsOf(r.out).size(), 8u) << r.out;
+  // The documented commands (experiments/README.md, docs/fitting.md) select what they did.
+  r = runRunner("list --methods fit_groups,fit_scales_ceres,fit_scales-tips,fit_scales-tissue");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(methodsOf(r.out),
+            (std::set<std::string>{"fit_groups_ceres", "fit_scales_ceres", "fit_scales-tips_ceres",
+                                   "fit_scales-tissue_ceres"}));
+  r = runRunner("list --methods heuristic,truth,fit_scales_ceres");
+  EXPECT_EQ(methodsOf(r.out), (std::set<std::string>{"heuristic", "truth", "fit_scales_ceres"}));
+  // A bare start of a name is no longer a selection: an error that says how to ask for one.
+  r = runRunner("list --methods fit");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--methods: \"fit\" is not one of the plan's: fit_groups_ceres, "),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("NAME* selects every method starting with NAME"), std::string::npos)
+      << r.err;
+  r = runRunner("list --methods 'nosuch*'");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
 }
 
 TEST_F(ExperimentsPipeline, ShardsPartitionThePlan) {
