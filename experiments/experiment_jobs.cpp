@@ -537,6 +537,9 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       for (const char* key : {"forward_sims", "fit_seconds", "initial_mean_mm"}) {
         result[key] = requireKey(metrics, key, metrics_file);
       }
+      // Closures that reached the step cap (their state the mean of the last steps); recorded
+      // since 2026-11-27, so the committed count can be summed from the job files.
+      result["unsettled_sims"] = requireKey(metrics, "unsettled_sims", metrics_file);
       result["convergence"] = convergenceTrace(run_dir / "convergence.csv");
     } else {
       result["forward_sims"] = 1;

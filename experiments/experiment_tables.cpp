@@ -446,19 +446,20 @@ class Merger {
     write("sensitivity.svg", svgLinePlots(panels, 2));
   }
 
-  // The distinct values of a job-result key, each in backticks and followed by a space, then a
-  // newline ("unknown" when there are none); a result without the key counts as `missing`, or
-  // is left out when `missing` is empty.
+  // The distinct values of a job-result key, each in backticks with its count of jobs and a space,
+  // then a newline ("unknown" when there are none); a result without the key counts as `missing`,
+  // or is left out when `missing` is empty.
   std::string recordedValues(const char* key, const std::string& missing) const {
-    std::set<std::string> values;
+    std::map<std::string, int> values;  // value -> jobs
     for (const auto& [id, r] : results_by_job_) {
       if (r.contains(key))
-        values.insert(r.at(key).get<std::string>());
+        ++values[r.at(key).get<std::string>()];
       else if (!missing.empty())
-        values.insert(missing);
+        ++values[missing];
     }
     std::string md;
-    for (const std::string& v : values) md += "`" + v + "` ";
+    for (const auto& [v, jobs] : values)
+      md += "`" + v + "` (" + std::to_string(jobs) + (jobs == 1 ? " job) " : " jobs) ");
     return md + (values.empty() ? "unknown\n" : "\n");
   }
 

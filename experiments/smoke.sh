@@ -29,6 +29,10 @@ expect_header sensitivity.csv "sweep,value,case,heuristic_mean_mm,fit_mean_mm,fi
 for label in heuristic manual-like per-cord per-cord+tips truth "noise floor"; do
   grep -q ",$label," "$out/results/table1.csv" || { echo "smoke: table1.csv: no '$label' row" >&2; exit 1; }
 done
+# Every fit job records its closures that reached the step cap (summed in the docs).
+for job in "$out/results/jobs/"*__fit_*.json; do
+  grep -q '"unsettled_sims"' "$job" || { echo "smoke: $job: no unsettled_sims" >&2; exit 1; }
+done
 for svg in optimizers recovery sensitivity; do
   grep -q "<svg" "$out/results/$svg.svg" || { echo "smoke: $svg.svg is not an SVG" >&2; exit 1; }
 done
