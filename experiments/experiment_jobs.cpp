@@ -420,6 +420,11 @@ void installStopHandlers() {
   sigaction(SIGTERM, &action, nullptr);
 }
 
+void restoreDefaultStopHandlers() {
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+}
+
 int stopSignal() { return g_stop_signal; }
 
 fs::path caseDirectory(const RunPaths& paths, const std::string& case_id) {

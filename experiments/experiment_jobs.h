@@ -45,6 +45,9 @@ struct StepOutcome {
 // which writes nothing when interrupted; its step then fails with stop_signal set, no result is
 // written, and stopSignal() tells the caller to start nothing more. Call once, before running.
 void installStopHandlers();
+// Back to the default (a signal ends the process): after the jobs, when a merge or check runs,
+// a Ctrl-C should stop it, not be recorded for a run that is over.
+void restoreDefaultStopHandlers();
 // 0, or the SIGINT / SIGTERM run_experiments received since installStopHandlers.
 int stopSignal();
 

@@ -445,12 +445,13 @@ const char* signalName(int signal_number) {
   return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
 }
 
-// The command that resumes a stopped run: this one without --force (jobs with a result are
-// kept, so what finished is not run again).
+// The command that resumes a stopped run: this one (jobs with a result are kept, so what
+// finished is not run again). A --force run keeps --force: the jobs it did not reach still
+// hold results from before it (another revision, perhaps), which a resume without it would
+// keep beside the new ones; so it runs every selected job again, the finished ones too.
 std::string resumeCommand(const Arguments& a) {
   std::string line;
   for (const std::string& arg : a.command_line) {
-    if (arg == "--force") continue;
     const bool plain = !arg.empty() && arg.find_first_of(" '\"\\$*?&;|<>()") == std::string::npos;
     line += (line.empty() ? "" : " ") + (plain ? arg : "'" + arg + "'");
   }
@@ -478,6 +479,11 @@ int stopRun(const Arguments& a, int signal_number, const std::string& during,
   if (finished.size() > kListedAtMost)
     std::fprintf(stderr, "  ... and %zu more\n", finished.size() - kListedAtMost);
   std::fprintf(stderr, "run_experiments: resume with: %s\n", resumeCommand(a).c_str());
+  if (a.force)
+    std::fprintf(stderr,
+                 "run_experiments: (--force kept: the jobs this run did not reach still hold "
+                 "results from before it, which a resume without --force would keep; it runs "
+                 "the finished jobs again too, or select the rest with --cases/--methods)\n");
   return kExitSignalBase + signal_number;
 }
 
@@ -835,6 +841,7 @@ int main(int argc, char** argv) {
     if (a.command == "check") return check(plan, config, a);
     installStopHandlers();
     const int ran = runShard(plan, config, a);
+    restoreDefaultStopHandlers();
     if (a.command == "run" || ran > kExitSignalBase) return ran;  // stopped: no merge
     const int merged = merge(plan, config, a);
     if (a.smoke) {
