@@ -118,6 +118,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     const TissuePrefitResult result = segmentTissuePrefit(valve_case, start_set, start_evaluation,
                                                           options.bounds, seed_residual, tissue);
     outcome.forward_sims += result.forward_sims;
+    outcome.tissue_prefit_ran = true;
     outcome.tissue_prefit_changes = result.changed;
     if (result.tissue.size() > 0) {
       working_case.tissue_stiffness = result.tissue;
@@ -239,7 +240,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
         const auto moving = std::count(slack.begin(), slack.end(), false);
         options.on_stage("uncertainty: the Jacobian at the fit, " + std::to_string(2 * moving) +
                          " closures (2 for each of the " + std::to_string(moving) +
-                         " parameters that move a taut cord)");
+                         (objective.finiteDifferences().skip_slack
+                              ? " parameters that move a taut cord)"
+                              : " parameters)"));
       }
       // The objective's differences: full closures when the driver gave up warm-started ones.
       JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V,

@@ -73,6 +73,7 @@ struct FitOutcome {
   // were disabled): e.g. every free cord is manual, so no factor would change a cord.
   std::string prefit_skipped;
   bool prefit_ran = false, segment_prefit_ran = false;  // false also when the budget was short
+  bool tissue_prefit_ran = false;                       // enabled and within the budget
   double prefit_factor = 1.0;  // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment

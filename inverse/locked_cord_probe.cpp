@@ -49,23 +49,28 @@ double probeLength(const Cord& cord, double delta, const ParameterBounds& bounds
 }
 
 // The damped Gauss-Newton step of the cords in `columns` (columns of J, d r / d delta) at the
-// residuals r with IRLS weights w, and its predicted drop of the data cost,
-// 1/2 g^T (H + mu I)^-1 g. An empty step when no tracing point moves with them.
+// residuals r with IRLS weights w: the gradient g = J^T W r, the (undamped) Gauss-Newton
+// matrix H = J^T W J and delta = -(H + mu I)^-1 g. An empty step when no tracing point moves
+// with them.
 struct Step {
-  Eigen::VectorXd delta;
-  double drop = 0.0;
+  Eigen::VectorXd g, delta;
+  Eigen::MatrixXd H;
+  // The linear model's drop of the data cost for a step d: -(g^T d + 1/2 d^T H d); for the
+  // step as applied (capped, bounded), not the one proposed.
+  double drop(const Eigen::VectorXd& d) const { return -(g.dot(d) + 0.5 * d.dot(H * d)); }
 };
 
 Step gaussNewtonStep(const Eigen::MatrixXd& J, const Eigen::VectorXd& r, const Eigen::VectorXd& w) {
   const Eigen::MatrixXd Jw = w.cwiseSqrt().asDiagonal() * J;
-  const Eigen::VectorXd g = J.transpose() * w.cwiseProduct(r);
-  Eigen::MatrixXd H = Jw.transpose() * Jw;
-  const double trace = H.trace();
-  if (!(trace > 0.0)) return {};
-  if (H.cols() > 1) H.diagonal().array() += 1e-3 * trace / static_cast<double>(H.cols());
   Step step;
-  step.delta = -H.ldlt().solve(g);
-  step.drop = -0.5 * g.dot(step.delta);
+  step.g = J.transpose() * w.cwiseProduct(r);
+  step.H = Jw.transpose() * Jw;
+  const double trace = step.H.trace();
+  if (!(trace > 0.0)) return {};
+  Eigen::MatrixXd damped = step.H;
+  if (damped.cols() > 1)
+    damped.diagonal().array() += 1e-3 * trace / static_cast<double>(damped.cols());
+  step.delta = -damped.ldlt().solve(step.g);
   return step;
 }
 
@@ -145,7 +150,10 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
       trial.mean_deviation_mm = out.fit_mean_deviation_mm;
       return;
     }
-    trial.predicted_drop = out.fit_data_cost > 0.0 ? step.drop / out.fit_data_cost : 0.0;
+    Eigen::VectorXd applied(static_cast<Eigen::Index>(columns.size()));
+    for (std::size_t k = 0; k < columns.size(); ++k)
+      applied(k) = trial.lengths_mm[k] / fitted.cords[trial.cords[k]].rest_length - 1.0;
+    trial.predicted_drop = out.fit_data_cost > 0.0 ? step.drop(applied) / out.fit_data_cost : 0.0;
     trials.push_back(&trial);
   };
   for (int i = 0; i < n; ++i)

@@ -2,10 +2,10 @@
 //
 // Why: a locked cord is a constant of the fit (the paper's editor; issue 5 item 5), so when the
 // user locks a cord at a length the tracings contradict, the fit can only work around it, and
-// nothing in its output said so. Measured on the bundled prolapse-P2 case: with its P2 cords
-// locked at 0.75 of the fitted lengths, the fit stopped on Ceres' gradient tolerance after 51
-// closures at AvgD 1.32 mm, every free cord slack, and the tracings' P2 prolapse not
-// reconstructed; the report showed a converged fit.
+// nothing in its output said so. Measured on the bundled prolapse-P2 case: from the quick-start
+// fit's cords with the P2 cords set to 0.75 of their seed lengths and locked, the fit stopped on
+// Ceres' gradient tolerance after 51 closures at AvgD 1.32 mm, every free cord slack, and the
+// tracings' P2 prolapse not reconstructed; the report showed a converged fit.
 //
 // What: for each locked cord taut in the fitted closure (a slack one pulls on nothing there,
 // so a small change of it changes nothing), the other cords as fitted:
@@ -13,7 +13,8 @@
 //     differences over rest length l (1 +- h) (full closures; h = the fit's scale step);
 //   - the one-parameter Gauss-Newton step of the data cost C = 1/2 sum rho(r_i^2) (Huber,
 //     robust_loss.h) under its IRLS weights w_i (huberWeights):
-//       g = sum w_i r_i j_i,  H = sum w_i j_i^2,  delta = -g / H,  predicted drop = g^2 / (2 H)
+//       g = sum w_i r_i j_i,  H = sum w_i j_i^2,  delta = -g / H; the predicted drop of the
+//     step d actually applied (capped, bounded below) is -(g d + H d^2 / 2), g^2 / 2H uncapped
 //     (Nocedal and Wright 2006, "Numerical Optimization", sec. 10.3). With the free cords
 //     re-fitting too the drop could only be larger (a lower bound of the linearised gain);
 //   - one full closure at l (1 + delta), the relative change capped at max_change and the scale
@@ -50,7 +51,8 @@ struct LockedCordProbeOptions {
 struct LockedCordTrial {
   std::vector<int> cords;          // cord indices, ascending
   std::vector<double> lengths_mm;  // their probe lengths l (1 + delta), capped and bounded
-  double predicted_drop = 0.0;     // the linearised drop, a fraction of the fit's data cost
+  double predicted_drop = 0.0;     // the linear model's drop for the step as applied (capped,
+                                   // bounded), a fraction of the fit's data cost
   double data_cost = 0.0;          // of the closure at the probe lengths
   double mean_deviation_mm = 0.0;  // AvgD of that closure
   std::string error;               // a closure failed (then the numbers are unset)

@@ -321,7 +321,7 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
-  std::cout << lockedProbeSummary(*valve_case, fit);
+  std::cout << lockedProbeSummary(*valve_case, o, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
   std::cout << missedProlapseHint(*valve_case, o, fit, fit_metrics);

@@ -167,8 +167,10 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
      << formatWeight(100.0 * probes.max_change)
      << " %, within the scale bounds), and a full closure there measures it; then the taut "
         "locked cords of each segment that has two or more, together. A lower data cost there "
-        "means the lock holds the fit back; with the free cords re-fitted too it could only "
-        "fall further. A slack locked cord pulls on nothing in the fitted closure and is not "
+        "means the lock holds the fit back; to first order, re-fitting the free cords too could "
+        "only lower it further. The predicted drop is the linear model's for the step as "
+        "applied (capped and bounded). A slack locked cord pulls on nothing in the fitted closure "
+        "and is not "
         "probed. Data cost of the fit: "
      << formatFixed(probes.fit_data_cost, 3) << ", AvgD "
      << formatFixed(probes.fit_mean_deviation_mm, 2) << " mm; " << probes.forward_sims
@@ -204,28 +206,32 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
 
 }  // namespace
 
-std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fit) {
+std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
+                               const inverse::FitOutcome& fit) {
   const inverse::LockedCordProbes& probes = fit.locked_probes;
   if (probes.cords.empty()) return "";
   const auto taut = std::count_if(probes.cords.begin(), probes.cords.end(),
                                   [](const inverse::LockedCordProbe& p) { return !p.slack; });
-  char line[640];
-  if (taut == 0) {
-    std::snprintf(line, sizeof line,
-                  "locked cords: %zu, all slack in the fitted closure (they hold nothing there)\n",
-                  probes.cords.size());
-    return line;
-  }
+  const std::string count = std::to_string(probes.cords.size());
+  if (taut == 0)
+    return "locked cords: " + count +
+           ", all slack in the fitted closure (they hold nothing there)\n";
+  int failed = 0;
+  auto countFailed = [&](const inverse::LockedCordTrial& t) { failed += t.error.empty() ? 0 : 1; };
+  for (const inverse::LockedCordProbe& p : probes.cords) countFailed(p.trial);
+  for (const inverse::LockedSegmentProbe& p : probes.segments) countFailed(p.trial);
+  const std::string failures =
+      failed > 0 ? "; " + std::to_string(failed) + " of its trials failed (report.md)" : "";
+  const std::string closures = std::to_string(probes.forward_sims) + " extra closures";
   const inverse::LockedCordTrial* best = probes.best();
   const double drop =
       best && probes.fit_data_cost > 0.0 ? 1.0 - best->data_cost / probes.fit_data_cost : 0.0;
-  if (drop < kLockedCordNoteDrop) {
-    std::snprintf(line, sizeof line,
-                  "locked cords: %zu, %td taut; letting them go lowers the data cost by less than "
-                  "%.0f %% (%d extra closures; report.md, \"Locked cords\")\n",
-                  probes.cords.size(), taut, 100.0 * kLockedCordNoteDrop, probes.forward_sims);
-    return line;
-  }
+  if (drop < kLockedCordNoteDrop)
+    return "locked cords: " + count + ", " + std::to_string(taut) +
+           " taut; no one-step change of them (at most ±" +
+           formatWeight(100.0 * probes.max_change) + " %) lowers the data cost by " +
+           formatWeight(100.0 * kLockedCordNoteDrop) + " % or more (" + closures +
+           "; report.md, \"Locked cords\")" + failures + "\n";
   const Eigen::VectorXi segment = openStateSegments(c.mesh);
   const bool one = best->cords.size() == 1;
   std::string what;
@@ -239,14 +245,15 @@ std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fi
     what = segmentName(c.mesh.leaflet_names, segment(fit.fitted.cords[best->cords[0]].vertex)) +
            "'s cords " + trialCords(*best) + " together";
   }
-  std::snprintf(line, sizeof line,
-                "note: locked cords hold the fit back: %s (%s %%) %s AvgD %.2f -> %.2f mm "
-                "(data cost -%.0f %%); unlock (edit-cords --unlock %s) to let the fit move %s "
-                "(%d extra closures; report.md, \"Locked cords\")\n",
-                what.c_str(), trialChange(fit, *best).c_str(), one ? "lowers" : "lower",
-                probes.fit_mean_deviation_mm, best->mean_deviation_mm, 100.0 * drop,
-                trialCords(*best, ",").c_str(), one ? "it" : "them", probes.forward_sims);
-  return line;
+  // edit-cords starts from the case's cords unless told the seed: keep the user's edits.
+  const std::string seed = o.seed_cords_file.empty() ? "" : " --cords " + o.seed_cords_file;
+  return "note: locked cords hold the fit back: " + what + " (" + trialChange(fit, *best) +
+         " %): data cost -" + formatFixed(100.0 * drop, 0) + " %, AvgD " +
+         formatFixed(probes.fit_mean_deviation_mm, 2) + " -> " +
+         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords CASE" + seed +
+         " --unlock " + trialCords(*best, ",") + " --out FILE) to let the fit move " +
+         (one ? "it" : "them") + " (" + closures + "; report.md, \"Locked cords\")" + failures +
+         "\n";
 }
 
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
@@ -274,8 +281,13 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
   }
   std::string hint = "note: the tracings show prolapse in " + joinSegments(missing) +
                      ", the fitted closure does not: ";
-  const std::string locks = "report.md, \"Locked cords\"";
-  if (free_cords == 0) {
+  // The probe's section exists only when it ran (not with --no-uncertainty).
+  const std::string locks = !fit.locked_probes.cords.empty()
+                                ? "report.md, \"Locked cords\""
+                                : "run without --no-uncertainty to probe them";
+  if (free_cords == 0 && locked == 0) {
+    hint += "no cord attaches there, so no cord length can make the flap";
+  } else if (free_cords == 0) {
     hint += "every cord there is locked (" + locks + "); unlock them to let the fit move them";
   } else if (at_upper > 0) {
     hint += std::to_string(at_upper) + " of the " + std::to_string(free_cords) +
@@ -286,6 +298,10 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
     hint +=
         "no free cord there reaches the upper scale bound, so the flap may need softer "
         "tissue: try --tissue-prefit (docs/fitting.md, \"Tissue pre-fit\")";
+  } else if (!fit.tissue_prefit_ran) {
+    hint +=
+        "no free cord there reaches the upper scale bound, and --max-sims left no closures "
+        "for the tissue pre-fit: raise it";
   } else {
     hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
   }
@@ -318,6 +334,8 @@ nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fi
     segments.push_back(
         {{"segment", segmentName(c.mesh.leaflet_names, p.segment)}, {"trial", trialJson(p.trial)}});
   return {{"fit_data_cost", probes.fit_data_cost},
+          {"relative_step", probes.relative_step},
+          {"max_change", probes.max_change},
           {"fit_mean_deviation_mm", probes.fit_mean_deviation_mm},
           {"forward_sims", probes.forward_sims},
           {"seconds", probes.seconds},

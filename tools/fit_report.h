@@ -35,7 +35,8 @@ int freeCords(const inverse::FitOutcome& fit);
 // "" when no cord is locked or the probe did not run. It speaks of a cord holding the fit back
 // when unlocking it alone lowers the fit's data cost by at least kLockedCordNoteDrop.
 constexpr double kLockedCordNoteDrop = 0.05;
-std::string lockedProbeSummary(const ValveCase& c, const inverse::FitOutcome& fit);
+std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
+                               const inverse::FitOutcome& fit);
 // When the fit does not reconstruct a prolapse the tracings show (Table 1's last column),
 // what to try, or "": the segments' cords at the upper scale bound ask for a higher bound;
 // otherwise, without --tissue-prefit, softer tissue (the benchmark's prolapse-P3 seeds 2-3
