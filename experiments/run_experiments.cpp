@@ -403,6 +403,21 @@ std::string moreLikeIt(int count, const char* what) {
   return " (" + std::to_string(count - 1) + " more " + what + (count > 2 ? "s" : "") + " like it)";
 }
 
+// The same over every job of the plan (merge and check: the tables are of all of them).
+StaleResult staleResultsOfPlan(const ExperimentPlan& plan, const ExperimentConfig& config,
+                               const fs::path& results) {
+  std::vector<const JobSpec*> jobs;
+  for (const JobSpec& job : plan.jobs) jobs.push_back(&job);
+  return staleResults(plan, config, jobs, results);
+}
+
+// "job ID was run with other options: FILE records max_sims 300, WHO 150 (--max-sims) (2 more
+// jobs like it)", for merge and check.
+std::string staleJobText(const StaleResult& stale, const char* who) {
+  return "job " + stale.job->id + " was run with other options: " + stale.file.string() +
+         " records " + describe(stale.mismatch, who) + moreLikeIt(stale.count, "job");
+}
+
 // Before a run starts: a present case or result made with other options than this run's would
 // be reused as if it were made with them (a case whatever --force says, a result unless
 // --force). Returns the message refusing the run, or "".
@@ -625,16 +640,11 @@ int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   }
   // Tables labelled with options the jobs were not run with (a --max-sims 150 merge of jobs
   // that used 300) used to be written without a word.
-  std::vector<const JobSpec*> jobs;
-  for (const JobSpec& job : plan.jobs) jobs.push_back(&job);
-  if (const StaleResult stale = staleResults(plan, config, jobs, a.results); stale.count > 0) {
+  if (const StaleResult stale = staleResultsOfPlan(plan, config, a.results); stale.count > 0) {
     std::fprintf(stderr,
-                 "run_experiments: error: merge: job %s was run with other options: %s records "
-                 "%s%s. Merge with the options the jobs were run with, or rerun them with these "
-                 "(run --force); nothing was written\n",
-                 stale.job->id.c_str(), stale.file.string().c_str(),
-                 describe(stale.mismatch, "the merge asks for").c_str(),
-                 moreLikeIt(stale.count, "job").c_str());
+                 "run_experiments: error: merge: %s. Merge with the options the jobs were run "
+                 "with, or rerun them with these (run --force); nothing was written\n",
+                 staleJobText(stale, "the merge asks for").c_str());
     return kExitUsage;
   }
   const MergeSummary s = mergeResults(plan, config, a.results,
@@ -673,15 +683,9 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   }
   std::vector<std::string> problems;
   // Job results made with other options than the check's (the tables would be of those).
-  std::vector<const JobSpec*> jobs;
-  for (const JobSpec& job : plan.jobs) jobs.push_back(&job);
-  if (const StaleResult stale = staleResults(plan, config, jobs, a.results); stale.count > 0) {
-    std::fprintf(stderr,
-                 "check: job %s was run with other options: %s records %s%s: give check the "
-                 "options the jobs were run with\n",
-                 stale.job->id.c_str(), stale.file.string().c_str(),
-                 describe(stale.mismatch, "the check asks for").c_str(),
-                 moreLikeIt(stale.count, "job").c_str());
+  if (const StaleResult stale = staleResultsOfPlan(plan, config, a.results); stale.count > 0) {
+    std::fprintf(stderr, "check: %s: give check the options the jobs were run with\n",
+                 staleJobText(stale, "the check asks for").c_str());
     std::printf("check: FAILED (%s)\n", a.results.string().c_str());
     return kExitJobsFailed;
   }

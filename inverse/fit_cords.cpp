@@ -266,20 +266,10 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.uncertainty_seconds = seconds() - outcome.seconds;
   }
   if (options.probe_locked) {
-    int taut = 0, locked = 0;
-    for (std::size_t c = 0; c < outcome.fitted.cords.size(); ++c) {
-      const Cord& cord = outcome.fitted.cords[c];
-      locked += cord.locked ? 1 : 0;
-      taut += cord.locked &&
-              !slackAtSpan(outcome.closed_spans(static_cast<Eigen::Index>(c)), cord.rest_length);
-    }
-    if (taut > 0 && options.on_stage)
-      options.on_stage("locked cords: probing the " + std::to_string(taut) + " taut of " +
-                       std::to_string(locked) + ", up to " + std::to_string(3 * taut + taut / 2) +
-                       " closures");
     LockedCordProbeOptions probe;
     probe.relative_step = options.finite_difference.scale_step;
     probe.threads = options.finite_difference.threads;
+    probe.on_start = options.on_stage;
     outcome.locked_probes = probeLockedCords(working_case, outcome.fitted, *best,
                                              outcome.closed_spans, residual, options.bounds, probe);
   }

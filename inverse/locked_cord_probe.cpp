@@ -99,6 +99,12 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
     out.cords.push_back(probe);
   }
   if (taut.empty()) return out;
+  if (options.on_start) {
+    const int n = static_cast<int>(taut.size());  // segments with two or more: at most n / 2
+    options.on_start("locked cords: probing the " + std::to_string(n) + " taut of " +
+                     std::to_string(out.cords.size()) + ", up to " + std::to_string(3 * n + n / 2) +
+                     " closures");
+  }
 
   // Central differences: closures at l (1 - h) and l (1 + h) of each taut locked cord.
   const double h = options.relative_step;

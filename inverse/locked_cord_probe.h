@@ -29,6 +29,7 @@
 // the thread count.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -45,6 +46,9 @@ struct LockedCordProbeOptions {
   double relative_step = 0.01;  // h, on the cord's length (the fit's --fd-step)
   double max_change = 0.25;     // cap on |delta|
   int threads = 2;
+  // Before the closures, when there are taut locked cords: a line saying how many and how many
+  // closures at most (optional; `chordfit fit` prints it).
+  std::function<void(const std::string&)> on_start;
 };
 
 // One trial: the listed locked cords at new lengths, every other cord as fitted.

@@ -324,7 +324,8 @@ int runFit(const FitCommandOptions& o) {
   std::cout << lockedProbeSummary(*valve_case, o, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
-  std::cout << missedProlapseHint(*valve_case, o, fit, fit_metrics);
+  if (const std::string hint = missedProlapseHint(*valve_case, o, fit, fit_metrics); !hint.empty())
+    std::cout << "note: " << hint;
   std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;
 }

@@ -118,6 +118,13 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
   return line;
 }
 
+// The Carpentier segment of a cord's leaflet vertex ("P2"), "?" when it has none;
+// `segment` is openStateSegments of the case mesh.
+std::string cordSegment(const ValveCase& c, const Eigen::VectorXi& segment, const Cord& cord) {
+  const int id = segment(cord.vertex);
+  return id >= 0 ? segmentName(c.mesh.leaflet_names, id) : "?";
+}
+
 // A locked-cord trial's cords as "16" or "14, 16, 17".
 std::string trialCords(const inverse::LockedCordTrial& trial, const std::string& separator = ", ") {
   std::string text;
@@ -180,10 +187,9 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
         "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
   for (const inverse::LockedCordProbe& p : probes.cords) {
     const Cord& cord = fit.fitted.cords[p.cord];
-    const int id = segment(cord.vertex);
-    md << "| " << p.cord << " | " << groups[p.cord] << " | "
-       << (id >= 0 ? segmentName(c.mesh.leaflet_names, id) : "?") << " | " << toString(cord.kind)
-       << " | " << formatFixed(cord.rest_length, 3) << " | " << formatFixed(p.span_mm, 3);
+    md << "| " << p.cord << " | " << groups[p.cord] << " | " << cordSegment(c, segment, cord)
+       << " | " << toString(cord.kind) << " | " << formatFixed(cord.rest_length, 3) << " | "
+       << formatFixed(p.span_mm, 3);
     if (p.slack)
       md << " (slack) | – | – | – | – | – |\n";
     else if (p.trial.cords.empty())  // its difference closures failed
@@ -237,13 +243,11 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
   std::string what;
   if (one) {
     const Cord& cord = fit.fitted.cords[best->cords[0]];
-    const int id = segment(cord.vertex);
-    what = "cord " + std::to_string(best->cords[0]) + " (" +
-           (id >= 0 ? segmentName(c.mesh.leaflet_names, id) : "?") + " " + toString(cord.kind) +
-           ") alone at " + formatFixed(best->lengths_mm[0], 2) + " mm";
+    what = "cord " + std::to_string(best->cords[0]) + " (" + cordSegment(c, segment, cord) + " " +
+           toString(cord.kind) + ") alone at " + formatFixed(best->lengths_mm[0], 2) + " mm";
   } else {
-    what = segmentName(c.mesh.leaflet_names, segment(fit.fitted.cords[best->cords[0]].vertex)) +
-           "'s cords " + trialCords(*best) + " together";
+    what = cordSegment(c, segment, fit.fitted.cords[best->cords[0]]) + "'s cords " +
+           trialCords(*best) + " together";
   }
   // edit-cords starts from the case's cords unless told the seed: keep the user's edits.
   const std::string seed = o.seed_cords_file.empty() ? "" : " --cords " + o.seed_cords_file;
@@ -268,9 +272,8 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
   const Eigen::VectorXi segment = openStateSegments(c.mesh);
   int free_cords = 0, at_upper = 0, locked = 0;
   for (const Cord& cord : fit.fitted.cords) {
-    const int id = segment(cord.vertex);
-    if (id < 0 || std::find(missing.begin(), missing.end(),
-                            segmentName(c.mesh.leaflet_names, id)) == missing.end())
+    // A cord without a segment ("?") is in none of the missing ones.
+    if (std::find(missing.begin(), missing.end(), cordSegment(c, segment, cord)) == missing.end())
       continue;
     if (cord.locked) {
       ++locked;
@@ -279,8 +282,8 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
     ++free_cords;
     at_upper += cord.scale() >= o.scale_bounds[1] - 1e-9 ? 1 : 0;
   }
-  std::string hint = "note: the tracings show prolapse in " + joinSegments(missing) +
-                     ", the fitted closure does not: ";
+  std::string hint =
+      "the tracings show prolapse in " + joinSegments(missing) + ", the fitted closure does not: ";
   // The probe's section exists only when it ran (not with --no-uncertainty).
   const std::string locks = !fit.locked_probes.cords.empty()
                                 ? "report.md, \"Locked cords\""
@@ -601,7 +604,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
      << joinSegments(seed_metrics.mesh_prolapse.segments) << ", fit "
      << joinSegments(fit_metrics.mesh_prolapse.segments) << "\n\n";
   if (const std::string hint = missedProlapseHint(c, o, fit, fit_metrics); !hint.empty())
-    md << hint.substr(std::string("note: ").size()) << "\n";
+    md << hint << "\n";
   if (seed_metrics.orifice.samples > 0 && fit_metrics.orifice.samples > 0) {
     char line[260];
     std::snprintf(line, sizeof line,

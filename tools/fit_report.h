@@ -38,10 +38,10 @@ constexpr double kLockedCordNoteDrop = 0.05;
 std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit);
 // When the fit does not reconstruct a prolapse the tracings show (Table 1's last column),
-// what to try, or "": the segments' cords at the upper scale bound ask for a higher bound;
-// otherwise, without --tissue-prefit, softer tissue (the benchmark's prolapse-P3 seeds 2-3
-// are reconstructed only with it: docs/fitting.md, "Tissue pre-fit"); locked cords there are
-// named. One line for the terminal and report.md.
+// what to try, or "": cords all locked there ask to be unlocked; cords at the upper scale
+// bound, a higher bound; otherwise, without --tissue-prefit, softer tissue (the benchmark's
+// prolapse-P3 seeds 2-3 are reconstructed only with it: docs/fitting.md, "Tissue pre-fit").
+// One line, ending in a newline, for report.md and (after "note: ") the terminal.
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics);
 // metrics.json's "locked_cord_probe" (docs/outputs.md).
