@@ -322,6 +322,25 @@ ValveMetrics computeMetrics(const ValveCase& valve_case, const Eigen::MatrixXd& 
   return m;
 }
 
+std::vector<std::string> prolapseMissing(const ProlapseResult& tracings,
+                                         const ProlapseResult& sections) {
+  std::vector<std::string> missing;
+  for (const std::string& segment : tracings.segments)
+    if (std::find(sections.segments.begin(), sections.segments.end(), segment) ==
+        sections.segments.end())
+      missing.push_back(segment);
+  return missing;
+}
+
+std::vector<std::string> prolapseMissingInClosure(const ValveCase& valve_case,
+                                                  const Eigen::MatrixXd& closed_V) {
+  if (valve_case.tracings.empty()) return {};
+  // The same criteria as computeMetrics' Table 1 verdict.
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  return prolapseMissing(prolapseOfTracings(valve_case, annulus, ProlapseOptions{2.0, 2}),
+                         prolapseOfSections(valve_case, annulus, closed_V));
+}
+
 std::string table1Header(const std::string& first_column) {
   return "| " + first_column +
          " | Area (mm²) | MinD (mm) | MedD (mm) | MaxD (mm) | AvgD (mm) | Prolapse "

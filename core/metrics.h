@@ -116,6 +116,15 @@ ProlapseResult prolapseOfSections(const ValveCase& valve_case, const ClosedAnnul
                                   const Eigen::MatrixXd& closed_V, double spacing_mm = 0.5,
                                   const ProlapseOptions& options = {2.0, 2});
 
+// Segments prolapsing in `tracings` but not in `sections` (sorted, as the results are): a
+// prolapse the closed mesh does not make where the tracings show one.
+std::vector<std::string> prolapseMissing(const ProlapseResult& tracings,
+                                         const ProlapseResult& sections);
+// The same for a closed mesh of the case: its sections against the case's tracings (empty
+// without tracings).
+std::vector<std::string> prolapseMissingInClosure(const ValveCase& valve_case,
+                                                  const Eigen::MatrixXd& closed_V);
+
 struct ValveMetrics {
   DeviationStats deviation;
   double area_mm2 = 0.0;

@@ -87,7 +87,7 @@ std::string acceptanceCsvHeader(bool timing) {
              "fit_tissue_prolapse_segments,tissue_prolapse_reconstructed,"
              "intended_prolapse_segments,prolapse_as_intended,cords,ruptured_cords,"
              "cords_within_3mm,recovery_median_pct_within_3mm,taut_cords_within_3mm,"
-             "recovery_median_pct_taut_within_3mm,forward_sims") +
+             "recovery_median_pct_taut_within_3mm,forward_sims,tissue_retry_kept") +
          (timing ? ",wall_seconds" : "") + "\n";
 }
 
@@ -148,6 +148,15 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       // length the closed valve depends on (a slack cord's is bounded below only).
       const std::vector<double> taut = cordErrors(*fit, t.near_plane_mm, true);
       const double taut_pct = taut.empty() ? kNaN : 100.0 * quantile(taut, 0.5);
+      // The fit ran again on softer tissue and kept it (fit's tissue retry): the tissue it found,
+      // "" when it did not (or the result predates the retry).
+      std::string retry_tissue;
+      const bool retry_kept =
+          fit->contains("tissue_retry") && fit->at("tissue_retry").value("kept", false);
+      if (retry_kept) {
+        for (const json& change : fit->at("tissue_retry").at("tissue"))
+          retry_tissue += (retry_tissue.empty() ? "" : "; ") + change.get<std::string>();
+      }
       const double sims = number(*fit, "forward_sims");
       const double wall = number(*fit, "wall_seconds");
 
@@ -169,7 +178,8 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
           mdNumber(truth_case) + " (" + mdNumber(truth_case / noise_floor, 1) + "×) | " +
           segmentsOrNone(m, "tracing_prolapse_segments") + " / " +
           segmentsOrNone(m, "section_prolapse_segments") + " " +
-          mark(true, !reconstructed.empty(), reconstructed == "yes") + " | " +
+          mark(true, !reconstructed.empty(), reconstructed == "yes") +
+          (retry_kept ? " (tissue retry: " + retry_tissue + ")" : "") + " | " +
           segmentsOrNone(m, "prolapse_segments") + " " + mark(true, has_tissue, tissue_ok) + " | " +
           (wanted.empty() ? std::string("none") : joined(wanted, ", ")) + " " +
           mark(true, has_sections, as_intended) + " | " + mdNumber(recovery_pct, 1) + " % (" +
@@ -190,6 +200,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                  std::to_string(cords.total) + "," + std::to_string(cords.ruptured) + "," +
                  std::to_string(near.size()) + "," + fixed(recovery_pct, 2) + "," +
                  std::to_string(taut.size()) + "," + fixed(taut_pct, 2) + "," + fixed(sims, 0) +
+                 "," + (fit->contains("tissue_retry") ? (retry_kept ? "yes" : "no") : "") +
                  (timing ? "," + fixed(wall, 2) : "") + "\n";
     }
   }
@@ -226,7 +237,10 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       "rest lengths and PM tips closed on the (coarser) case mesh; its excess over the noise "
       "floor is discretisation, not fitting. It is no bound on the per-cord fit, which keeps "
       "the heuristic's tips and lets the lengths make up for them (docs/fitting.md, \"Without "
-      "the mesh error\").\n\n"
+      "the mesh error\"). *(tissue retry: …)* after a prolapse verdict: the fit's closure with the "
+      "cords alone missed a prolapse of the tracings, so the fit ran again from its pre-fits "
+      "with the tissue pre-fit and kept that, on the tissue named (docs/fitting.md, \"Tissue "
+      "retry\").\n\n"
       "| Case | AvgD heuristic → fit (mm) | Reduction | Noise floor (mm) | Fit / floor | True "
       "cords on the case mesh (mm, / floor) | Prolapse: tracings / fit in their planes | Fit "
       "tissue | Preset | Recovery ≤ "

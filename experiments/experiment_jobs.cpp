@@ -545,6 +545,14 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
       // Closures that reached the step cap (their state the mean of the last steps); recorded
       // since 2026-11-27, so the committed count can be summed from the job files.
       result["unsettled_sims"] = requireKey(metrics, "unsettled_sims", metrics_file);
+      // Whether the fit ran again on softer tissue (fit's tissue retry, docs/fitting.md); absent
+      // from results before it.
+      if (metrics.contains("tissue_retry")) {
+        const json& retry = metrics.at("tissue_retry");
+        result["tissue_retry"] = {{"ran", retry.value("ran", false)},
+                                  {"kept", retry.value("kept", false)},
+                                  {"tissue", retry.value("tissue", json::array())}};
+      }
       result["convergence"] = convergenceTrace(run_dir / "convergence.csv");
     } else {
       result["forward_sims"] = 1;

@@ -3,10 +3,179 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <memory>
 
 #include "core/metrics.h"
 
 namespace chordfit::inverse {
+
+namespace {
+
+// One optimisation of the cords from the pre-fits' start: the tissue pre-fit when asked for,
+// the optimiser, the slack release. A fit runs one, and a second when the tissue retry runs.
+// Heap-held and never moved: the parameterisation, residual and objective refer to
+// working_case and to each other.
+struct Optimisation {
+  ValveCase working_case;  // the case, with the tissue the tissue pre-fit accepted
+  std::unique_ptr<FitParameterization> parameters;
+  std::unique_ptr<ForwardResidual> residual;
+  std::unique_ptr<FitObjective> objective;
+  bool tissue_ran = false;
+  std::vector<std::string> tissue_changes;
+  Eigen::VectorXd tissue;  // empty: the case's own
+  std::shared_ptr<const ForwardEvaluation> best, optimiser_best;
+  std::string termination;
+  bool switched_to_full_closures = false;
+  bool release_ran = false, release_kept = false;
+  SlackReleaseProposal release;
+  double release_data_cost = 0.0, optimiser_data_cost = 0.0;
+  std::string release_error;
+  std::vector<IterationRecord> history;
+  int forward_sims = 0;  // cumulative, every stage of the fit so far
+  std::string error;
+  bool error_is_input = false;
+
+  double dataCost() const {
+    return residual->cost(best->data, Eigen::VectorXd::Zero(best->regularisation.size()));
+  }
+};
+
+struct OptimisationStart {
+  const CordSet& cords;                       // after the cord pre-fits
+  const ForwardEvaluation& evaluation;        // its full closure on the case's own tissue
+  const std::vector<int>& rescaled_segments;  // by the segment pre-fit
+  const ForwardResidual& seed_residual;       // for the tissue pre-fit's closures
+  int sims_before = 0;
+  bool tissue_prefit = false;  // run the tissue pre-fit first (when the budget allows)
+};
+
+std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSet& seed,
+                                       const SimulationSettings& settings,
+                                       const FitOptions& options, const OptimisationStart& from,
+                                       FitObjective::Clock::time_point clock_start) {
+  auto run = std::make_unique<Optimisation>();
+  run->working_case = valve_case;
+  run->forward_sims = from.sims_before;
+  auto record = [&](const std::string& stage, int iteration, const ForwardEvaluation& e,
+                    double best_cost) {
+    // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
+    const double elapsed =
+        std::chrono::duration<double>(FitObjective::Clock::now() - clock_start).count();
+    IterationRecord r{stage,
+                      iteration,
+                      e.ok() ? e.cost : NAN,
+                      best_cost,
+                      e.ok() ? e.mean_deviation_mm : NAN,
+                      run->forward_sims,
+                      elapsed};
+    run->history.push_back(r);
+    if (options.on_iteration) options.on_iteration(r);
+  };
+  CordSet start_set = from.cords;
+  ForwardEvaluation start_evaluation = from.evaluation;
+  auto budget_allows = [&](int sims) { return run->forward_sims + sims + 1 <= options.max_sims; };
+  if (from.tissue_prefit && budget_allows(options.tissue_prefit.closures())) {
+    TissuePrefitOptions tissue = options.tissue_prefit;
+    tissue.enabled = true;
+    tissue.threads = options.finite_difference.threads;
+    const TissuePrefitResult result = segmentTissuePrefit(
+        valve_case, start_set, start_evaluation, options.bounds, from.seed_residual, tissue);
+    run->forward_sims += result.forward_sims;
+    run->tissue_ran = true;
+    run->tissue_changes = result.changed;
+    if (result.tissue.size() > 0) {
+      run->working_case.tissue_stiffness = result.tissue;
+      run->tissue = result.tissue;
+    }
+    start_set = result.start;
+    start_evaluation = result.best;
+    record("tissue", 3, start_evaluation, start_evaluation.cost);
+  }
+
+  run->parameters = std::make_unique<FitParameterization>(run->working_case, start_set,
+                                                          options.mode, options.bounds);
+  const FitParameterization& parameters = *run->parameters;
+  run->residual =
+      std::make_unique<ForwardResidual>(run->working_case, parameters, settings, options.residual);
+  const ForwardResidual& residual = *run->residual;
+  const bool release_slack = options.slack_release.enabled && parameters.size() > 0 &&
+                             options.mode != ParameterMode::kGroups &&
+                             run->forward_sims + 2 <= options.max_sims;
+  run->release_ran = release_slack;
+  run->objective = std::make_unique<FitObjective>(
+      residual, options.finite_difference, options.max_sims - (release_slack ? 1 : 0),
+      run->forward_sims, clock_start, options.on_iteration);
+  FitObjective& objective = *run->objective;
+  if (!parameters.startClamped()) {
+    // The start's closure is already known (the same cords): reuse it, with this
+    // parameterisation's x and regularisation (zero at the start).
+    start_evaluation.x = parameters.initial();
+    start_evaluation.regularisation = residual.regularisation(start_evaluation.x);
+    start_evaluation.cost = residual.cost(start_evaluation.data, start_evaluation.regularisation);
+    objective.remember(start_evaluation);
+  }
+  auto optimizer = makeOptimizer(options.optimizer);
+  const Termination termination = optimizer->minimize(objective, options.optimizer_settings);
+  run->termination = termination.message;
+  run->switched_to_full_closures =
+      options.finite_difference.warm_start && !objective.warmDifferences();
+  // The drivers count against the optimiser's share; say where the rest of --max-sims went.
+  if (release_slack && termination.budget_spent)
+    run->termination += "; 1 more of --max-sims " + std::to_string(options.max_sims) +
+                        " kept for the slack release";
+  for (const IterationRecord& r : objective.history()) run->history.push_back(r);
+
+  auto best = objective.best();
+  if (!best) best = objective.evaluate(parameters.initial());
+  run->forward_sims = objective.forwardSims();
+  if (!best->ok() && objective.budgetRefused() && !objective.best()) {
+    run->error = "--max-sims " + std::to_string(options.max_sims) +
+                 " leaves no closure for the optimiser's start (the seed, clamped into the "
+                 "scale bounds); raise it";
+    run->error_is_input = true;
+    return run;
+  }
+  if (!best->ok()) {
+    run->error = "closure at the pre-fit start failed: " + best->error;
+    return run;
+  }
+  run->optimiser_best = best;
+  if (release_slack) {
+    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(best->regularisation.size());
+    const CordSet at_best = parameters.apply(best->x);
+    const Eigen::VectorXi vertex_segment = openStateSegments(run->working_case.mesh);
+    std::vector<int> cord_segment;
+    for (const Cord& cord : at_best.cords) cord_segment.push_back(vertex_segment(cord.vertex));
+    run->release = proposeSlackRelease(
+        at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
+        cord_segment, atypicalSegments(run->working_case, best->closed_V, from.rescaled_segments),
+        options.bounds.scale_upper);
+    if (!run->release.empty()) {
+      // Free non-manual cords are parameters of their own in the per-cord modes.
+      Eigen::VectorXd x = best->x;
+      for (std::size_t i = 0; i < run->release.cords.size(); ++i) {
+        const int parameter = parameters.cordParameter()[run->release.cords[i]];
+        if (parameter >= 0) x(parameter) = run->release.scales[i];
+      }
+      auto released = std::make_shared<ForwardEvaluation>(residual.evaluate(x));
+      ++run->forward_sims;
+      run->optimiser_data_cost = residual.cost(best->data, zero);
+      if (released->ok()) {
+        run->release_data_cost = residual.cost(released->data, zero);
+        run->release_kept = run->release_data_cost <=
+                            run->optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance);
+      } else {
+        run->release_error = released->error;
+      }
+      record("release", 0, *released, run->release_kept ? released->cost : best->cost);
+      if (run->release_kept) best = released;
+    }
+  }
+  run->best = best;
+  return run;
+}
+
+}  // namespace
 
 std::string prefitSkipReason(const CordSet& seed) {
   // The cord pre-fits rescale free cords the user did not set; with none, each of their
@@ -23,8 +192,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   const Clock::time_point start = Clock::now();
   FitOutcome outcome;
   outcome.seed = seed;
-  auto optimizer = makeOptimizer(options.optimizer);
-  if (!optimizer) {
+  if (!makeOptimizer(options.optimizer)) {
     outcome.error = "unknown optimizer \"" + options.optimizer + "\"";
     outcome.error_is_input = true;
     return outcome;
@@ -109,105 +277,101 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     record("segments", 2, start_evaluation, start_evaluation.cost);
   }
 
-  // The optimiser's case: the input, or with the tissue the tissue pre-fit accepted.
-  ValveCase working_case = valve_case;
-  if (options.tissue_prefit.enabled && seed_parameters.size() > 0 &&
-      budget_allows(options.tissue_prefit.closures())) {
-    TissuePrefitOptions tissue = options.tissue_prefit;
-    tissue.threads = options.finite_difference.threads;
-    const TissuePrefitResult result = segmentTissuePrefit(valve_case, start_set, start_evaluation,
-                                                          options.bounds, seed_residual, tissue);
-    outcome.forward_sims += result.forward_sims;
-    outcome.tissue_prefit_ran = true;
-    outcome.tissue_prefit_changes = result.changed;
-    if (result.tissue.size() > 0) {
-      working_case.tissue_stiffness = result.tissue;
-      outcome.tissue = result.tissue;
+  // The optimisation, and when its closure misses a prolapse of the tracings, once more on
+  // softer tissue (the tissue retry).
+  OptimisationStart from{start_set,
+                         start_evaluation,
+                         segment_prefit_ids,
+                         seed_residual,
+                         outcome.forward_sims,
+                         options.tissue_prefit.enabled && seed_parameters.size() > 0};
+  std::unique_ptr<Optimisation> run = optimise(valve_case, seed, settings, options, from, start);
+  for (const IterationRecord& r : run->history) outcome.history.push_back(r);
+  outcome.forward_sims = run->forward_sims;
+  int unsettled = seed_residual.unsettledClosures() + run->residual->unsettledClosures();
+  if (!run->error.empty()) {
+    outcome.error = run->error;
+    outcome.error_is_input = run->error_is_input;
+    return outcome;
+  }
+  TissueRetry& retry = outcome.tissue_retry;
+  if (options.tissue_retry && !run->tissue_ran) {
+    retry.missing = prolapseMissingInClosure(valve_case, run->best->closed_V);
+    // The tissue pre-fit's closures and at least one of the optimiser's, then the final one.
+    const int needed = options.tissue_prefit.closures() + 2;
+    if (!retry.missing.empty() && run->parameters->size() == 0) {
+      retry.skipped = "no free cord";
+    } else if (!retry.missing.empty() && outcome.forward_sims + needed > options.max_sims) {
+      retry.skipped = "--max-sims " + std::to_string(options.max_sims) + " leaves " +
+                      std::to_string(std::max(0, options.max_sims - outcome.forward_sims)) +
+                      " closures, it needs more than " + std::to_string(needed);
+    } else if (!retry.missing.empty()) {
+      retry.ran = true;
+      if (options.on_stage)
+        options.on_stage("tissue retry: the tracings show prolapse in " +
+                         joinSegments(retry.missing) +
+                         ", the fit does not; fitting again from the pre-fits with the tissue "
+                         "pre-fit, within the " +
+                         std::to_string(options.max_sims - outcome.forward_sims) +
+                         " closures left of --max-sims");
+      // Its records carry "retry " before the stage and the best cost of the whole fit, so
+      // that the progress lines and convergence.csv tell the two optimisations apart.
+      const double best_before = run->best->cost;
+      auto relabel = [best_before](IterationRecord r) {
+        r.stage = "retry " + r.stage;
+        r.best_cost = std::min(r.best_cost, best_before);
+        return r;
+      };
+      FitOptions retry_options = options;
+      if (options.on_iteration)
+        retry_options.on_iteration = [&](const IterationRecord& r) {
+          options.on_iteration(relabel(r));
+        };
+      from.sims_before = outcome.forward_sims;
+      from.tissue_prefit = true;
+      std::unique_ptr<Optimisation> second =
+          optimise(valve_case, seed, settings, retry_options, from, start);
+      for (const IterationRecord& r : second->history) outcome.history.push_back(relabel(r));
+      retry.forward_sims = second->forward_sims - outcome.forward_sims;
+      outcome.forward_sims = second->forward_sims;
+      unsettled += second->residual ? second->residual->unsettledClosures() : 0;
+      retry.tissue_changes = second->tissue_changes;
+      retry.data_cost_without = run->dataCost();
+      retry.mean_mm_without = run->best->mean_deviation_mm;
+      if (!second->error.empty()) {
+        retry.error = second->error;
+      } else {
+        retry.data_cost_with = second->dataCost();
+        retry.mean_mm_with = second->best->mean_deviation_mm;
+        retry.missing_after = prolapseMissingInClosure(valve_case, second->best->closed_V);
+        retry.kept =
+            !second->tissue_changes.empty() &&
+            retry.data_cost_with < retry.data_cost_without * (1.0 - options.tissue_retry_min_gain);
+        if (retry.kept) run = std::move(second);
+      }
     }
-    start_set = result.start;
-    start_evaluation = result.best;
-    record("tissue", 3, start_evaluation, start_evaluation.cost);
   }
 
-  const FitParameterization parameters(working_case, start_set, options.mode, options.bounds);
-  const ForwardResidual residual(working_case, parameters, settings, options.residual);
-  const bool release_slack = options.slack_release.enabled && parameters.size() > 0 &&
-                             options.mode != ParameterMode::kGroups &&
-                             outcome.forward_sims + 2 <= options.max_sims;
-  outcome.slack_release_ran = release_slack;
-  FitObjective objective(residual, options.finite_difference,
-                         options.max_sims - (release_slack ? 1 : 0), outcome.forward_sims, start,
-                         options.on_iteration);
-  if (!parameters.startClamped()) {
-    // The start's closure is already known (the same cords): reuse it, with this
-    // parameterisation's x and regularisation (zero at the start).
-    start_evaluation.x = parameters.initial();
-    start_evaluation.regularisation = residual.regularisation(start_evaluation.x);
-    start_evaluation.cost = residual.cost(start_evaluation.data, start_evaluation.regularisation);
-    objective.remember(start_evaluation);
-  }
-  const Termination termination = optimizer->minimize(objective, options.optimizer_settings);
-  outcome.termination = termination.message;
-  outcome.switched_to_full_closures =
-      options.finite_difference.warm_start && !objective.warmDifferences();
-  // The drivers count against the optimiser's share; say where the rest of --max-sims went.
-  if (release_slack && termination.budget_spent)
-    outcome.termination += "; 1 more of --max-sims " + std::to_string(options.max_sims) +
-                           " kept for the slack release";
-  for (const IterationRecord& r : objective.history()) outcome.history.push_back(r);
-  outcome.forward_sims = objective.forwardSims();
+  const Optimisation& fit = *run;
+  const FitParameterization& parameters = *fit.parameters;
+  const ForwardResidual& residual = *fit.residual;
+  FitObjective& objective = *fit.objective;
+  std::shared_ptr<const ForwardEvaluation> best = fit.best;
+  outcome.tissue_prefit_ran = fit.tissue_ran;
+  outcome.tissue_prefit_changes = fit.tissue_changes;
+  outcome.tissue = fit.tissue;
+  outcome.termination = fit.termination;
+  outcome.switched_to_full_closures = fit.switched_to_full_closures;
+  outcome.slack_release_ran = fit.release_ran;
+  outcome.slack_release = fit.release;
+  outcome.slack_release_kept = fit.release_kept;
+  outcome.slack_release_data_cost = fit.release_data_cost;
+  outcome.optimiser_data_cost = fit.optimiser_data_cost;
+  outcome.slack_release_error = fit.release_error;
   outcome.parameter_names = parameters.names();
   for (int p = 0; p < parameters.size(); ++p)
     outcome.parameter_is_scale.push_back(parameters.isScale(p));
   outcome.cord_parameter = parameters.cordParameter();
-
-  auto best = objective.best();
-  if (!best) best = objective.evaluate(parameters.initial());
-  outcome.forward_sims = objective.forwardSims();
-  if (!best->ok() && objective.budgetRefused() && !objective.best()) {
-    outcome.error = "--max-sims " + std::to_string(options.max_sims) +
-                    " leaves no closure for the optimiser's start (the seed, clamped into the "
-                    "scale bounds); raise it";
-    outcome.error_is_input = true;
-    return outcome;
-  }
-  if (!best->ok()) {
-    outcome.error = "closure at the pre-fit start failed: " + best->error;
-    return outcome;
-  }
-  std::shared_ptr<const ForwardEvaluation> optimiser_best = best;
-  if (release_slack) {
-    const Eigen::VectorXd zero = Eigen::VectorXd::Zero(best->regularisation.size());
-    const CordSet at_best = parameters.apply(best->x);
-    const Eigen::VectorXi vertex_segment = openStateSegments(working_case.mesh);
-    std::vector<int> cord_segment;
-    for (const Cord& cord : at_best.cords) cord_segment.push_back(vertex_segment(cord.vertex));
-    outcome.slack_release = proposeSlackRelease(
-        at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
-        cord_segment, atypicalSegments(working_case, best->closed_V, segment_prefit_ids),
-        options.bounds.scale_upper);
-    if (!outcome.slack_release.empty()) {
-      // Free non-manual cords are parameters of their own in the per-cord modes.
-      Eigen::VectorXd x = best->x;
-      for (std::size_t i = 0; i < outcome.slack_release.cords.size(); ++i) {
-        const int parameter = parameters.cordParameter()[outcome.slack_release.cords[i]];
-        if (parameter >= 0) x(parameter) = outcome.slack_release.scales[i];
-      }
-      auto released = std::make_shared<ForwardEvaluation>(residual.evaluate(x));
-      ++outcome.forward_sims;
-      outcome.optimiser_data_cost = residual.cost(best->data, zero);
-      if (released->ok()) {
-        outcome.slack_release_data_cost = residual.cost(released->data, zero);
-        outcome.slack_release_kept =
-            outcome.slack_release_data_cost <=
-            outcome.optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance);
-      } else {
-        outcome.slack_release_error = released->error;
-      }
-      record("release", 0, *released, outcome.slack_release_kept ? released->cost : best->cost);
-      if (outcome.slack_release_kept) best = released;
-    }
-  }
   outcome.x = best->x;
   outcome.final_evaluation = *best;
   outcome.fitted = parameters.apply(best->x);
@@ -223,13 +387,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     }
   }
   outcome.closed_spans = closedSpans(outcome.fitted, residual.cordInsertions(), best->closed_V);
-  outcome.unsettled_sims = seed_residual.unsettledClosures() + residual.unsettledClosures();
+  outcome.unsettled_sims = unsettled;
   outcome.seconds = seconds();
   if (options.uncertainty && parameters.size() > 0) {
     // The optimiser's Jacobian also holds at the release when the release closed the valve
     // to the same state (its cords slack throughout): the data depend on x only through it.
-    std::shared_ptr<const Eigen::MatrixXd> J = objective.cachedJacobian(optimiser_best->x);
-    if (best != optimiser_best && best->closed_V != optimiser_best->closed_V) J = nullptr;
+    std::shared_ptr<const Eigen::MatrixXd> J = objective.cachedJacobian(fit.optimiser_best->x);
+    if (best != fit.optimiser_best && best->closed_V != fit.optimiser_best->closed_V) J = nullptr;
     int jacobian_sims = 0;
     std::string jacobian_error;
     if (!J) {
@@ -253,7 +417,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     }
     if (J) {
       std::vector<int> runs;  // the stacked tracing points, polyline by polyline
-      for (const Tracing& t : working_case.tracings)
+      for (const Tracing& t : fit.working_case.tracings)
         runs.push_back(static_cast<int>(t.points.rows()));
       outcome.uncertainty = fitUncertainty(*J, best->data, runs, options.residual.huber_delta_mm,
                                            residual.regularisationJacobian(), best->x,
@@ -270,7 +434,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     probe.relative_step = options.finite_difference.scale_step;
     probe.threads = options.finite_difference.threads;
     probe.on_start = options.on_stage;
-    outcome.locked_probes = probeLockedCords(working_case, outcome.fitted, *best,
+    outcome.locked_probes = probeLockedCords(fit.working_case, outcome.fitted, *best,
                                              outcome.closed_spans, residual, options.bounds, probe);
   }
   return outcome;

@@ -47,6 +47,13 @@ struct FitOptions {
   // the best point: the optimiser's when it computed one there, else 2 closures per parameter
   // outside max_sims (FitOutcome::uncertainty.jacobian_sims). `chordfit fit` turns it on.
   bool uncertainty = false;
+  // When the fitted closure misses a prolapse the tracings show (their segments not in its
+  // sections), the optimisation runs once more from the pre-fits' start with the tissue
+  // pre-fit, within what is left of max_sims, and is kept if its data cost is lower by at least
+  // tissue_retry_min_gain (relative). Not when the tissue pre-fit ran already. `chordfit fit`
+  // turns it on (--no-tissue-retry turns it off).
+  bool tissue_retry = false;
+  double tissue_retry_min_gain = 0.01;
   // After the fit, a probe of each taut locked cord (locked_cord_probe.h): 3 closures each,
   // outside max_sims (FitOutcome::locked_probes). `chordfit fit` turns it on.
   bool probe_locked = false;
@@ -54,6 +61,21 @@ struct FitOptions {
   // A line before each after-fit stage that runs closures (the uncertainty's Jacobian, the
   // locked-cord probe): what it is and how many closures (at most, for the probe) (optional).
   std::function<void(const std::string&)> on_stage;
+};
+
+// The tissue retry (FitOptions::tissue_retry): a prolapse the cords alone did not make.
+struct TissueRetry {
+  std::vector<std::string> missing;         // tracings' prolapse segments not in the fit's sections
+  bool ran = false;                         // missing non-empty and the budget allowed it
+  std::string skipped;                      // why it did not run although segments were missing
+  bool kept = false;                        // the retry's optimisation is the fit's result
+  std::vector<std::string> tissue_changes;  // its tissue stage's, "P3 0.1" (empty: none kept)
+  // Data costs and mean deviations of the two optimisations' results (full closures).
+  double data_cost_without = 0.0, data_cost_with = 0.0;
+  double mean_mm_without = 0.0, mean_mm_with = 0.0;
+  std::vector<std::string> missing_after;  // of the retry's result
+  int forward_sims = 0;                    // its closures (in FitOutcome::forward_sims)
+  std::string error;                       // its optimisation failed (then not kept)
 };
 
 // Why the cord pre-fits (global and segment) have nothing to do on `seed`, or "": they
@@ -73,8 +95,8 @@ struct FitOutcome {
   // were disabled): e.g. every free cord is manual, so no factor would change a cord.
   std::string prefit_skipped;
   bool prefit_ran = false, segment_prefit_ran = false;  // false also when the budget was short
-  bool tissue_prefit_ran = false;                       // enabled and within the budget
-  double prefit_factor = 1.0;  // common factor of the global pre-fit, then per kind:
+  bool tissue_prefit_ran = false;  // enabled and within the budget, or the kept tissue retry's
+  double prefit_factor = 1.0;      // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
   std::vector<std::string> tissue_prefit_changes;   // "A2 0.1", per accepted segment
@@ -98,6 +120,7 @@ struct FitOutcome {
   FitUncertainty uncertainty;  // empty (sd.size() == 0) when not asked for
   double uncertainty_seconds = 0.0;
   LockedCordProbes locked_probes;  // empty when not asked for or nothing is locked
+  TissueRetry tissue_retry;        // when asked for
   std::string termination;
   // Warm-started differences were given up for full closures during the solve (the Ceres
   // driver after rejected steps); the uncertainty then uses full closures too.

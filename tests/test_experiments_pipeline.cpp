@@ -577,7 +577,7 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
   // Taut in the truth: cords 0 and 2, of which only cord 0 lies within 3 mm (2 %).
   EXPECT_EQ(rows[1],
             "normal-1_s2,normal-1,no,1.2500,0.3000,76.0,0.4000,0.750,0.4000,,,yes,A1,no,,yes,4,1,2,"
-            "3.00,1,2.00,1");
+            "3.00,1,2.00,1,");  // no tissue_retry: a result from before the retry
   const std::string md = readText(dir / "acceptance.md");
   // A normal preset: the planes must show no prolapse, as they do.
   EXPECT_NE(md.find("| none / none ✓ | A1 ✗ | none ✓ | 3.0 % (2 of 4, 1 ruptured) ✓ | 2.0 % (1) "
@@ -594,6 +594,18 @@ TEST_F(ExperimentsPipeline, AcceptanceTableJudgesTheIssueCriteriaPerCase) {
               "out)."),
       std::string::npos)
       << md;
+
+  // A fit that kept its tissue retry: named after the verdict, "yes" in the CSV.
+  fit["tissue_retry"] = {{"ran", true}, {"kept", true}, {"tissue", {"P3 0.3, cords 1.5"}}};
+  writeText(dir / "jobs" / "normal-1_s2__fit_scales_ceres.json", fit.dump());
+  ASSERT_EQ(runRunner("merge --smoke --allow-missing --no-timing --results " + quoted(dir.path()))
+                .exit_code,
+            0);
+  EXPECT_EQ(lines(readText(dir / "acceptance.csv"))[1].substr(rows[1].size()), "yes");
+  EXPECT_NE(readText(dir / "acceptance.md")
+                .find("| none / none ✓ (tissue retry: P3 0.3, cords 1.5) | A1 ✗ |"),
+            std::string::npos)
+      << readText(dir / "acceptance.md");
 }
 
 // Real closures (chordfit make-case and simulate on the smoke case; a few seconds): results

@@ -159,5 +159,55 @@ TEST(TissuePrefitCli, FitWritesTheTissueAndSimulateReproducesTheClosure) {
   EXPECT_FALSE(std::filesystem::exists(dir / "sim2" / "metrics.json"));
 }
 
+// The tissue retry (FitOptions::tissue_retry, on in `chordfit fit`): on the benchmark's
+// prolapse-P3 seed 3 the cords alone leave the P3 flap down (its truth prolapses through soft
+// lesion tissue), so the fit runs again from the pre-fits with the tissue pre-fit, makes the
+// flap, fits the tracings better and keeps that; --no-tissue-retry gives the first fit alone.
+TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse) {
+  testing::TempDir dir;
+  const std::string case_dir = testing::quoted(dir / "case");
+  const auto made = testing::runChordfit(
+      "make-case --preset prolapse-P3 --seed 3 --edge 2.5 --out " + case_dir + " --quiet");
+  ASSERT_EQ(made.exit_code, 0) << made.err;
+  const std::string fit = "fit " + case_dir + " --max-sims 300 --fd-warm --no-uncertainty --out ";
+  const auto first =
+      testing::runChordfit(fit + testing::quoted(dir / "first") + " --no-tissue-retry");
+  ASSERT_EQ(first.exit_code, 0) << first.err;
+  const auto without = nlohmann::json::parse(testing::readText(dir / "first" / "metrics.json"));
+  ASSERT_EQ(without["tracing_prolapse_segments"], nlohmann::json::array({"P3"}));
+  ASSERT_FALSE(without["prolapse_reconstructed"].get<bool>())
+      << "the cords alone make the P3 flap: the case no longer tests the retry";
+  EXPECT_EQ(without["tissue_retry"]["ran"], false);
+  EXPECT_NE(first.out.find("leave out --no-tissue-retry"), std::string::npos) << first.out;
+  EXPECT_FALSE(std::filesystem::exists(dir / "first" / "tissue.json"));
+
+  const auto second = testing::runChordfit(fit + testing::quoted(dir / "retry"));
+  ASSERT_EQ(second.exit_code, 0) << second.err;
+  const auto with = nlohmann::json::parse(testing::readText(dir / "retry" / "metrics.json"));
+  const auto& retry = with["tissue_retry"];
+  EXPECT_EQ(retry["missing_segments"], nlohmann::json::array({"P3"}));
+  ASSERT_EQ(retry["ran"], true) << retry.dump();
+  ASSERT_EQ(retry["kept"], true) << retry.dump();
+  EXPECT_TRUE(with["prolapse_reconstructed"].get<bool>());
+  EXPECT_EQ(retry["missing_segments_after"], nlohmann::json::array());
+  EXPECT_LT(retry["data_cost_with"].get<double>(), 0.9 * retry["data_cost_without"].get<double>());
+  EXPECT_LT(with["mean_mm"].get<double>(), without["mean_mm"].get<double>());
+  // The first optimisation is the fit without the retry, closure for closure.
+  EXPECT_EQ(retry["mean_mm_without"].get<double>(), without["mean_mm"].get<double>());
+  EXPECT_EQ(with["forward_sims"].get<int>(),
+            without["forward_sims"].get<int>() + retry["forward_sims"].get<int>());
+  EXPECT_LE(with["forward_sims"].get<int>(), 301);
+  EXPECT_EQ(with["tissue_prefit"], retry["tissue"]);
+  EXPECT_TRUE(std::filesystem::exists(dir / "retry" / "tissue.json"));
+  EXPECT_NE(second.out.find("tissue retry: the tracings show prolapse in P3, the fit does not"),
+            std::string::npos)
+      << second.out;
+  EXPECT_NE(
+      testing::readText(dir / "retry" / "report.md").find("- tissue retry: the tracings show"),
+      std::string::npos);
+  EXPECT_NE(testing::readText(dir / "retry" / "convergence.csv").find("retry ceres"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace chordfit

@@ -162,14 +162,15 @@ struct FitCommandOptions {
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
-  double tip_weight = 0.05;              // RegularisationWeights::tip_per_mm
-  bool prefit = true;                    // global and segment pre-fits before the optimiser
-  bool tissue_prefit = false;            // softer tissue per segment, after the cord pre-fits
-  bool slack_release = true;             // slack cords to the kind's typical scale at the end
-  double fd_scale_step = 0.01;           // central-difference step on a scale
-  double fd_tip_step_mm = 0.1;           // ... on a tip offset coordinate
-  bool fd_warm_start = false;            // perturbed closures start from the base closed state
-  bool fd_slack_closures = false;        // also close the perturbations of slack-only parameters
+  double tip_weight = 0.05;        // RegularisationWeights::tip_per_mm
+  bool prefit = true;              // global and segment pre-fits before the optimiser
+  bool tissue_prefit = false;      // softer tissue per segment, after the cord pre-fits
+  bool tissue_retry = true;        // fit again with the tissue pre-fit when a prolapse is missed
+  bool slack_release = true;       // slack cords to the kind's typical scale at the end
+  double fd_scale_step = 0.01;     // central-difference step on a scale
+  double fd_tip_step_mm = 0.1;     // ... on a tip offset coordinate
+  bool fd_warm_start = false;      // perturbed closures start from the base closed state
+  bool fd_slack_closures = false;  // also close the perturbations of slack-only parameters
   std::string distance = "own-leaflet";  // own-leaflet | surface (inverse/forward_residual.h)
   double section_weight = 0.0;           // ResidualOptions::section_weight
   bool uncertainty = true;               // FitOptions::uncertainty

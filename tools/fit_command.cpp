@@ -154,6 +154,7 @@ int runFit(const FitCommandOptions& o) {
   options.prefit.enabled = o.prefit;
   options.segment_prefit.enabled = o.prefit;
   options.tissue_prefit.enabled = o.tissue_prefit;
+  options.tissue_retry = o.tissue_retry;
   options.slack_release.enabled = o.slack_release;
   options.optimizer = o.optimizer;
   options.max_sims = o.max_sims;
@@ -239,6 +240,7 @@ int runFit(const FitCommandOptions& o) {
   metrics["prefit_secondary_factor"] = fit.prefit_secondary_factor;
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["tissue_prefit"] = fit.tissue_prefit_changes;
+  metrics["tissue_retry"] = tissueRetryJson(fit);
   metrics["slack_release"] = {{"proposed_cords", fit.slack_release.cords.size()},
                               {"kept", fit.slack_release_kept},
                               {"primary_reference", fit.slack_release.primary_reference},
@@ -250,6 +252,7 @@ int runFit(const FitCommandOptions& o) {
   // How the fit was run, so that two results can be told apart by their files alone.
   metrics["options"] = {{"prefit", o.prefit},
                         {"tissue_prefit", o.tissue_prefit},
+                        {"tissue_retry", o.tissue_retry},
                         {"slack_release", o.slack_release},
                         {"tip_box_mm", o.tip_box_mm},
                         {"fd_step", o.fd_scale_step},
@@ -321,6 +324,8 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
+  if (fit.tissue_retry.ran || !fit.tissue_retry.skipped.empty())
+    std::cout << "tissue retry: " << tissueRetryLine(fit, o) << "\n";
   std::cout << lockedProbeSummary(*valve_case, o, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);

@@ -212,6 +212,48 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
 
 }  // namespace
 
+std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o) {
+  const inverse::TissueRetry& r = fit.tissue_retry;
+  if (!o.tissue_retry) return "off (--no-tissue-retry)";
+  if (o.tissue_prefit) return "not needed: the tissue pre-fit ran (--tissue-prefit)";
+  if (r.missing.empty()) return "not needed: the fit makes every prolapse the tracings show";
+  std::string line = "the tracings show prolapse in " + joinSegments(r.missing) +
+                     ", the fit did not (data cost " + formatFixed(r.data_cost_without, 3) +
+                     ", AvgD " + formatFixed(r.mean_mm_without, 2) + " mm); ";
+  if (!r.ran) return line + "not run: " + r.skipped;
+  line += "fitted again from the pre-fits with the tissue pre-fit (" +
+          std::to_string(r.forward_sims) + " closures): ";
+  if (!r.error.empty()) return line + "failed (" + r.error + "), not kept";
+  line += (r.tissue_changes.empty() ? std::string("no softer segment fitted better")
+                                    : joinSegments(r.tissue_changes)) +
+          ", data cost " + formatFixed(r.data_cost_with, 3) + ", AvgD " +
+          formatFixed(r.mean_mm_with, 2) + " mm, prolapse missed in " +
+          joinSegments(r.missing_after) + "; ";
+  if (r.kept) return line + "kept (the cords were fitted on this tissue: tissue.json)";
+  return line + (r.tissue_changes.empty() ? "not kept (the tissue is the case's own)"
+                                          : "not kept (not 1 % below the first fit's data cost)");
+}
+
+nlohmann::json tissueRetryJson(const inverse::FitOutcome& fit) {
+  const inverse::TissueRetry& r = fit.tissue_retry;
+  nlohmann::json j = {{"missing_segments", r.missing}, {"ran", r.ran}, {"kept", r.kept}};
+  if (!r.skipped.empty()) j["skipped"] = r.skipped;
+  if (r.ran) {
+    j["forward_sims"] = r.forward_sims;
+    j["tissue"] = r.tissue_changes;
+    j["data_cost_without"] = r.data_cost_without;
+    j["mean_mm_without"] = r.mean_mm_without;
+    if (!r.error.empty()) {
+      j["error"] = r.error;
+    } else {
+      j["data_cost_with"] = r.data_cost_with;
+      j["mean_mm_with"] = r.mean_mm_with;
+      j["missing_segments_after"] = r.missing_after;
+    }
+  }
+  return j;
+}
+
 std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit) {
   const inverse::LockedCordProbes& probes = fit.locked_probes;
@@ -263,11 +305,9 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics) {
   if (!fit_metrics.has_tracings || fit_metrics.prolapse_reconstructed) return "";
-  const std::vector<std::string>& fitted = fit_metrics.section_prolapse.segments;
-  std::vector<std::string> missing;  // in the tracings, not in the fit's planes
-  for (const std::string& segment : fit_metrics.tracing_prolapse.segments)
-    if (std::find(fitted.begin(), fitted.end(), segment) == fitted.end())
-      missing.push_back(segment);
+  // In the tracings, not in the fit's planes.
+  const std::vector<std::string> missing =
+      prolapseMissing(fit_metrics.tracing_prolapse, fit_metrics.section_prolapse);
   if (missing.empty()) return "";  // the fit prolapses where the tracings do not: no remedy here
   const Eigen::VectorXi segment = openStateSegments(c.mesh);
   int free_cords = 0, at_upper = 0, locked = 0;
@@ -297,16 +337,19 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
             " free cords there end at the upper scale bound " + formatWeight(o.scale_bounds[1]) +
             "; a higher one (--scale-bounds " + formatWeight(o.scale_bounds[0]) +
             ",HI) lets them lengthen further";
-  } else if (!o.tissue_prefit) {
+  } else if (fit.tissue_prefit_ran || fit.tissue_retry.ran) {
+    hint += "neither the cords within the scale bounds nor softer tissue (the tissue " +
+            std::string(fit.tissue_retry.ran ? "retry" : "pre-fit") + ") made the flap";
+  } else if (!o.tissue_prefit && !o.tissue_retry) {
     hint +=
         "no free cord there reaches the upper scale bound, so the flap may need softer "
-        "tissue: try --tissue-prefit (docs/fitting.md, \"Tissue pre-fit\")";
-  } else if (!fit.tissue_prefit_ran) {
-    hint +=
-        "no free cord there reaches the upper scale bound, and --max-sims left no closures "
-        "for the tissue pre-fit: raise it";
+        "tissue: try --tissue-prefit, or leave out --no-tissue-retry (docs/fitting.md, "
+        "\"Tissue pre-fit\")";
   } else {
-    hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
+    hint +=
+        "no free cord there reaches the upper scale bound, and --max-sims left too few "
+        "closures to try softer tissue (the tissue " +
+        std::string(o.tissue_prefit ? "pre-fit" : "retry") + "): raise it";
   }
   if (locked > 0 && free_cords > 0)
     hint += "; " + std::to_string(locked) + " cords there are locked (" + locks + ")";
@@ -565,6 +608,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                                    "tissue (tissue.json)")
        << "\n";
   }
+  md << "- tissue retry: " << tissueRetryLine(fit, o) << "\n";
   md << "- slack release: " << slackReleaseLine(fit, o.slack_release, o.params) << "\n";
   // Ceres differentiates, and so does the uncertainty after any optimiser (NLopt's methods
   // themselves are derivative-free).

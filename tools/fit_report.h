@@ -44,6 +44,10 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
 // One line, ending in a newline, for report.md and (after "note: ") the terminal.
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics);
+// What the tissue retry did (FitOptions::tissue_retry), for report.md and the terminal; and
+// metrics.json's "tissue_retry" (docs/outputs.md).
+std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o);
+nlohmann::json tissueRetryJson(const inverse::FitOutcome& fit);
 // metrics.json's "locked_cord_probe" (docs/outputs.md).
 nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fit);
 

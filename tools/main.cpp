@@ -273,6 +273,11 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
                 "Also try softer tissue per segment (0.3, 0.1, 0.05 of the modulus) before the "
                 "optimiser; writes tissue.json");
   cmd->add_flag_callback(
+      "--no-tissue-retry", [&o] { o.tissue_retry = false; },
+      "When the fitted closure misses a prolapse the tracings show, do not fit again with the "
+      "tissue pre-fit (the retry, within --max-sims, is kept only if it fits the tracings "
+      "better)");
+  cmd->add_flag_callback(
       "--no-slack-release", [&o] { o.slack_release = false; },
       "Keep slack cords where the optimiser left them instead of raising them to the "
       "valve's typical scale of their kind (the median of its taut cords)");
