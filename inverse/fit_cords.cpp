@@ -5,24 +5,21 @@
 #include <cmath>
 #include <memory>
 
+#include "core/carpentier.h"
 #include "core/metrics.h"
 
 namespace chordfit::inverse {
 
 namespace {
 
-// One optimisation of the cords from the pre-fits' start: the tissue pre-fit when asked for,
-// the optimiser, the slack release. A fit runs one, and a second when the tissue retry runs.
-// Heap-held and never moved: the parameterisation, residual and objective refer to
-// working_case and to each other.
+// One optimisation of the cords from a start: the optimiser, then the slack release. A fit
+// runs one, and a second when the tissue retry runs. Heap-held and never moved: the
+// parameterisation, residual and objective refer to working_case and to each other.
 struct Optimisation {
-  ValveCase working_case;  // the case, with the tissue the tissue pre-fit accepted
+  ValveCase working_case;  // the case, on the start's tissue
   std::unique_ptr<FitParameterization> parameters;
   std::unique_ptr<ForwardResidual> residual;
   std::unique_ptr<FitObjective> objective;
-  bool tissue_ran = false;
-  std::vector<std::string> tissue_changes;
-  Eigen::VectorXd tissue;  // empty: the case's own
   std::shared_ptr<const ForwardEvaluation> best, optimiser_best;
   std::string termination;
   bool switched_to_full_closures = false;
@@ -41,12 +38,11 @@ struct Optimisation {
 };
 
 struct OptimisationStart {
-  const CordSet& cords;                       // after the cord pre-fits
-  const ForwardEvaluation& evaluation;        // its full closure on the case's own tissue
+  const CordSet& cords;                       // after the pre-fits
+  const ForwardEvaluation& evaluation;        // its full closure on `tissue`
+  const Eigen::VectorXd& tissue;              // per-vertex factors; empty: the case's own
   const std::vector<int>& rescaled_segments;  // by the segment pre-fit
-  const ForwardResidual& seed_residual;       // for the tissue pre-fit's closures
   int sims_before = 0;
-  bool tissue_prefit = false;  // run the tissue pre-fit first (when the budget allows)
 };
 
 std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSet& seed,
@@ -55,44 +51,11 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
                                        FitObjective::Clock::time_point clock_start) {
   auto run = std::make_unique<Optimisation>();
   run->working_case = valve_case;
+  if (from.tissue.size() > 0) run->working_case.tissue_stiffness = from.tissue;
   run->forward_sims = from.sims_before;
-  auto record = [&](const std::string& stage, int iteration, const ForwardEvaluation& e,
-                    double best_cost) {
-    // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
-    const double elapsed =
-        std::chrono::duration<double>(FitObjective::Clock::now() - clock_start).count();
-    IterationRecord r{stage,
-                      iteration,
-                      e.ok() ? e.cost : NAN,
-                      best_cost,
-                      e.ok() ? e.mean_deviation_mm : NAN,
-                      run->forward_sims,
-                      elapsed};
-    run->history.push_back(r);
-    if (options.on_iteration) options.on_iteration(r);
-  };
-  CordSet start_set = from.cords;
   ForwardEvaluation start_evaluation = from.evaluation;
-  auto budget_allows = [&](int sims) { return run->forward_sims + sims + 1 <= options.max_sims; };
-  if (from.tissue_prefit && budget_allows(options.tissue_prefit.closures())) {
-    TissuePrefitOptions tissue = options.tissue_prefit;
-    tissue.enabled = true;
-    tissue.threads = options.finite_difference.threads;
-    const TissuePrefitResult result = segmentTissuePrefit(
-        valve_case, start_set, start_evaluation, options.bounds, from.seed_residual, tissue);
-    run->forward_sims += result.forward_sims;
-    run->tissue_ran = true;
-    run->tissue_changes = result.changed;
-    if (result.tissue.size() > 0) {
-      run->working_case.tissue_stiffness = result.tissue;
-      run->tissue = result.tissue;
-    }
-    start_set = result.start;
-    start_evaluation = result.best;
-    record("tissue", 3, start_evaluation, start_evaluation.cost);
-  }
 
-  run->parameters = std::make_unique<FitParameterization>(run->working_case, start_set,
+  run->parameters = std::make_unique<FitParameterization>(run->working_case, from.cords,
                                                           options.mode, options.bounds);
   const FitParameterization& parameters = *run->parameters;
   run->residual =
@@ -167,12 +130,34 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
       } else {
         run->release_error = released->error;
       }
-      record("release", 0, *released, run->release_kept ? released->cost : best->cost);
+      // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
+      IterationRecord r{
+          "release",
+          0,
+          released->ok() ? released->cost : NAN,
+          run->release_kept ? released->cost : best->cost,
+          released->ok() ? released->mean_deviation_mm : NAN,
+          run->forward_sims,
+          std::chrono::duration<double>(FitObjective::Clock::now() - clock_start).count()};
+      run->history.push_back(r);
+      if (options.on_iteration) options.on_iteration(r);
       if (run->release_kept) best = released;
     }
   }
   run->best = best;
   return run;
+}
+
+// The segment ids of `names` on this mesh (open-state segments; a name without one is left out).
+std::vector<int> segmentIds(const ValveMesh& mesh, const std::vector<std::string>& names) {
+  const Eigen::VectorXi vertex_segment = openStateSegments(mesh);
+  const int count = vertex_segment.size() > 0 ? vertex_segment.maxCoeff() + 1 : 0;
+  std::vector<int> ids;
+  for (int id = 0; id < count; ++id) {
+    const std::string name = segmentName(mesh.leaflet_names, id);
+    if (std::find(names.begin(), names.end(), name) != names.end()) ids.push_back(id);
+  }
+  return ids;
 }
 
 }  // namespace
@@ -277,78 +262,135 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     record("segments", 2, start_evaluation, start_evaluation.cost);
   }
 
-  // The optimisation, and when its closure misses a prolapse of the tracings, once more on
-  // softer tissue (the tissue retry).
-  OptimisationStart from{start_set,
-                         start_evaluation,
-                         segment_prefit_ids,
-                         seed_residual,
-                         outcome.forward_sims,
-                         options.tissue_prefit.enabled && seed_parameters.size() > 0};
-  std::unique_ptr<Optimisation> run = optimise(valve_case, seed, settings, options, from, start);
+  // Softer tissue per segment first when asked for (--tissue-prefit).
+  if (options.tissue_prefit.enabled && seed_parameters.size() > 0 &&
+      budget_allows(options.tissue_prefit.closures())) {
+    TissuePrefitOptions tissue = options.tissue_prefit;
+    tissue.threads = options.finite_difference.threads;
+    const TissuePrefitResult result = segmentTissuePrefit(valve_case, start_set, start_evaluation,
+                                                          options.bounds, seed_residual, tissue);
+    outcome.forward_sims += result.forward_sims;
+    outcome.tissue_prefit_ran = true;
+    outcome.tissue_prefit_changes = result.changed;
+    outcome.tissue = result.tissue;
+    start_set = result.start;
+    start_evaluation = result.best;
+    record("tissue", 3, start_evaluation, start_evaluation.cost);
+  }
+
+  // What an optimisation's result makes the outcome say.
+  auto adopt = [&](const Optimisation& run) {
+    outcome.termination = run.termination;
+    outcome.switched_to_full_closures = run.switched_to_full_closures;
+    outcome.slack_release_ran = run.release_ran;
+    outcome.slack_release = run.release;
+    outcome.slack_release_kept = run.release_kept;
+    outcome.slack_release_data_cost = run.release_data_cost;
+    outcome.optimiser_data_cost = run.optimiser_data_cost;
+    outcome.slack_release_error = run.release_error;
+    outcome.parameter_names = run.parameters->names();
+    outcome.parameter_is_scale.clear();
+    for (int p = 0; p < run.parameters->size(); ++p)
+      outcome.parameter_is_scale.push_back(run.parameters->isScale(p));
+    outcome.cord_parameter = run.parameters->cordParameter();
+  };
+  std::unique_ptr<Optimisation> run = optimise(
+      valve_case, seed, settings, options,
+      {start_set, start_evaluation, outcome.tissue, segment_prefit_ids, outcome.forward_sims},
+      start);
   for (const IterationRecord& r : run->history) outcome.history.push_back(r);
   outcome.forward_sims = run->forward_sims;
-  int unsettled = seed_residual.unsettledClosures() + run->residual->unsettledClosures();
+  int optimiser_unsettled = run->residual->unsettledClosures();
+  adopt(*run);
   if (!run->error.empty()) {
     outcome.error = run->error;
     outcome.error_is_input = run->error_is_input;
     return outcome;
   }
+
+  // The tissue retry: a prolapse of the tracings the cords alone did not make.
   TissueRetry& retry = outcome.tissue_retry;
-  if (options.tissue_retry && !run->tissue_ran) {
-    retry.missing = prolapseMissingInClosure(valve_case, run->best->closed_V);
-    // The tissue pre-fit's closures and at least one of the optimiser's, then the final one.
-    const int needed = options.tissue_prefit.closures() + 2;
-    if (!retry.missing.empty() && run->parameters->size() == 0) {
+  retry.missing = prolapseMissingInClosure(valve_case, run->best->closed_V);
+  if (!retry.missing.empty()) {
+    retry.data_cost_without = run->dataCost();
+    retry.mean_mm_without = run->best->mean_deviation_mm;
+  }
+  if (options.tissue_retry && !outcome.tissue_prefit_ran && !retry.missing.empty()) {
+    // Softer tissue where the flap is missing, nowhere else: the tracings say where to look.
+    TissuePrefitOptions tissue = options.tissue_prefit;
+    tissue.enabled = true;
+    tissue.threads = options.finite_difference.threads;
+    tissue.segments = segmentIds(valve_case.mesh, retry.missing);
+    const int needed = tissue.closures(static_cast<int>(tissue.segments.size())) + 2;
+    if (run->parameters->size() == 0) {
       retry.skipped = "no free cord";
-    } else if (!retry.missing.empty() && outcome.forward_sims + needed > options.max_sims) {
+    } else if (tissue.segments.empty()) {
+      retry.skipped = "the mesh has no vertex in " + joinSegments(retry.missing);
+    } else if (outcome.forward_sims + needed > options.max_sims) {
       retry.skipped = "--max-sims " + std::to_string(options.max_sims) + " leaves " +
                       std::to_string(std::max(0, options.max_sims - outcome.forward_sims)) +
-                      " closures, it needs more than " + std::to_string(needed);
-    } else if (!retry.missing.empty()) {
+                      " closures, it needs at least " + std::to_string(needed);
+    } else {
       retry.ran = true;
       if (options.on_stage)
         options.on_stage("tissue retry: the tracings show prolapse in " +
                          joinSegments(retry.missing) +
-                         ", the fit does not; fitting again from the pre-fits with the tissue "
-                         "pre-fit, within the " +
+                         ", the fit does not; softer tissue there, then the fit again from the "
+                         "pre-fits, within the " +
                          std::to_string(options.max_sims - outcome.forward_sims) +
                          " closures left of --max-sims");
       // Its records carry "retry " before the stage and the best cost of the whole fit, so
       // that the progress lines and convergence.csv tell the two optimisations apart.
       const double best_before = run->best->cost;
-      auto relabel = [best_before](IterationRecord r) {
+      const auto relabel = [best_before](IterationRecord r) {
         r.stage = "retry " + r.stage;
         r.best_cost = std::min(r.best_cost, best_before);
         return r;
       };
-      FitOptions retry_options = options;
-      if (options.on_iteration)
-        retry_options.on_iteration = [&](const IterationRecord& r) {
-          options.on_iteration(relabel(r));
-        };
-      from.sims_before = outcome.forward_sims;
-      from.tissue_prefit = true;
-      std::unique_ptr<Optimisation> second =
-          optimise(valve_case, seed, settings, retry_options, from, start);
-      for (const IterationRecord& r : second->history) outcome.history.push_back(relabel(r));
-      retry.forward_sims = second->forward_sims - outcome.forward_sims;
-      outcome.forward_sims = second->forward_sims;
-      unsettled += second->residual ? second->residual->unsettledClosures() : 0;
-      retry.tissue_changes = second->tissue_changes;
-      retry.data_cost_without = run->dataCost();
-      retry.mean_mm_without = run->best->mean_deviation_mm;
-      if (!second->error.empty()) {
-        retry.error = second->error;
-      } else {
-        retry.data_cost_with = second->dataCost();
-        retry.mean_mm_with = second->best->mean_deviation_mm;
-        retry.missing_after = prolapseMissingInClosure(valve_case, second->best->closed_V);
-        retry.kept =
-            !second->tissue_changes.empty() &&
-            retry.data_cost_with < retry.data_cost_without * (1.0 - options.tissue_retry_min_gain);
-        if (retry.kept) run = std::move(second);
+      const int sims_before_retry = outcome.forward_sims;
+      const TissuePrefitResult softened = segmentTissuePrefit(
+          valve_case, start_set, start_evaluation, options.bounds, seed_residual, tissue);
+      outcome.forward_sims += softened.forward_sims;
+      retry.tissue_changes = softened.changed;
+      const IterationRecord tissue_record{"tissue",
+                                          3,
+                                          softened.best.cost,
+                                          softened.best.cost,
+                                          softened.best.mean_deviation_mm,
+                                          outcome.forward_sims,
+                                          seconds()};
+      outcome.history.push_back(relabel(tissue_record));
+      if (options.on_iteration) options.on_iteration(relabel(tissue_record));
+      if (!softened.changed.empty()) {
+        FitOptions retry_options = options;
+        if (options.on_iteration)
+          retry_options.on_iteration = [on_iteration = options.on_iteration, relabel](
+                                           const IterationRecord& r) { on_iteration(relabel(r)); };
+        std::unique_ptr<Optimisation> second =
+            optimise(valve_case, seed, settings, retry_options,
+                     {softened.start, softened.best, softened.tissue, segment_prefit_ids,
+                      outcome.forward_sims},
+                     start);
+        for (const IterationRecord& r : second->history) outcome.history.push_back(relabel(r));
+        outcome.forward_sims = second->forward_sims;
+        optimiser_unsettled += second->residual->unsettledClosures();
+        if (!second->error.empty()) {
+          retry.error = second->error;
+        } else {
+          retry.data_cost_with = second->dataCost();
+          retry.mean_mm_with = second->best->mean_deviation_mm;
+          retry.missing_after = prolapseMissingInClosure(valve_case, second->best->closed_V);
+          retry.kept = retry.data_cost_with <
+                       retry.data_cost_without * (1.0 - options.tissue_retry_min_gain);
+          if (retry.kept) {
+            run = std::move(second);
+            adopt(*run);
+            outcome.tissue = softened.tissue;
+            outcome.tissue_prefit_changes = softened.changed;
+          }
+        }
       }
+      retry.forward_sims = outcome.forward_sims - sims_before_retry;
     }
   }
 
@@ -357,21 +399,6 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   const ForwardResidual& residual = *fit.residual;
   FitObjective& objective = *fit.objective;
   std::shared_ptr<const ForwardEvaluation> best = fit.best;
-  outcome.tissue_prefit_ran = fit.tissue_ran;
-  outcome.tissue_prefit_changes = fit.tissue_changes;
-  outcome.tissue = fit.tissue;
-  outcome.termination = fit.termination;
-  outcome.switched_to_full_closures = fit.switched_to_full_closures;
-  outcome.slack_release_ran = fit.release_ran;
-  outcome.slack_release = fit.release;
-  outcome.slack_release_kept = fit.release_kept;
-  outcome.slack_release_data_cost = fit.release_data_cost;
-  outcome.optimiser_data_cost = fit.optimiser_data_cost;
-  outcome.slack_release_error = fit.release_error;
-  outcome.parameter_names = parameters.names();
-  for (int p = 0; p < parameters.size(); ++p)
-    outcome.parameter_is_scale.push_back(parameters.isScale(p));
-  outcome.cord_parameter = parameters.cordParameter();
   outcome.x = best->x;
   outcome.final_evaluation = *best;
   outcome.fitted = parameters.apply(best->x);
@@ -387,7 +414,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     }
   }
   outcome.closed_spans = closedSpans(outcome.fitted, residual.cordInsertions(), best->closed_V);
-  outcome.unsettled_sims = unsettled;
+  // The pre-fits' closures (the retry's tissue pre-fit too) count in the seed residual's.
+  outcome.unsettled_sims = seed_residual.unsettledClosures() + optimiser_unsettled;
   outcome.seconds = seconds();
   if (options.uncertainty && parameters.size() > 0) {
     // The optimiser's Jacobian also holds at the release when the release closed the valve

@@ -48,8 +48,9 @@ struct FitOptions {
   // outside max_sims (FitOutcome::uncertainty.jacobian_sims). `chordfit fit` turns it on.
   bool uncertainty = false;
   // When the fitted closure misses a prolapse the tracings show (their segments not in its
-  // sections), the optimisation runs once more from the pre-fits' start with the tissue
-  // pre-fit, within what is left of max_sims, and is kept if its data cost is lower by at least
+  // sections), the tissue pre-fit tries softer tissue in those segments from the pre-fits'
+  // start and, when it softens one, the optimisation runs once more on that tissue, within
+  // what is left of max_sims; its result is kept if its data cost is lower by more than
   // tissue_retry_min_gain (relative). Not when the tissue pre-fit ran already. `chordfit fit`
   // turns it on (--no-tissue-retry turns it off).
   bool tissue_retry = false;
@@ -65,17 +66,22 @@ struct FitOptions {
 
 // The tissue retry (FitOptions::tissue_retry): a prolapse the cords alone did not make.
 struct TissueRetry {
-  std::vector<std::string> missing;         // tracings' prolapse segments not in the fit's sections
-  bool ran = false;                         // missing non-empty and the budget allowed it
-  std::string skipped;                      // why it did not run although segments were missing
-  bool kept = false;                        // the retry's optimisation is the fit's result
-  std::vector<std::string> tissue_changes;  // its tissue stage's, "P3 0.1" (empty: none kept)
-  // Data costs and mean deviations of the two optimisations' results (full closures).
+  // The tracings' prolapse segments the first optimisation's sections lack (always computed,
+  // also when the retry is off).
+  std::vector<std::string> missing;
+  bool ran = false;     // enabled, missing non-empty, the budget allowed it
+  std::string skipped;  // why it did not run although enabled and segments were missing
+  bool kept = false;    // the second optimisation is the fit's result
+  // Its tissue pre-fit's changes, "P3 0.3, cords 1.5"; empty: nothing softer fitted better,
+  // and no second optimisation ran.
+  std::vector<std::string> tissue_changes;
+  // Data costs and mean deviations of the two optimisations' results (full closures): the
+  // first's whenever `missing` is non-empty, the second's when it ran without error.
   double data_cost_without = 0.0, data_cost_with = 0.0;
   double mean_mm_without = 0.0, mean_mm_with = 0.0;
-  std::vector<std::string> missing_after;  // of the retry's result
+  std::vector<std::string> missing_after;  // of the second optimisation's result
   int forward_sims = 0;                    // its closures (in FitOutcome::forward_sims)
-  std::string error;                       // its optimisation failed (then not kept)
+  std::string error;                       // the second optimisation failed (then not kept)
 };
 
 // Why the cord pre-fits (global and segment) have nothing to do on `seed`, or "": they

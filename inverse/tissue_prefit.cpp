@@ -46,6 +46,9 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
     std::vector<int> candidate_segment;
     for (int segment = 0; segment < segment_count; ++segment) {
       if (done[segment]) continue;
+      if (!options.segments.empty() && std::find(options.segments.begin(), options.segments.end(),
+                                                 segment) == options.segments.end())
+        continue;
       for (double f : options.factors) {
         for (bool long_cords : {false, true}) {
           Candidate c{f, long_cords, result.start, tissue};

@@ -20,7 +20,9 @@
 // cost (a pass in a fixed order let A3, tried first, take P3's lesion on the cohort); at most
 // `rounds` rounds (66 closures for two). The tissue found is piecewise constant per segment;
 // the cords are then optimised on it. It is a hypothesis the user opts into: on tracings alone a
-// soft segment and long cords can explain the same bulge.
+// soft segment and long cords can explain the same bulge. The fit also runs it, on the segments
+// concerned only, when the cords alone missed a prolapse the tracings show (the tissue retry,
+// fit_cords.h).
 #pragma once
 
 #include <string>
@@ -40,6 +42,9 @@ struct TissuePrefitOptions {
   std::vector<double> factors{0.3, 0.1, 0.05};  // stiffness factors tried per segment
   int rounds = 2;  // segments accepted at most (one per round, best first)
   int threads = 2;
+  // The segments tried (open-state segment ids); empty: every segment. The fit's tissue retry
+  // tries those where the tracings show a prolapse its closure lacks.
+  std::vector<int> segments;
   // Closures of all rounds at most: 2 per factor and segment, fewer segments each round.
   int closures(int segments = 6) const {
     int total = 0;

@@ -178,8 +178,29 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
   ASSERT_FALSE(without["prolapse_reconstructed"].get<bool>())
       << "the cords alone make the P3 flap: the case no longer tests the retry";
   EXPECT_EQ(without["tissue_retry"]["ran"], false);
+  EXPECT_EQ(without["tissue_retry"]["missing_segments"], nlohmann::json::array({"P3"}));
   EXPECT_NE(first.out.find("leave out --no-tissue-retry"), std::string::npos) << first.out;
   EXPECT_FALSE(std::filesystem::exists(dir / "first" / "tissue.json"));
+
+  // A budget the first optimisation spends: the retry is skipped, and both say so.
+  const auto small =
+      testing::runChordfit("fit " + case_dir + " --max-sims 50 --fd-warm --no-uncertainty --out " +
+                           testing::quoted(dir / "small"));
+  ASSERT_EQ(small.exit_code, 0) << small.err;
+  const auto skipped = nlohmann::json::parse(testing::readText(dir / "small" / "metrics.json"));
+  EXPECT_EQ(skipped["tissue_retry"]["ran"], false);
+  EXPECT_EQ(skipped["tissue_retry"]["skipped"].get<std::string>().rfind("--max-sims 50 leaves ", 0),
+            0u)
+      << skipped["tissue_retry"].dump();
+  EXPECT_NE(small.out.find("tissue retry: the tracings show prolapse in P3, the fit did not (data "
+                           "cost "),
+            std::string::npos)
+      << small.out;
+  EXPECT_EQ(small.out.find("data cost 0.000"), std::string::npos) << small.out;
+  EXPECT_NE(small.out.find("softer tissue was not tried: the tissue retry did not run (--max-sims "
+                           "50 leaves "),
+            std::string::npos)
+      << small.out;
 
   const auto second = testing::runChordfit(fit + testing::quoted(dir / "retry"));
   ASSERT_EQ(second.exit_code, 0) << second.err;
@@ -198,6 +219,10 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
             without["forward_sims"].get<int>() + retry["forward_sims"].get<int>());
   EXPECT_LE(with["forward_sims"].get<int>(), 301);
   EXPECT_EQ(with["tissue_prefit"], retry["tissue"]);
+  ASSERT_FALSE(retry["tissue"].empty());
+  EXPECT_EQ(retry["tissue"][0].get<std::string>().rfind("P3 ", 0), 0u) << retry.dump();
+  // The fit makes the flap: no advice.
+  EXPECT_EQ(second.out.find("note: the tracings show prolapse"), std::string::npos) << second.out;
   EXPECT_TRUE(std::filesystem::exists(dir / "retry" / "tissue.json"));
   EXPECT_NE(second.out.find("tissue retry: the tracings show prolapse in P3, the fit does not"),
             std::string::npos)

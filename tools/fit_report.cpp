@@ -212,44 +212,53 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
 
 }  // namespace
 
+// A segment's tissue changes, "P3 0.3, cords 1.5; A2 0.1": one change may itself hold a comma.
+std::string joinTissueChanges(const std::vector<std::string>& changes) {
+  std::string joined;
+  for (const std::string& change : changes) joined += (joined.empty() ? "" : "; ") + change;
+  return joined;
+}
+
 std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o) {
   const inverse::TissueRetry& r = fit.tissue_retry;
   if (!o.tissue_retry) return "off (--no-tissue-retry)";
-  if (o.tissue_prefit) return "not needed: the tissue pre-fit ran (--tissue-prefit)";
+  if (fit.tissue_prefit_ran) return "not needed: the tissue pre-fit ran (--tissue-prefit)";
   if (r.missing.empty()) return "not needed: the fit makes every prolapse the tracings show";
   std::string line = "the tracings show prolapse in " + joinSegments(r.missing) +
                      ", the fit did not (data cost " + formatFixed(r.data_cost_without, 3) +
                      ", AvgD " + formatFixed(r.mean_mm_without, 2) + " mm); ";
   if (!r.ran) return line + "not run: " + r.skipped;
-  line += "fitted again from the pre-fits with the tissue pre-fit (" +
-          std::to_string(r.forward_sims) + " closures): ";
-  if (!r.error.empty()) return line + "failed (" + r.error + "), not kept";
-  line += (r.tissue_changes.empty() ? std::string("no softer segment fitted better")
-                                    : joinSegments(r.tissue_changes)) +
-          ", data cost " + formatFixed(r.data_cost_with, 3) + ", AvgD " +
+  const std::string closures = std::to_string(r.forward_sims) + " closures";
+  line += "softer tissue there (the tissue pre-fit): ";
+  if (r.tissue_changes.empty())
+    return line + "none fitted the tracings better, so the fit is the first (" + closures + ")";
+  line += joinTissueChanges(r.tissue_changes) + ", then the fit again on it";
+  if (!r.error.empty()) return line + " failed (" + r.error + "; " + closures + "); not kept";
+  line += ": data cost " + formatFixed(r.data_cost_with, 3) + ", AvgD " +
           formatFixed(r.mean_mm_with, 2) + " mm, prolapse missed in " +
-          joinSegments(r.missing_after) + "; ";
+          joinSegments(r.missing_after) + " (" + closures + "); ";
   if (r.kept) return line + "kept (the cords were fitted on this tissue: tissue.json)";
-  return line + (r.tissue_changes.empty() ? "not kept (the tissue is the case's own)"
-                                          : "not kept (not 1 % below the first fit's data cost)");
+  return line + "not kept (its data cost is not more than 1 % below the first's)";
 }
 
 nlohmann::json tissueRetryJson(const inverse::FitOutcome& fit) {
   const inverse::TissueRetry& r = fit.tissue_retry;
   nlohmann::json j = {{"missing_segments", r.missing}, {"ran", r.ran}, {"kept", r.kept}};
   if (!r.skipped.empty()) j["skipped"] = r.skipped;
-  if (r.ran) {
-    j["forward_sims"] = r.forward_sims;
-    j["tissue"] = r.tissue_changes;
+  if (!r.missing.empty()) {
     j["data_cost_without"] = r.data_cost_without;
     j["mean_mm_without"] = r.mean_mm_without;
-    if (!r.error.empty()) {
-      j["error"] = r.error;
-    } else {
-      j["data_cost_with"] = r.data_cost_with;
-      j["mean_mm_with"] = r.mean_mm_with;
-      j["missing_segments_after"] = r.missing_after;
-    }
+  }
+  if (!r.ran) return j;
+  j["forward_sims"] = r.forward_sims;
+  j["tissue"] = r.tissue_changes;
+  if (r.tissue_changes.empty()) return j;  // nothing softer fitted better: no second fit
+  if (!r.error.empty()) {
+    j["error"] = r.error;
+  } else {
+    j["data_cost_with"] = r.data_cost_with;
+    j["mean_mm_with"] = r.mean_mm_with;
+    j["missing_segments_after"] = r.missing_after;
   }
   return j;
 }
@@ -309,6 +318,7 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
   const std::vector<std::string> missing =
       prolapseMissing(fit_metrics.tracing_prolapse, fit_metrics.section_prolapse);
   if (missing.empty()) return "";  // the fit prolapses where the tracings do not: no remedy here
+  const inverse::TissueRetry& retry = fit.tissue_retry;
   const Eigen::VectorXi segment = openStateSegments(c.mesh);
   int free_cords = 0, at_upper = 0, locked = 0;
   for (const Cord& cord : fit.fitted.cords) {
@@ -337,19 +347,34 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
             " free cords there end at the upper scale bound " + formatWeight(o.scale_bounds[1]) +
             "; a higher one (--scale-bounds " + formatWeight(o.scale_bounds[0]) +
             ",HI) lets them lengthen further";
-  } else if (fit.tissue_prefit_ran || fit.tissue_retry.ran) {
-    hint += "neither the cords within the scale bounds nor softer tissue (the tissue " +
-            std::string(fit.tissue_retry.ran ? "retry" : "pre-fit") + ") made the flap";
-  } else if (!o.tissue_prefit && !o.tissue_retry) {
+  } else if (fit.tissue_prefit_ran) {
+    hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
+  } else if (retry.ran && !retry.error.empty()) {
+    hint += "the tissue retry's fit failed (" + retry.error + ")";
+  } else if (retry.ran && retry.tissue_changes.empty()) {
+    hint +=
+        "no free cord there reaches the upper scale bound, and no softer tissue there fitted "
+        "the tracings better (the tissue retry)";
+  } else if (retry.ran && !retry.kept && retry.missing_after.empty()) {
+    hint += "softer tissue made the flap (the tissue retry: " +
+            joinTissueChanges(retry.tissue_changes) +
+            ") but fitted the tracings no better, so the fit keeps the cords alone (report.md, "
+            "\"tissue retry\")";
+  } else if (retry.ran) {
+    hint +=
+        "neither the cords within the scale bounds nor softer tissue there (the tissue retry) "
+        "made the flap";
+  } else if (!o.tissue_retry) {
     hint +=
         "no free cord there reaches the upper scale bound, so the flap may need softer "
         "tissue: try --tissue-prefit, or leave out --no-tissue-retry (docs/fitting.md, "
         "\"Tissue pre-fit\")";
   } else {
     hint +=
-        "no free cord there reaches the upper scale bound, and --max-sims left too few "
-        "closures to try softer tissue (the tissue " +
-        std::string(o.tissue_prefit ? "pre-fit" : "retry") + "): raise it";
+        "no free cord there reaches the upper scale bound, and softer tissue was not tried: "
+        "the tissue " +
+        std::string(o.tissue_prefit ? "pre-fit did not fit in --max-sims; raise it"
+                                    : "retry did not run (" + retry.skipped + ")");
   }
   if (locked > 0 && free_cords > 0)
     hint += "; " + std::to_string(locked) + " cords there are locked (" + locks + ")";
@@ -406,8 +431,17 @@ namespace {
 // convergence.csv first). The one-point stages (the seed, the pre-fits, the slack release)
 // are large and of distinct shapes, the optimiser's iterations smaller circles in the cost
 // line's blue, its full-closure iterations after warm-started differences misled
-// ("<optimizer>-full") vermillion squares.
+// ("<optimizer>-full") vermillion squares; the tissue retry's ("retry <stage>") the same shapes
+// in wine red.
 PlotSeries stageSeries(const std::string& stage, const std::string& optimizer) {
+  // The tissue retry's stages: the same shapes as the first optimisation's, in one colour.
+  const std::string retry = "retry ";
+  if (stage.rfind(retry, 0) == 0) {
+    PlotSeries series = stageSeries(stage.substr(retry.size()), optimizer);
+    series.label = retry + series.label;
+    series.colour = "#882255";
+    return series;
+  }
   struct Style {
     const char* stage;
     const char* text;
