@@ -119,8 +119,8 @@ ValveCase truthCaseAtEdge(const SyntheticCase& synthetic, double edge_mm);
 
 // The true cords on the case mesh: `case_cords` (the case's cords.json: the same anatomical
 // cords as the truth's, in the same order, attached on the case mesh) with the rest lengths,
-// provenance and PM tips of `truth_cords` (truth/cords.json). Closed on the case mesh they measure the
-// case mesh's discretisation error (experiments/, "true cords on the case mesh"). Not a bound
+// provenance and PM tips of `truth_cords` (truth/cords.json). Closed on the case mesh they measure
+// the case mesh's discretisation error (experiments/, "true cords on the case mesh"). Not a bound
 // on a per-cord fit, which keeps the heuristic's tips and lets the lengths make up for them
 // (docs/fitting.md, "Without the mesh error"). Throws std::invalid_argument when the cord or
 // tip counts differ.

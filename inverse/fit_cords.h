@@ -36,7 +36,8 @@ struct FitOptions {
   FiniteDifferenceOptions finite_difference;  // .threads also used by the pre-fit
   PrefitOptions prefit;
   SegmentPrefitOptions segment_prefit;  // runs after the global pre-fit
-  TissuePrefitOptions tissue_prefit;    // opt-in; runs after the segment pre-fit
+  TissuePrefitOptions tissue_prefit;    // opt-in; runs after the segment pre-fit (and in the
+                                        // tissue retry, with its factors and rounds)
   // After the optimiser, per-cord modes only (slack_release.h); one closure of the budget is
   // kept back for it.
   SlackReleaseOptions slack_release;

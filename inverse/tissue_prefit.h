@@ -1,5 +1,6 @@
-// Tissue pre-fit (opt-in, `chordfit fit --tissue-prefit`): after the cord pre-fits, one pass
-// over the Carpentier segments trying a softer leaflet tissue in each.
+// Tissue pre-fit (opt-in, `chordfit fit --tissue-prefit`; also the fit's tissue retry,
+// fit_cords.h): after the cord pre-fits, one pass over the Carpentier segments trying a softer
+// leaflet tissue in each.
 //
 // Why: cords alone cannot make every prolapse. An anterior leaflet has no clefts, so A2 cannot
 // rise past the annulus without A1 and A3 however long its cords are, and a P3 scallop is held
