@@ -232,6 +232,15 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
       std::string::npos);
   EXPECT_NE(testing::readText(dir / "retry" / "convergence.csv").find("retry ceres"),
             std::string::npos);
+
+  // The retry is as deterministic as the rest of the fit: one thread gives the same files.
+  const auto one =
+      testing::runChordfit(fit + testing::quoted(dir / "one") + " --threads 1 --quiet");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  for (const char* file : {"cords.json", "tissue.json", "closed.ply"}) {
+    EXPECT_EQ(testing::readText(dir / "one" / file), testing::readText(dir / "retry" / file))
+        << file;
+  }
 }
 
 }  // namespace
