@@ -233,6 +233,31 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
   EXPECT_NE(testing::readText(dir / "retry" / "convergence.csv").find("retry ceres"),
             std::string::npos);
 
+  // The fit says how to reproduce its closure; simulate and compare, given the fit's cords
+  // without its tissue, say that tissue.json lies beside them.
+  EXPECT_NE(second.out.find("the fitted closure is on softer tissue (tissue retry): chordfit "
+                            "simulate "),
+            std::string::npos)
+      << second.out;
+  const std::string cords = testing::quoted(dir / "retry" / "cords.json");
+  const std::string beside = "tissue.json lies beside ";
+  const auto own = testing::runChordfit("simulate " + case_dir + " --cords " + cords +
+                                        " --quiet --out " + testing::quoted(dir / "own"));
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_NE(own.err.find("note: simulate: "), std::string::npos) << own.err;
+  EXPECT_NE(own.err.find(beside), std::string::npos) << own.err;
+  const auto softer =
+      testing::runChordfit("simulate " + case_dir + " --cords " + cords + " --tissue " +
+                           testing::quoted(dir / "retry" / "tissue.json") + " --quiet --out " +
+                           testing::quoted(dir / "softer"));
+  ASSERT_EQ(softer.exit_code, 0) << softer.err;
+  EXPECT_EQ(softer.err.find(beside), std::string::npos) << softer.err;
+  EXPECT_EQ(nlohmann::json::parse(testing::readText(dir / "softer" / "metrics.json"))["mean_mm"],
+            with["mean_mm"]);
+  const auto compared = testing::runChordfit("compare " + case_dir + " " + cords + " --quiet");
+  ASSERT_EQ(compared.exit_code, 0) << compared.err;
+  EXPECT_NE(compared.err.find("note: compare: "), std::string::npos) << compared.err;
+
   // The retry is as deterministic as the rest of the fit: one thread gives the same files.
   const auto one =
       testing::runChordfit(fit + testing::quoted(dir / "one") + " --threads 1 --quiet");

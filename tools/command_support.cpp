@@ -44,6 +44,19 @@ int reportProblems(const Diagnostics& diagnostics) {
   return kExitBadInput;
 }
 
+std::string tissueBesideCordsNote(const char* command, const std::string& cords_file,
+                                  const std::string& option) {
+  if (cords_file.empty()) return "";
+  const std::filesystem::path tissue =
+      std::filesystem::path(cords_file).parent_path() / "tissue.json";
+  std::error_code error;
+  if (!std::filesystem::is_regular_file(tissue, error)) return "";
+  return std::string("note: ") + command + ": " + tissue.string() + " lies beside " + cords_file +
+         ": the fit that wrote them closed these cords on that tissue; this run closes them on "
+         "the case's own (" +
+         option + " to use it)\n";
+}
+
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file) {
   if (cords_file.empty()) {
     if (valve_case.cords) return valve_case.cords;

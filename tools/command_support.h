@@ -26,6 +26,14 @@ int reportProblems(const Diagnostics& diagnostics);
 // nullopt on bad input.
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
 
+// A note when a fit's tissue.json lies beside `cords_file` (a fit's output directory) and the
+// command closes those cords on the case's own tissue instead: the fit closed them on that
+// tissue (its tissue pre-fit or tissue retry softened a segment), so this closure is not the
+// fit's. `option` is how the command takes a tissue file ("--tissue FILE", "--tissues …").
+// "" when there is no such file or no cords file.
+std::string tissueBesideCordsNote(const char* command, const std::string& cords_file,
+                                  const std::string& option);
+
 // The case's simulator settings (its "simulation" block over the defaults), then the
 // command line's `overrides` ("KEY=VALUE": a key of that block and a number, true or false;
 // `--set`), which are also written into valve_case.simulation_json so that everything reading

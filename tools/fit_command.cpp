@@ -331,6 +331,15 @@ int runFit(const FitCommandOptions& o) {
             << table1Row("fit", fit_metrics);
   if (const std::string hint = missedProlapseHint(*valve_case, o, fit, fit_metrics); !hint.empty())
     std::cout << "note: " << hint;
+  if (fit.tissue.size() > 0) {
+    // compare and simulate close cords on the case's own tissue unless told otherwise.
+    const std::filesystem::path out_dir(o.out_dir);
+    std::cout << "the fitted closure is on softer tissue ("
+              << (fit.tissue_retry.kept ? "tissue retry" : "tissue pre-fit")
+              << "): chordfit simulate " << o.case_dir << " --cords "
+              << (out_dir / "cords.json").string() << " --tissue "
+              << (out_dir / "tissue.json").string() << " reproduces it (compare: --tissues)\n";
+  }
   std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;
 }

@@ -108,6 +108,8 @@ int runSimulate(const SimulateOptions& options) {
   }
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
+  if (options.tissue_file.empty())
+    std::cerr << tissueBesideCordsNote("simulate", options.cords_file, "--tissue FILE");
   auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kClose,
                                             "simulate", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
