@@ -258,6 +258,21 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
   ASSERT_EQ(compared.exit_code, 0) << compared.err;
   EXPECT_NE(compared.err.find("note: compare: "), std::string::npos) << compared.err;
 
+  // sweep-cord takes the fit's tissue too: its scale-1 closure is the fit's.
+  const std::string sweep = "sweep-cord " + case_dir + " --cords " + cords +
+                            " --range 0.004 --step 0.001 --window 2 --out ";
+  const auto swept = testing::runChordfit(sweep + testing::quoted(dir / "sweep") + " --tissue " +
+                                          testing::quoted(dir / "retry" / "tissue.json"));
+  ASSERT_EQ(swept.exit_code, 0) << swept.err;
+  EXPECT_EQ(swept.err.find(beside), std::string::npos) << swept.err;
+  const std::string csv = testing::readText(dir / "sweep" / "sweep.csv");
+  const std::size_t row = csv.find("\n1,");
+  ASSERT_NE(row, std::string::npos) << csv;
+  EXPECT_NEAR(std::stod(csv.substr(row + 3)), with["mean_mm"].get<double>(), 1e-9) << csv;
+  const auto swept_own = testing::runChordfit(sweep + testing::quoted(dir / "sweep_own"));
+  ASSERT_EQ(swept_own.exit_code, 0) << swept_own.err;
+  EXPECT_NE(swept_own.err.find("note: sweep-cord: "), std::string::npos) << swept_own.err;
+
   // The retry is as deterministic as the rest of the fit: one thread gives the same files.
   const auto one =
       testing::runChordfit(fit + testing::quoted(dir / "one") + " --threads 1 --quiet");

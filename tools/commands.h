@@ -110,11 +110,12 @@ struct SweepCordOptions {
   // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set).
   std::vector<std::string> settings_overrides;
   std::string case_dir;
-  std::string cords_file;  // optional; as for simulate
-  int cord = -1;           // cord index; -1: the P2 primary cord nearest the P2 centre
-  double range = 0.05;     // sweep scale over [1 - range, 1 + range]
-  double step = 0.001;     // scale step
-  int window = 5;          // half-width (points) of the local quadratic fit for the noise
+  std::string cords_file;   // optional; as for simulate
+  std::string tissue_file;  // optional; as for simulate
+  int cord = -1;            // cord index; -1: the P2 primary cord nearest the P2 centre
+  double range = 0.05;      // sweep scale over [1 - range, 1 + range]
+  double step = 0.001;      // scale step
+  int window = 5;           // half-width (points) of the local quadratic fit for the noise
   int threads = 2;
   std::string out_dir;
 };

@@ -123,6 +123,9 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
       "sweep-cord", "Scan one cord's rest-length scale; measure the forward map's smoothness");
   cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
   cmd->add_option("--cords", o.cords_file, "CordSet JSON (default: case cords, else heuristic)");
+  cmd->add_option("--tissue", o.tissue_file,
+                  "Regional tissue JSON, one stiffness factor per vertex, e.g. a fit's "
+                  "tissue.json (default: the case's)");
   cmd->add_option("--cord", o.cord, "Cord index (default: the P2 primary cord nearest P2's centre)")
       ->check(CLI::Validator(
           [](const std::string& value) {

@@ -14,6 +14,7 @@
 #include "core/annulus_plane.h"
 #include "core/atomic_file.h"
 #include "core/carpentier.h"
+#include "core/case_io.h"
 #include "core/closure_model.h"
 #include "core/forward_map_noise.h"
 #include "core/metrics.h"
@@ -173,8 +174,15 @@ int runSweepCord(const SweepCordOptions& options) {
   }
   auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
+  if (!options.tissue_file.empty()) {
+    Diagnostics diagnostics;
+    if (!loadTissueFile(options.tissue_file, options.tissue_file, *valve_case, diagnostics))
+      return reportProblems(diagnostics);
+  }
   const auto cords = resolveCords(*valve_case, options.cords_file);
   if (!cords) return kExitBadInput;
+  if (options.tissue_file.empty())
+    std::cerr << tissueBesideCordsNote("sweep-cord", options.cords_file, "--tissue FILE");
   const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(*valve_case, *cords);
   if (cord < 0 || cord >= static_cast<int>(cords->cords.size())) {
     std::cerr << "error: sweep-cord: --cord: no such cord (the set has " << cords->cords.size()
@@ -261,6 +269,7 @@ int runSweepCord(const SweepCordOptions& options) {
       {"vertex_z", noiseJson(mapNoise(s, z, options.window), s, z)}};
   if (!options.settings_overrides.empty())
     summary["settings_overrides"] = options.settings_overrides;
+  if (!options.tissue_file.empty()) summary["tissue_file"] = options.tissue_file;
   std::vector<PlotPanel> panels;
   if (tracing_points.rows() > 0) {
     summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window), s, deviation);
