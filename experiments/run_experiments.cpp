@@ -476,9 +476,10 @@ std::string resumeCommand(const Arguments& a) {
 // Ends a run that was asked to stop: says what finished and how to resume. Returns the exit
 // code, 128 + the signal (130 for SIGINT, 143 for SIGTERM), as a shell reports a process killed
 // by it.
+// Jobs and cases are counted apart: a case that failed to generate is not one of the jobs.
 int stopRun(const Arguments& a, int signal_number, const std::string& during,
             const std::vector<std::string>& finished, int present, std::size_t jobs,
-            std::size_t failures, double seconds) {
+            std::size_t failures, std::size_t case_failures, double seconds) {
   const std::size_t done = finished.size() + static_cast<std::size_t>(present);
   std::fprintf(stderr,
                "run_experiments: stopped by %s %s after %.0f s; a step stopped midway writes "
@@ -489,6 +490,8 @@ int stopRun(const Arguments& a, int signal_number, const std::string& during,
                "run_experiments: this run finished %zu job(s) with a result (%d were there "
                "already), %zu failed, %zu of the shard's %zu not done\n",
                finished.size(), present, failures, jobs - std::min(jobs, done + failures), jobs);
+  if (case_failures > 0)
+    std::fprintf(stderr, "run_experiments: and %zu case(s) failed to generate\n", case_failures);
   for (std::size_t i = 0; i < finished.size() && i < kListedAtMost; ++i)
     std::fprintf(stderr, "  finished: %s\n", finished[i].c_str());
   if (finished.size() > kListedAtMost)
@@ -543,11 +546,12 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
   // used to be logged as one failed job, and the next job started.
   std::vector<std::string> finished;  // jobs that ran to a result in this run
   int present = 0;
+  std::size_t case_failures = 0;  // of `failures`, the cases' (the rest are jobs)
   auto stopped = [&](const StepOutcome* o, const std::string& during) {
     const int signal_number = o && o->stop_signal ? o->stop_signal : stopSignal();
     return signal_number == 0 ? kExitOk
                               : stopRun(a, signal_number, during, finished, present, jobs.size(),
-                                        failures.size(), elapsed());
+                                        failures.size() - case_failures, case_failures, elapsed());
   };
   for (std::size_t k = 0; k < cases.size(); ++k) {
     const std::string step = "case " + std::to_string(k + 1) + "/" + std::to_string(cases.size()) +
@@ -562,6 +566,7 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
     } else if (o.stop_signal == 0) {
       std::fprintf(stderr, "[case %zu/%zu] FAILED %s\n", k + 1, cases.size(), o.error.c_str());
       failures.push_back(o.error);
+      ++case_failures;
     }
     if (const int code = stopped(&o, (o.ok ? "after " : "during ") + step)) return code;
   }

@@ -744,6 +744,19 @@ TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult)
     EXPECT_NE(r.err.find("run_experiments: resume with: "), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "results" / "jobs" / "normal-1_s2__heuristic.json"));
   }
+  {  // A case that failed to generate is counted apart from the jobs when a stop ends the run
+     // (it was counted as a failed job: "1 failed, 1 of the shard's 2 not done").
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(
+        dir.path(), "[ \"$(wc -l < " + quoted(dir / "calls") + ")\" -eq 1 ] && exit 1\nexit 130");
+    const auto r =
+        runRunner("run --smoke --methods heuristic,truth --chordfit " + quoted(fake) + " --work " +
+                  quoted(dir / "work") + " --results " + quoted(dir / "results"));
+    EXPECT_EQ(r.exit_code, 130) << r.err;
+    EXPECT_NE(r.err.find("[case 1/1] FAILED"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("0 failed, 2 of the shard's 2 not done"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("and 1 case(s) failed to generate"), std::string::npos) << r.err;
+  }
   {  // kill -TERM run_experiments: forwarded to its chordfit, waited for, exit 143.
     TempDir dir;
     const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
