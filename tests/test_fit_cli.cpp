@@ -460,6 +460,41 @@ TEST(FitCommand, SaysWhatToTryWhenTheTracingsProlapseWhereTheFitDoesNot) {
   EXPECT_NE(locked.out.find(upper + "every cord there is locked"), std::string::npos) << locked.out;
 }
 
+// --params groups: a group factor's bounds keep the group's mean scale within --scale-bounds,
+// so a cord below its group's mean shrinks further than the bound itself; a bound that leaves
+// such a cord under 1 mm is refused before the fit (the per-cord check let it through, and the
+// fit would have written a cords.json no reader takes).
+TEST(FitCommand, GroupBoundsThatShrinkACordBelowOneMillimetreAreRefused) {
+  TempDir dir;
+  auto cords = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  // Every cord 30 mm long from the seed's view; all but the first lengthened to 45 mm, so the
+  // first one's group has a mean scale above 1 and the first cord lies below it.
+  for (std::size_t c = 0; c < cords["cords"].size(); ++c) {
+    auto& cord = cords["cords"][c];
+    const double rest = c == 0 ? 30.0 : 45.0;
+    cord["seed_rest_length_mm"] = 30.0;
+    cord["rest_length_mm"] = rest;
+    cord["scale"] = rest / 30.0;
+    cord["provenance"] = c == 0 ? "heuristic" : "manual";
+  }
+  testing::writeText(dir / "seed.json", cords.dump(1));
+  // 30 mm x 0.0334 = 1.002 mm: every cord stays above 1 mm at the bound itself.
+  const std::string fit = "fit " + quoted(smallCase()) + " --seed-cords " +
+                          quoted(dir / "seed.json") + " --scale-bounds 0.0334,1.5 --max-sims 20 " +
+                          "--no-uncertainty --quiet --out ";
+  const auto groups = runChordfit(fit + quoted(dir / "groups") + " --params groups");
+  EXPECT_EQ(groups.exit_code, 2) << groups.err;
+  EXPECT_NE(groups.err.find("error: fit: --scale-bounds: with --params groups the lower bound "
+                            "0.0334 lets cord 0 (group "),
+            std::string::npos)
+      << groups.err;
+  EXPECT_NE(groups.err.find("shrink to 0."), std::string::npos) << groups.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "groups" / "cords.json"));
+  // Per cord the same bounds are fine: the fit runs.
+  const auto scales = runChordfit(fit + quoted(dir / "scales") + " --no-prefit");
+  EXPECT_EQ(scales.exit_code, 0) << scales.err;
+}
+
 // A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
 // factor: 8 grid + 4 refinement closures fit in 16 runs, 8 more for the kinds do not.
 TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {

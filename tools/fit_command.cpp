@@ -141,6 +141,33 @@ int runFit(const FitCommandOptions& o) {
       return kExitBadInput;
     }
   }
+  if (*mode == inverse::ParameterMode::kGroups) {
+    // A group factor's bounds keep the group's mean scale within --scale-bounds, so a cord
+    // above its group's mean goes further than the check above assumes: take the lengths at
+    // the factors' bounds themselves.
+    inverse::ParameterBounds bounds;
+    bounds.scale_lower = o.scale_bounds[0];
+    bounds.scale_upper = o.scale_bounds[1];
+    const inverse::FitParameterization groups(*valve_case, *seed, *mode, bounds);
+    const CordSet longest = groups.apply(groups.upper());
+    const CordSet shortest = groups.apply(groups.lower());
+    const std::vector<std::string> names = inverse::cordGroups(*valve_case, *seed);
+    for (std::size_t c = 0; c < seed->cords.size(); ++c) {
+      if (seed->cords[c].locked) continue;
+      const double reach = longest.cords[c].rest_length, shrunk = shortest.cords[c].rest_length;
+      if (reach <= kMaxCordRestLengthMm && shrunk >= kMinCordRestLengthMm) continue;
+      const bool too_long = reach > kMaxCordRestLengthMm;
+      std::cerr << "error: fit: --scale-bounds: with --params groups the "
+                << (too_long ? "upper" : "lower") << " bound " << o.scale_bounds[too_long ? 1 : 0]
+                << " lets cord " << c << " (group " << names[c] << ", "
+                << seed->cords[c].rest_length << " mm) " << (too_long ? "reach " : "shrink to ")
+                << (too_long ? reach : shrunk)
+                << " mm (the group factor's bound keeps the group's mean scale within it, not "
+                   "each cord's); a cord set holds "
+                << kMinCordRestLengthMm << " to " << kMaxCordRestLengthMm << " mm\n";
+      return kExitBadInput;
+    }
+  }
   const auto case_settings = caseSettingsOrReport(*valve_case, o.case_dir, SettingsUse::kClose,
                                                   "fit", o.settings_overrides);
   if (!case_settings) return kExitBadInput;
