@@ -150,13 +150,12 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       const double taut_pct = taut.empty() ? kNaN : 100.0 * quantile(taut, 0.5);
       // The fit ran again on softer tissue and kept it (fit's tissue retry): the tissue it found,
       // "" when it did not (or the result predates the retry).
-      std::string retry_tissue;
       const bool retry_kept =
           fit->contains("tissue_retry") && fit->at("tissue_retry").value("kept", false);
-      if (retry_kept) {
-        for (const json& change : fit->at("tissue_retry").at("tissue"))
-          retry_tissue += (retry_tissue.empty() ? "" : "; ") + change.get<std::string>();
-      }
+      const std::string retry_tissue =
+          retry_kept
+              ? joined(fit->at("tissue_retry").at("tissue").get<std::vector<std::string>>(), "; ")
+              : "";
       const double sims = number(*fit, "forward_sims");
       const double wall = number(*fit, "wall_seconds");
 

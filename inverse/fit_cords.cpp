@@ -37,6 +37,21 @@ struct Optimisation {
   }
 };
 
+// The history record of a closure run outside the optimiser's iterations (seed, pre-fits,
+// slack release, the retry's tissue pre-fit). A failed closure has no cost or deviation: NaN
+// in the history (docs/outputs.md).
+IterationRecord closureRecord(const std::string& stage, int iteration, const ForwardEvaluation& e,
+                              double best_cost, int forward_sims,
+                              FitObjective::Clock::time_point clock_start) {
+  return {stage,
+          iteration,
+          e.ok() ? e.cost : NAN,
+          best_cost,
+          e.ok() ? e.mean_deviation_mm : NAN,
+          forward_sims,
+          std::chrono::duration<double>(FitObjective::Clock::now() - clock_start).count()};
+}
+
 struct OptimisationStart {
   const CordSet& cords;                       // after the pre-fits
   const ForwardEvaluation& evaluation;        // its full closure on `tissue`
@@ -130,15 +145,9 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
       } else {
         run->release_error = released->error;
       }
-      // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
-      IterationRecord r{
-          "release",
-          0,
-          released->ok() ? released->cost : NAN,
-          run->release_kept ? released->cost : best->cost,
-          released->ok() ? released->mean_deviation_mm : NAN,
-          run->forward_sims,
-          std::chrono::duration<double>(FitObjective::Clock::now() - clock_start).count()};
+      const IterationRecord r =
+          closureRecord("release", 0, *released, run->release_kept ? released->cost : best->cost,
+                        run->forward_sims, clock_start);
       run->history.push_back(r);
       if (options.on_iteration) options.on_iteration(r);
       if (run->release_kept) best = released;
@@ -191,14 +200,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto seconds = [&] { return std::chrono::duration<double>(Clock::now() - start).count(); };
   auto record = [&](const std::string& stage, int iteration, const ForwardEvaluation& e,
                     double best_cost) {
-    // A failed closure has no cost or deviation: NaN in the history (docs/outputs.md).
-    IterationRecord r{stage,
-                      iteration,
-                      e.ok() ? e.cost : NAN,
-                      best_cost,
-                      e.ok() ? e.mean_deviation_mm : NAN,
-                      outcome.forward_sims,
-                      seconds()};
+    const IterationRecord r =
+        closureRecord(stage, iteration, e, best_cost, outcome.forward_sims, start);
     outcome.history.push_back(r);
     if (options.on_iteration) options.on_iteration(r);
   };
@@ -352,13 +355,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
           valve_case, start_set, start_evaluation, options.bounds, seed_residual, tissue);
       outcome.forward_sims += softened.forward_sims;
       retry.tissue_changes = softened.changed;
-      const IterationRecord tissue_record{"tissue",
-                                          3,
-                                          softened.best.cost,
-                                          softened.best.cost,
-                                          softened.best.mean_deviation_mm,
-                                          outcome.forward_sims,
-                                          seconds()};
+      const IterationRecord tissue_record = closureRecord(
+          "tissue", 3, softened.best, softened.best.cost, outcome.forward_sims, start);
       outcome.history.push_back(relabel(tissue_record));
       if (options.on_iteration) options.on_iteration(relabel(tissue_record));
       if (!softened.changed.empty()) {
