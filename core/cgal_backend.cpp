@@ -505,8 +505,11 @@ std::string checkOff(const std::string& bytes) {
 
 // ---------------------------------------------------------------------------------------
 // OBJ: CGAL rejects any statement it does not know, including "l" (polyline), which
-// readMesh documents as ignored. Such lines are dropped before CGAL sees the text.
-void dropObjLines(std::string& bytes) {
+// readMesh documents as ignored. Such lines are dropped before CGAL sees the text. CGAL also
+// takes a face's corners only after a space ("f\t1\t2\t3" read as a face with one corner),
+// while the format separates words by any blank: tabs become spaces first.
+void normaliseObjText(std::string& bytes) {
+  std::replace(bytes.begin(), bytes.end(), '\t', ' ');
   std::string kept;
   kept.reserve(bytes.size());
   std::size_t pos = 0;
@@ -710,7 +713,7 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
   if (extension == ".off") error = checkOff(bytes);
   if (extension == ".stl") error = prepareStl(bytes);
   if (extension == ".obj") {
-    dropObjLines(bytes);
+    normaliseObjText(bytes);
     error = checkObjIndices(bytes);
   }
   if (!error.empty()) return false;

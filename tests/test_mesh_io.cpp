@@ -365,6 +365,18 @@ TEST_F(MeshIoTest, ObjQuadWithNormalsTexturesAndPolylinesReadsAsTwoTriangles) {
   EXPECT_EQ(F, squareFaces());
 }
 
+// The format separates words by blanks; CGAL alone read "f\t1\t2\t3" as a one-corner face.
+TEST_F(MeshIoTest, ObjWithTabSeparatedWordsReadsLikeSpaces) {
+  const fs::path path = write("tabs.obj",
+                              "v\t0\t0\t0\nv\t1 0\t0\nv 1\t1\t0\nv\t0\t1\t0\n"
+                              "f\t1/1/1\t2/1/1\t3/1/1\t4/1/1\n");
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  readOk(path, V, F);
+  EXPECT_EQ(V, quadVertices());
+  EXPECT_EQ(F, squareFaces());
+}
+
 // CGAL let an index one past the end through (its check is "max index > #points"), read 0 as
 // that same index, and refused anything farther with a bare "could not parse".
 TEST_F(MeshIoTest, ObjIndexOutOfRangeIsRefusedNamingTheLineFaceAndRange) {
