@@ -181,12 +181,16 @@ std::string baseCaseId(const std::string& preset, int seed) {
   return preset + "_s" + std::to_string(seed);
 }
 
-std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults) {
+std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults,
+                              const ExperimentPlan& plan) {
+  const bool fits = std::any_of(plan.jobs.begin(), plan.jobs.end(),
+                                [](const JobSpec& job) { return job.method == Method::kFit; });
   std::string text;
   auto add = [&](const std::string& option) { text += (text.empty() ? "" : " ") + option; };
   if (config.edge_mm != defaults.edge_mm) add("--edge " + shortNumber(config.edge_mm));
-  if (config.max_sims != defaults.max_sims) add("--max-sims " + std::to_string(config.max_sims));
-  if (config.scale_bounds && config.scale_bounds != defaults.scale_bounds) {
+  if (fits && config.max_sims != defaults.max_sims)
+    add("--max-sims " + std::to_string(config.max_sims));
+  if (fits && config.scale_bounds && config.scale_bounds != defaults.scale_bounds) {
     add("--scale-bounds " + shortNumber(config.scale_bounds->first) + "," +
         shortNumber(config.scale_bounds->second));
   }

@@ -84,8 +84,10 @@ std::string baseCaseId(const std::string& preset, int seed);
 
 // The options that change a plan's numbers but not its job ids, where `config` differs from the
 // plan's `defaults`: "--edge 2 --max-sims 150 --scale-bounds 0.6,1.5" (each only when it
-// differs; "" for the defaults).
-std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults);
+// differs; "" for the defaults). The budget and bounds are the fits' own: a plan without a fit
+// job (`--methods heuristic,truth`) leaves them out, as its numbers do not depend on them.
+std::string nonDefaultOptions(const ExperimentConfig& config, const ExperimentConfig& defaults,
+                              const ExperimentPlan& plan);
 
 // What identifies a plan's jobs whatever options chose them: 16 hex digits of the FNV-1a hash of
 // its sorted job ids ("--seeds 1,2,3" and no --seeds give the same plan id), and of

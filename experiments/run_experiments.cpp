@@ -827,13 +827,13 @@ int main(int argc, char** argv) {
   if (a.max_sims > 0) config.max_sims = a.max_sims;
   if (a.edge_mm > 0.0) config.edge_mm = a.edge_mm;
   if (a.scale_bounds) config.scale_bounds = a.scale_bounds;
-  a.option_values = nonDefaultOptions(config, defaults);
   ExperimentPlan plan;
   try {
     plan = restrictPlan(makePlan(config), a.methods, a.seeds, a.presets, a.cases);
   } catch (const std::invalid_argument& e) {  // a filter that matches nothing: usage
     return usageError(e.what());
   }
+  a.option_values = nonDefaultOptions(config, defaults, plan);
   if (!a.methods.empty()) {
     std::vector<std::string> selected;
     for (const JobSpec& job : plan.jobs) {

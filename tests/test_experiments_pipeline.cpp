@@ -509,28 +509,46 @@ TEST_F(ExperimentsPipeline, ResultsMadeWithOtherOptionsAreRefusedNotReused) {
             std::string::npos)
       << r.err;
 
-  // The plan options and id name a budget, edge or bounds other than the plan's defaults.
-  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth --max-sims 150" + where);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string other = readText(results / "index.md");
-  EXPECT_NE(other.find("Plan options: `--plan smoke --methods heuristic,truth --max-sims 150`"),
-            std::string::npos)
-      << other;
-  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth" + where);
-  ASSERT_EQ(r.exit_code, 0) << r.err;
-  const std::string plain = readText(results / "index.md");
+  // The plan options and id name a budget, edge or bounds other than the plan's defaults; the
+  // budget and bounds only where the plan has a fit job to use them.
   const auto id = [](const std::string& text) {
     const std::size_t at = text.find("plan id `");
     return at == std::string::npos ? std::string() : text.substr(at, 26);
   };
-  EXPECT_NE(id(other), id(plain)) << other << plain;
+  r = runRunner(
+      "merge --smoke --allow-missing --methods heuristic,fit_scales_ceres --max-sims 80"
+      " --scale-bounds 0.6,1.5" +
+      where);
+  EXPECT_EQ(r.exit_code, 2) << "the fit was run with the default bounds: " << r.err;
+  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth --max-sims 150" + where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string budget = readText(results / "index.md");
+  EXPECT_NE(budget.find("Plan options: `--plan smoke --methods heuristic,truth`;"),
+            std::string::npos)
+      << "no fit job uses the budget: " << budget;
+  r = runRunner("merge --smoke --allow-missing --methods heuristic,truth" + where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string plain = readText(results / "index.md");
+  EXPECT_EQ(id(budget), id(plain)) << budget << plain;
   r = runRunner("check --smoke --methods heuristic,truth --max-sims 150" + where);
-  EXPECT_EQ(r.exit_code, 1) << "merged with the default budget: " << r.err;
-  EXPECT_NE(r.err.find("another plan than this check's `--plan smoke --methods heuristic,truth "
-                       "--max-sims 150`"),
+  EXPECT_EQ(r.exit_code, 0) << "the budget is not part of this plan: " << r.err;
+  r = runRunner("check --smoke --methods heuristic" + where);
+  EXPECT_EQ(r.exit_code, 1) << "merged with the truth jobs too: " << r.err;
+  EXPECT_NE(r.err.find("was merged with `--plan smoke --methods heuristic,truth`, another plan "
+                       "than this check's `--plan smoke --methods heuristic`"),
             std::string::npos)
       << r.err;
-  r = runRunner("check --smoke --methods heuristic,truth --edge 3 --max-sims 80" + where);
+  r = runRunner(
+      "merge --smoke --allow-missing --methods heuristic,truth,fit_scales_ceres "
+      "--max-sims 80" +
+      where);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string with_fit = readText(results / "index.md");
+  EXPECT_NE(id(with_fit), id(plain)) << "another plan: its jobs differ";
+  r = runRunner("check --smoke --methods heuristic,truth,fit_scales_ceres --max-sims 150" + where);
+  EXPECT_EQ(r.exit_code, 1) << "the fit was run with a budget of 80: " << r.err;
+  r = runRunner("check --smoke --methods heuristic,truth,fit_scales_ceres --edge 3 --max-sims 80" +
+                where);
   EXPECT_EQ(r.exit_code, 0) << "the plan's defaults given explicitly: " << r.err;
 
   // A case in --work made with other options is refused even with --force (which reruns jobs,
