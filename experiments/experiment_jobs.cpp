@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <vector>
 
@@ -73,6 +74,34 @@ extern "C" void forwardStopSignal(int signal_number) {
   if (child > 0) ::kill(child, signal_number);
 }
 
+// A child that outlives a forwarded stop by this long (one that ignores or hangs on SIGINT /
+// SIGTERM; chordfit ends within a step) is killed, so that a stop always ends the run.
+constexpr std::chrono::seconds kStopGrace{5};
+
+// waitpid's status of `pid`, or -1. Polls rather than blocks: the stop handlers restart a
+// blocking waitpid (SA_RESTART), and a child deaf to the forwarded stop must still be ended.
+int waitForChild(pid_t pid) {
+  using Clock = std::chrono::steady_clock;
+  std::optional<Clock::time_point> stop_seen;
+  bool killed = false;
+  for (;;) {
+    int status = 0;
+    const pid_t waited = waitpid(pid, &status, WNOHANG);
+    if (waited == pid) return status;
+    if (waited < 0 && errno != EINTR) return -1;
+    if (g_stop_signal != 0 && !stop_seen) stop_seen = Clock::now();
+    if (stop_seen && !killed && Clock::now() - *stop_seen > kStopGrace) {
+      ::kill(pid, SIGKILL);
+      killed = true;
+      std::fprintf(stderr,
+                   "run_experiments: the job's process %d did not end within %lld s of the stop "
+                   "signal: killed (SIGKILL)\n",
+                   static_cast<int>(pid), static_cast<long long>(kStopGrace.count()));
+    }
+    ::usleep(20000);  // 20 ms: a job's start and end are seen well within its own run time
+  }
+}
+
 // Runs args[0] with stdout and stderr appended to `log`. Returns the exit code, or -1 when
 // the program could not be started (e.g. missing executable), 128 + signal when killed; does
 // not start it (128 + signal) when a stop was requested.
@@ -108,12 +137,10 @@ int runProgram(const std::vector<std::string>& args, const fs::path& log) {
   sigprocmask(SIG_SETMASK, &previous, nullptr);  // a pending stop is forwarded here
   if (spawned != 0) return -1;
   if (g_stop_signal != 0) ::kill(pid, g_stop_signal);  // requested before the child existed
-  int status = 0;
-  pid_t waited = 0;
-  while ((waited = waitpid(pid, &status, 0)) < 0 && errno == EINTR) {
-  }
+  const int status_or_failure = waitForChild(pid);
   g_child_pid = 0;
-  if (waited < 0) return -1;
+  if (status_or_failure < 0) return -1;
+  const int status = status_or_failure;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
 }

@@ -801,6 +801,27 @@ TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult)
         << err;
     EXPECT_FALSE(fs::exists(dir / "results" / "jobs" / "normal-1_s2__heuristic.json"));
   }
+  {  // A chordfit deaf to the forwarded stop is killed after a grace period: the run still ends.
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(
+        dir.path(), "trap '' TERM INT\n: > " + quoted(dir / "deaf") + "\nexec sleep 60");
+    const pid_t runner = startRunner("run --force" + options(dir, fake), dir / "err", false);
+    ASSERT_GT(runner, 0);
+    const pid_t child = waitForFakeChild(dir.path());
+    ASSERT_GT(child, 0) << readText(dir / "err");
+    for (int k = 0; k < 100 && !fs::exists(dir / "deaf"); ++k)
+      std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    ASSERT_TRUE(fs::exists(dir / "deaf")) << "the fake never set its trap";
+    kill(runner, SIGTERM);
+    const int status = waitForRunner(runner);
+    const std::string err = readText(dir / "err");
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << "status " << status << err;
+    EXPECT_FALSE(stillRunning(child)) << "the chordfit of the job was left running";
+    EXPECT_NE(err.find("did not end within 5 s of the stop signal: killed (SIGKILL)"),
+              std::string::npos)
+        << err;
+    EXPECT_EQ(calls(dir), 1u) << err;
+  }
   {  // Ctrl-C: SIGINT to the whole process group during `all`: exit 130, no merge.
     TempDir dir;
     const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
