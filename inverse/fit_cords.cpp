@@ -415,6 +415,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   // The pre-fits' closures (the retry's tissue pre-fit too) count in the seed residual's.
   outcome.unsettled_sims = seed_residual.unsettledClosures() + optimiser_unsettled;
   outcome.seconds = seconds();
+  // The diagnostics after the fit close through the same residual; their unsettled closures
+  // are counted apart, as their closures are (outside --max-sims).
+  const int unsettled_in_fit = residual.unsettledClosures();
   if (options.uncertainty && parameters.size() > 0) {
     // The optimiser's Jacobian also holds at the release when the release closed the valve
     // to the same state (its cords slack throughout): the data depend on x only through it.
@@ -453,6 +456,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
           "uncertainty: a finite-difference closure failed: " + jacobian_error;
     }
     outcome.uncertainty.jacobian_sims = jacobian_sims;
+    outcome.uncertainty.unsettled_sims = residual.unsettledClosures() - unsettled_in_fit;
     outcome.uncertainty_seconds = seconds() - outcome.seconds;
   }
   if (options.probe_locked) {
@@ -462,6 +466,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     probe.on_start = options.on_stage;
     outcome.locked_probes = probeLockedCords(fit.working_case, outcome.fitted, *best,
                                              outcome.closed_spans, residual, options.bounds, probe);
+    outcome.locked_probes.unsettled_sims =
+        residual.unsettledClosures() - unsettled_in_fit - outcome.uncertainty.unsettled_sims;
   }
   return outcome;
 }

@@ -42,6 +42,7 @@ struct FitUncertainty {
   double sigma_mm = 0.0;          // residual SD sigma (mm)
   double correlation_time = 1.0;  // tau (>= 1), in tracing points
   int jacobian_sims = 0;          // closures run for J (0 when it came from the optimiser)
+  int unsettled_sims = 0;         // of jacobian_sims: closures that reached their step cap
   std::string error;              // J could not be computed or the system is singular
   bool ok() const { return error.empty() && sd.size() > 0; }
 };

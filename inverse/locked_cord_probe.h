@@ -84,6 +84,7 @@ struct LockedCordProbes {
   double fit_mean_deviation_mm = 0.0;
   double relative_step = 0.0, max_change = 0.0;  // the options it ran with
   int forward_sims = 0;
+  int unsettled_sims = 0;  // of forward_sims: closures that reached their step cap
   double seconds = 0.0;
   // The trial (single cords, then segments) with the lowest data cost below the fit's, or
   // nullptr when none lowered it.

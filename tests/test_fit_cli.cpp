@@ -420,6 +420,25 @@ TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
   EXPECT_NE(report.find("| Cord | Group | Segment | Kind | Locked length (mm) |"),
             std::string::npos);
 
+  // Closures cut short by the step cap: the probe's are counted apart from the fit's.
+  const auto capped = runChordfit(fit + " --set max_steps=150 --out " + quoted(dir / "capped"));
+  ASSERT_EQ(capped.exit_code, 0) << capped.err;
+  const auto capped_metrics =
+      nlohmann::json::parse(testing::readText(dir / "capped" / "metrics.json"));
+  const auto& capped_probe = capped_metrics["locked_cord_probe"];
+  EXPECT_EQ(capped_metrics["unsettled_sims"].get<int>(), 1) << "the seed's closure";
+  EXPECT_GT(capped_probe["forward_sims"].get<int>(), 0);
+  EXPECT_EQ(capped_probe["unsettled_sims"], capped_probe["forward_sims"]) << capped_probe;
+  EXPECT_EQ(capped_metrics["uncertainty"]["error"], "no free parameters");
+  EXPECT_NE(capped.out.find(
+                std::to_string(capped_probe["forward_sims"].get<int>()) + " extra closures, " +
+                std::to_string(capped_probe["unsettled_sims"].get<int>()) + " unsettled"),
+            std::string::npos)
+      << capped.out;
+  EXPECT_NE(testing::readText(dir / "capped" / "report.md")
+                .find(" reached the step cap without settling), "),
+            std::string::npos);
+
   const auto skipped = runChordfit(fit + " --no-uncertainty --out " + quoted(dir / "skipped"));
   ASSERT_EQ(skipped.exit_code, 0) << skipped.err;
   EXPECT_EQ(skipped.out.find("locked cords"), std::string::npos) << skipped.out;

@@ -291,6 +291,7 @@ int runFit(const FitCommandOptions& o) {
   if (o.fd_warm_start) metrics["fd_switched_to_full_closures"] = fit.switched_to_full_closures;
   if (o.uncertainty) {
     nlohmann::json u = {{"jacobian_sims", fit.uncertainty.jacobian_sims},
+                        {"unsettled_sims", fit.uncertainty.unsettled_sims},
                         {"seconds", fit.uncertainty_seconds}};
     if (fit.uncertainty.ok()) {
       u["residual_sd_mm"] = fit.uncertainty.sigma_mm;
@@ -298,7 +299,7 @@ int runFit(const FitCommandOptions& o) {
       u["identified_cords"] = identifiedCords(fit);
       u["free_cords"] = freeCords(fit);
     } else {
-      u["error"] = fit.uncertainty.error;
+      u["error"] = fit.uncertainty.error.empty() ? "no free parameters" : fit.uncertainty.error;
     }
     metrics["uncertainty"] = u;
   }
@@ -345,9 +346,11 @@ int runFit(const FitCommandOptions& o) {
   if (fit.uncertainty.ok()) {
     std::printf(
         "uncertainty: %d of %d free cords determined to better than 3 %% (residual SD %.2f mm, "
-        "correlated over %.1f points; %d extra closures, %.1f s; report.md, uncertainty.csv)\n",
+        "correlated over %.1f points; %s, %.1f s; report.md, uncertainty.csv)\n",
         identifiedCords(fit), freeCords(fit), fit.uncertainty.sigma_mm,
-        fit.uncertainty.correlation_time, fit.uncertainty.jacobian_sims, fit.uncertainty_seconds);
+        fit.uncertainty.correlation_time,
+        extraClosures(fit.uncertainty.jacobian_sims, fit.uncertainty.unsettled_sims).c_str(),
+        fit.uncertainty_seconds);
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }

@@ -181,7 +181,11 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
         "probed. Data cost of the fit: "
      << formatFixed(probes.fit_data_cost, 3) << ", AvgD "
      << formatFixed(probes.fit_mean_deviation_mm, 2) << " mm; " << probes.forward_sims
-     << " closures, " << formatFixed(probes.seconds, 1) << " s, outside --max-sims.\n\n";
+     << " closures"
+     << (probes.unsettled_sims > 0 ? " (" + std::to_string(probes.unsettled_sims) +
+                                         " reached the step cap without settling)"
+                                   : "")
+     << ", " << formatFixed(probes.seconds, 1) << " s, outside --max-sims.\n\n";
   md << "| Cord | Group | Segment | Kind | Locked length (mm) | Closed span (mm) | Probe length "
         "(mm) | Change (%) | Predicted cost drop (%) | Data cost there | AvgD there (mm) |\n"
         "|---:|---|---|---|---:|---:|---:|---:|---:|---:|---:|\n";
@@ -279,7 +283,7 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
   for (const inverse::LockedSegmentProbe& p : probes.segments) countFailed(p.trial);
   const std::string failures =
       failed > 0 ? "; " + std::to_string(failed) + " of its trials failed (report.md)" : "";
-  const std::string closures = std::to_string(probes.forward_sims) + " extra closures";
+  const std::string closures = extraClosures(probes.forward_sims, probes.unsettled_sims);
   const inverse::LockedCordTrial* best = probes.best();
   const double drop =
       best && probes.fit_data_cost > 0.0 ? 1.0 - best->data_cost / probes.fit_data_cost : 0.0;
@@ -409,6 +413,7 @@ nlohmann::json lockedProbeJson(const ValveCase& c, const inverse::FitOutcome& fi
           {"max_change", probes.max_change},
           {"fit_mean_deviation_mm", probes.fit_mean_deviation_mm},
           {"forward_sims", probes.forward_sims},
+          {"unsettled_sims", probes.unsettled_sims},
           {"seconds", probes.seconds},
           {"cords", cords},
           {"segments", segments}};
@@ -592,6 +597,11 @@ int freeCords(const inverse::FitOutcome& fit) {
   int count = 0;
   for (int p : fit.cord_parameter) count += p >= 0 ? 1 : 0;
   return count;
+}
+
+std::string extraClosures(int closures, int unsettled) {
+  return std::to_string(closures) + " extra closures" +
+         (unsettled > 0 ? ", " + std::to_string(unsettled) + " unsettled" : "");
 }
 
 std::string fitReport(const ValveCase& c, const FitCommandOptions& o,

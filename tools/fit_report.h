@@ -30,6 +30,8 @@ int slackCords(const inverse::FitOutcome& fit);
 int identifiedCords(const inverse::FitOutcome& fit);
 // Cords that are fit parameters (not locked).
 int freeCords(const inverse::FitOutcome& fit);
+// "16 extra closures", or "16 extra closures, 2 unsettled" when some reached the step cap.
+std::string extraClosures(int closures, int unsettled);
 
 // The summary line of the locked-cord probe (inverse/locked_cord_probe.h) for the terminal,
 // "" when no cord is locked or the probe did not run. It speaks of a cord holding the fit back
