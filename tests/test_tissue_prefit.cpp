@@ -117,6 +117,7 @@ TEST(TissuePrefitCli, FitWritesTheTissueAndSimulateReproducesTheClosure) {
                                         testing::quoted(dir / "fit"));
   ASSERT_EQ(fit.exit_code, 0) << fit.err;
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  EXPECT_TRUE(metrics["tissue_prefit_ran"].get<bool>());
   ASSERT_FALSE(metrics["tissue_prefit"].empty());
   EXPECT_EQ(metrics["tissue_prefit"][0], "P2 0.1");
   ASSERT_TRUE(std::filesystem::exists(dir / "fit" / "tissue.json"));
@@ -148,6 +149,21 @@ TEST(TissuePrefitCli, FitWritesTheTissueAndSimulateReproducesTheClosure) {
   EXPECT_EQ(miscounted.exit_code, 2);
   EXPECT_NE(miscounted.err.find("--tissues: 2 file(s) for 1 cord file(s)"), std::string::npos)
       << miscounted.err;
+
+  // A budget too small for the tissue pre-fit: it does not run, and the report does not say it
+  // kept the uniform tissue as if it had.
+  const auto short_budget = testing::runChordfit("fit " + case_dir +
+                                                 " --no-prefit --tissue-prefit --max-sims 5 "
+                                                 "--no-uncertainty --quiet --out " +
+                                                 testing::quoted(dir / "short"));
+  ASSERT_EQ(short_budget.exit_code, 0) << short_budget.err;
+  EXPECT_FALSE(
+      nlohmann::json::parse(testing::readText(dir / "short" / "metrics.json"))["tissue_prefit_ran"]
+          .get<bool>());
+  EXPECT_NE(testing::readText(dir / "short" / "report.md")
+                .find("- tissue pre-fit (stiffness factor per segment): not run: --max-sims 5 "
+                      "leaves too few closures"),
+            std::string::npos);
 
   testing::writeText(dir / "bad.json", R"({"stiffness": [1, 0.5, 1]})");
   const auto bad = testing::runChordfit("simulate " + case_dir + " --tissue " +

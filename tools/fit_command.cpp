@@ -261,6 +261,7 @@ int runFit(const FitCommandOptions& o) {
   // why not when they were skipped.
   metrics["prefit_ran"] = fit.prefit_ran;
   metrics["segment_prefit_ran"] = fit.segment_prefit_ran;
+  metrics["tissue_prefit_ran"] = fit.tissue_prefit_ran;
   if (!fit.prefit_skipped.empty()) metrics["prefit_skipped"] = fit.prefit_skipped;
   metrics["prefit_factor"] = fit.prefit_factor;
   metrics["prefit_primary_factor"] = fit.prefit_primary_factor;

@@ -645,11 +645,17 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                               : joinSegments(fit.segment_prefit_changes))
      << "\n";
   if (o.tissue_prefit) {
+    const std::string tissue_not_run =
+        fit.tissue_prefit_ran ? ""
+        : fit.x.size() == 0
+            ? "not run: no free cord"
+            : "not run: --max-sims " + std::to_string(o.max_sims) + " leaves too few closures";
     md << "- tissue pre-fit (stiffness factor per segment): "
-       << (fit.tissue_prefit_changes.empty() ? std::string("no change (uniform tissue kept)")
-                                             : joinSegments(fit.tissue_prefit_changes) +
-                                                   "; the cords were fitted on this "
-                                                   "tissue (tissue.json)")
+       << (!tissue_not_run.empty() ? tissue_not_run
+           : fit.tissue_prefit_changes.empty()
+               ? std::string("no change (uniform tissue kept)")
+               : joinSegments(fit.tissue_prefit_changes) +
+                     "; the cords were fitted on this tissue (tissue.json)")
        << "\n";
   }
   md << "- tissue retry: " << tissueRetryLine(fit, o) << "\n";

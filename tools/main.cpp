@@ -253,7 +253,8 @@ void addFit(CLI::App& app, FitCommandOptions& o) {
   cmd->add_option("--optimizer", o.optimizer, "ceres | bobyqa | cobyla | sbplx | crs2")
       ->capture_default_str();
   cmd->add_option("--max-sims", o.max_sims,
-                  "Forward closures of the fit (budget; the written result adds one)")
+                  "Forward closures of the fit (budget; the written result adds one, and the "
+                  "uncertainty and locked-cord probe after the fit run theirs outside it)")
       ->capture_default_str();
   cmd->add_option("--threads", o.threads,
                   "Parallel closures (finite differences, pre-fit), 1 to 64; the same result for "
