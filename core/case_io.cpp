@@ -484,7 +484,7 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
     CordSet set;
     if (readCordSet(cords->path, cords->name, set, diagnostics)) {
       if (mesh_ok) {
-        ok &= checkCordVertices(set, static_cast<int>(c.mesh.V.rows()), cords->name, diagnostics);
+        ok &= checkCordVertices(set, c.mesh, cords->name, diagnostics);
         ok &= checkTipPlacement(c.mesh, set.tips, cords->name, diagnostics);
       }
       c.cords = set;

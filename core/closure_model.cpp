@@ -52,6 +52,10 @@ bool closureModel(const ValveCase& valve_case, const CordSet& cords, ClosurePhas
       error = "cords[" + std::to_string(c) + "].point: " + point_problem;
       return false;
     }
+    if (const std::string problem = cordOnRingProblem(cord, mesh.annulus); !problem.empty()) {
+      error = "cords[" + std::to_string(c) + "]: " + problem;
+      return false;
+    }
     if (!(cord.rest_length > 0.0)) {
       error = "cords[" + std::to_string(c) + "]: rest length must be > 0";
       return false;

@@ -1,6 +1,7 @@
 #include "core/cordset.h"
 
 #include <cmath>
+#include <cstdio>
 
 namespace chordfit {
 
@@ -88,6 +89,36 @@ std::string cordPointProblem(const CordPoint& point, int vertex_count) {
     return "weights must be finite and >= 0";
   if (std::abs(point.weights.sum() - 1.0) > 1e-9) return "weights must sum to 1";
   return "";
+}
+
+std::string cordOnRingProblem(const Cord& cord, const Eigen::VectorXi& ring) {
+  const auto on_ring = [&ring](int v) { return (ring.array() == v).any(); };
+  double leaflet_weight = 0.0;
+  std::vector<int> ring_vertices;
+  const auto add = [&](int v, double weight) {
+    if (!on_ring(v)) {
+      leaflet_weight += weight;
+    } else if (weight > 0.0) {
+      ring_vertices.push_back(v);
+    }
+  };
+  if (cord.point) {
+    for (int m = 0; m < 3; ++m) add(cord.point->vertices[m], cord.point->weights(m));
+  } else {
+    add(cord.vertex, 1.0);
+  }
+  if (leaflet_weight >= kMinLeafletInsertionWeight) return "";
+  char share[32];
+  std::snprintf(share, sizeof share, "%.4g %%", 100.0 * (1.0 - leaflet_weight));
+  std::string named = ring_vertices.size() == 1 ? "ring vertex " : "ring vertices ";
+  for (std::size_t k = 0; k < ring_vertices.size(); ++k)
+    named += (k ? ", " : "") + std::to_string(ring_vertices[k]);
+  return std::string("the insertion lies on the annulus ring (") + share + " of its weight on " +
+         named +
+         ", which the closure moves along a prescribed path): a cord must pull on the leaflet, "
+         "with at least " +
+         std::to_string(static_cast<int>(100 * kMinLeafletInsertionWeight)) +
+         " % of its weight on vertices off the ring";
 }
 
 Eigen::Vector3d pointPosition(const CordPoint& p, const Eigen::MatrixXd& V) {

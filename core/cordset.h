@@ -70,6 +70,16 @@ std::string groupName(const Cord& cord, const Eigen::VectorXi& leaflet_labels,
 // a negative or non-finite weight, or weights not summing to 1 (within 1e-9). "" = fine.
 std::string cordPointProblem(const CordPoint& point, int vertex_count);
 
+// Whether a cord's insertion (valid indices) lies on the annulus ring `ring` (vertex indices):
+// when its vertices off the ring carry less than kMinLeafletInsertionWeight of its weight, a
+// problem naming the weight on the ring; "" = fine. The closure moves ring vertices along a
+// prescribed path, so such a cord pulls on nothing, or, through a vertex of weight b, moves
+// that vertex 1/b times as far as the insertion: a 1e-12 weight threw it 1e12 times the
+// cord's stretch at the first step. Every cord of the bundled and benchmark cases inserts
+// wholly off the ring.
+constexpr double kMinLeafletInsertionWeight = 0.5;
+std::string cordOnRingProblem(const Cord& cord, const Eigen::VectorXi& ring);
+
 // A point on a mesh state V (#V by 3): sum_m weights(m) V(vertices[m]).
 Eigen::Vector3d pointPosition(const CordPoint& point, const Eigen::MatrixXd& V);
 

@@ -306,8 +306,9 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
   return ok;
 }
 
-bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& file,
+bool checkCordVertices(const CordSet& set, const ValveMesh& mesh, const std::string& file,
                        Diagnostics& diagnostics) {
+  const int vertex_count = static_cast<int>(mesh.V.rows());
   // A cord set made for another mesh (a make-case truth/cords.json, on the finer truth mesh)
   // has most of its cords beyond this one: the first few are named, then one line says so,
   // instead of one line per cord and point.
@@ -324,6 +325,10 @@ bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& 
       const std::string problem = cordPointProblem(*cord.point, vertex_count);
       if (!problem.empty()) problems.emplace_back(".point", problem);
     }
+    if (problems.empty()) {
+      const std::string problem = cordOnRingProblem(cord, mesh.annulus);
+      if (!problem.empty()) problems.emplace_back(cord.point ? ".point" : ".vertex", problem);
+    }
     if (problems.empty()) continue;
     if (++bad_cords > kNamedCords) continue;
     for (const auto& [field, problem] : problems)
@@ -334,7 +339,8 @@ bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& 
                       std::to_string(bad_cords - kNamedCords) + " more cords (" +
                           std::to_string(bad_cords) + " of " + std::to_string(set.cords.size()) +
                           ") attach beyond the mesh's " + std::to_string(vertex_count) +
-                          " vertices: was this cord set made for another mesh? (a make-case "
+                          " vertices or on its annulus ring: was this cord set made for another "
+                          "mesh? (a make-case "
                           "truth/cords.json belongs to truth/case)");
   return bad_cords == 0;
 }

@@ -37,8 +37,9 @@ bool readTips(const nlohmann::json& array, const std::string& where, JsonFields&
 // The "tips" array as written in cord set and pm_tips files.
 nlohmann::json tipsJson(const std::vector<PmTip>& tips);
 
-// Reports cords whose vertex is not a vertex of a mesh with `vertex_count` vertices.
-bool checkCordVertices(const CordSet& set, int vertex_count, const std::string& file,
+// Reports cords whose vertex is not a vertex of `mesh`, or whose insertion lies on its annulus
+// ring (cordOnRingProblem).
+bool checkCordVertices(const CordSet& set, const ValveMesh& mesh, const std::string& file,
                        Diagnostics& diagnostics);
 
 // Writes atomically. With a mesh, each cord also gets its "group" (leaflet/tip) for readers.

@@ -286,6 +286,50 @@ TEST_F(ValidateCommand, ReportsAPieceOfTheMeshThatNoRingVertexIsOn) {
   expectError("annulus_ring\\.json", "belongs to a piece of the mesh that no ring vertex is on");
 }
 
+// A cord inserted on the annulus ring pulls on nothing the closure moves, or, through a leaflet
+// vertex of tiny weight, throws that vertex away: a point with weight 1e-12 off the ring made the
+// closure diverge at step 1 ("reduce dt_ms").
+TEST_F(ValidateCommand, ReportsACordInsertedOnTheAnnulusRing) {
+  const Eigen::VectorXi& ring = valve_.mesh.annulus;
+  auto onRing = [&ring](int v) { return (ring.array() == v).any(); };
+  CordPoint point;  // a triangle with two ring vertices, nearly all the weight on them
+  bool found = false;
+  for (Eigen::Index f = 0; f < valve_.mesh.F.rows() && !found; ++f) {
+    std::array<int, 3> v{valve_.mesh.F(f, 0), valve_.mesh.F(f, 1), valve_.mesh.F(f, 2)};
+    std::stable_partition(v.begin(), v.end(), onRing);
+    if (onRing(v[0]) && onRing(v[1]) && !onRing(v[2])) {
+      point.vertices = v;
+      point.weights = Eigen::Vector3d(0.6, 0.4 - 1e-12, 1e-12);
+      found = true;
+    }
+  }
+  ASSERT_TRUE(found) << "no triangle with two ring vertices";
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = point.vertices[0];
+  cord.point = point;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  Cord on_vertex = cord;
+  on_vertex.point.reset();
+  on_vertex.vertex = ring(1);
+  set.cords = {cord, on_vertex};
+  writeCordSet(dir_ / "cords.json", set);
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json",
+              "cords\\[0\\]\\.point: the insertion lies on the annulus ring \\(100 % of its weight "
+              "on ring vertices " +
+                  std::to_string(point.vertices[0]) + ", " + std::to_string(point.vertices[1]));
+  expectError("cords\\.json", "cords\\[1\\]\\.vertex: the insertion lies on the annulus ring");
+  // The same set given to simulate: refused before any closure.
+  const auto r =
+      runChordfit("simulate " + testing::quoted(dir_.path()) + " --cords " +
+                  testing::quoted(dir_ / "cords.json") + " --out " + testing::quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("a cord must pull on the leaflet"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim"));
+}
+
 // A case.json that is a loop of links, or a directory the user may not search, is not "not
 // found".
 TEST_F(ValidateCommand, SaysWhyACaseFileThatIsALoopOfLinksCannotBeRead) {

@@ -65,8 +65,7 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   Diagnostics diagnostics;
   CordSet set;
   if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
-      !checkCordVertices(set, static_cast<int>(valve_case.mesh.V.rows()), cords_file,
-                         diagnostics) ||
+      !checkCordVertices(set, valve_case.mesh, cords_file, diagnostics) ||
       !checkTipPlacement(valve_case.mesh, set.tips, cords_file, diagnostics)) {
     diagnostics.print(std::cerr);
     return std::nullopt;
