@@ -338,6 +338,24 @@ TEST_F(SimulateCommand, ADivergingRunExitsWith3AndWritesNoOutput) {
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
 }
 
+// A modulus within its range but far too soft for the pressure stretches the sheet without any
+// vertex going far or fast: at 0.001 MPa the closure reported 5,900 times the open area, 457
+// crossing pairs, as a result (exit 0). The area check calls it a divergence.
+TEST_F(SimulateCommand, ASheetStretchedManyTimesItsAreaIsADivergenceNotAResult) {
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) +
+                  " --set youngs_modulus_mpa=0.001 --quiet --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
+  EXPECT_NE(r.err.find("simulation diverged: the leaflets stretched to "), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("youngs_modulus_mpa 0.001"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+  const auto soft =
+      runChordfit("simulate " + quoted(case_dir_) + " --set youngs_modulus_mpa=0.5 --quiet --out " +
+                  quoted(dir_ / "soft"));
+  EXPECT_EQ(soft.exit_code, 0) << "soft tissue that holds together is a result: " << soft.err;
+}
+
 // sweep-cord over a short range: one row per scale, the same bytes with 1 or 2 threads.
 TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   TempDir dir;
