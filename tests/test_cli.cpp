@@ -378,6 +378,22 @@ TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
   EXPECT_NE(r.err.find("does not have the case mesh's topology"), std::string::npos) << r.err;
 }
 
+// One vertex of a closed mesh thrown far away: named, not every other triangle called
+// degenerate (triangle areas are judged against the mesh's size).
+TEST(ChordfitCli, NamesTheFarVertexOfAClosedMeshBeforeJudgingItsTriangles) {
+  TempDir dir;
+  ValveCase valve = testing::tinyConeCase();
+  writeCase(dir / "case", valve);
+  valve.mesh.V(5, 0) = 1e9;
+  writePly(dir / "far.ply", valve.mesh.V, valve.mesh.F);
+  const auto r =
+      runChordfit("metrics " + quoted(dir / "case") + " --mesh " + quoted(dir / "far.ply"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("vertices[5]"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("from the valve mesh"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("degenerate"), std::string::npos) << r.err;
+}
+
 // The same counts but one triangle's corners in another order: named, not "topology (161 /
 // 254 vs 161 / 254)".
 TEST(ChordfitCli, NamesTheFirstTriangleThatDiffersFromTheCaseMesh) {
