@@ -251,6 +251,21 @@ bool JsonFields::number(const nlohmann::json& value, const std::string& where, d
 }
 
 bool JsonFields::integer(const nlohmann::json& value, const std::string& where, int& out) {
+  // A whole number written with a fraction part (2000.0, as scripts that hold every number as a
+  // float write it) is that integer; 2000.5 is named, not called "number".
+  if (value.is_number_float()) {
+    const double real = value.get<double>();
+    if (!std::isfinite(real) || real != std::floor(real)) {
+      error(where, "expected an integer, got " + value.dump());
+      return false;
+    }
+    if (real < std::numeric_limits<int>::min() || real > std::numeric_limits<int>::max()) {
+      error(where, "integer out of range");
+      return false;
+    }
+    out = static_cast<int>(real);
+    return true;
+  }
   if (!value.is_number_integer()) {
     typeError(where, "an integer", value);
     return false;

@@ -22,6 +22,31 @@ TEST(ParseJson, ReportsANumberBeyondDoubleRangeAsAProblemOfTheFile) {
   EXPECT_NE(printed.str().find("overflow"), std::string::npos) << printed.str();
 }
 
+// A whole number written as 2000.0 (scripts that hold every number as a float) is read as the
+// integer; 2000.5 and a string are refused naming the value or its type.
+TEST(JsonFieldsInteger, ReadsAWholeNumberWithAFractionPartAndNamesAFraction) {
+  Diagnostics diagnostics;
+  JsonFields fields("case.json", diagnostics);
+  int out = 0;
+  EXPECT_TRUE(fields.integer(nlohmann::json::parse("2000.0"), "simulation.max_steps", out));
+  EXPECT_EQ(out, 2000);
+  EXPECT_TRUE(fields.integer(nlohmann::json::parse("-3"), "x", out));
+  EXPECT_EQ(out, -3);
+  EXPECT_FALSE(fields.integer(nlohmann::json::parse("2000.5"), "simulation.max_steps", out));
+  EXPECT_FALSE(fields.integer(nlohmann::json::parse("1e30"), "simulation.max_steps", out));
+  EXPECT_FALSE(fields.integer(nlohmann::json::parse("\"7\""), "simulation.window", out));
+  std::ostringstream printed;
+  diagnostics.print(printed);
+  EXPECT_NE(printed.str().find("simulation.max_steps: expected an integer, got 2000.5"),
+            std::string::npos)
+      << printed.str();
+  EXPECT_NE(printed.str().find("simulation.max_steps: integer out of range"), std::string::npos)
+      << printed.str();
+  EXPECT_NE(printed.str().find("simulation.window: expected an integer, got string"),
+            std::string::npos)
+      << printed.str();
+}
+
 TEST(ParseJson, ReportsMalformedJsonWithItsPosition) {
   Diagnostics diagnostics;
   EXPECT_FALSE(parseJson("{\n  \"a\": [1, 2,\n}", "tracings.json", diagnostics));
