@@ -445,6 +445,27 @@ TEST(ChordfitCli, HeuristicRefusesASpacingBelowATenthOfAMillimetre) {
   EXPECT_FALSE(std::filesystem::exists(dir / "cords.json"));
 }
 
+// Placement options that change nothing say so: on a case with its own cords (their insertions
+// are kept), and a secondary depth no vertex reaches (no secondaries at all).
+TEST(ChordfitCli, HeuristicSaysWhenItsPlacementOptionsPlaceNothing) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  auto r = runChordfit("heuristic " + quoted(small) + " --primary-spacing 10 --out " +
+                       quoted(dir / "kept.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: heuristic: the case's own cords keep their insertions"),
+            std::string::npos)
+      << r.err;
+  ASSERT_EQ(runChordfit("make-valve --out " + quoted(dir / "valve") + " --edge 3").exit_code, 0);
+  r = runChordfit("heuristic " + quoted(dir / "valve") + " --secondary-depth 100 --out " +
+                  quoted(dir / "deep.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: heuristic: no secondary cord placed"), std::string::npos) << r.err;
+  r = runChordfit("heuristic " + quoted(dir / "valve") + " --out " + quoted(dir / "plain.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err.find("note:"), std::string::npos) << r.err;
+}
+
 // --out "" used to mean the current directory: make-valve wrote there and printed
 // "wrote /case.json"; simulate, fit, sweep-cord and compare did all the work and then failed
 // to create "" (exit 1).

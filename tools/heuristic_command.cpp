@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <map>
@@ -68,11 +69,20 @@ int runHeuristic(const HeuristicCommandOptions& options) {
   }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
-  if ((options.primary_compliance > 0.0 || options.secondary_compliance > 0.0) &&
-      valve_case->cords && !valve_case->cords->cords.empty())
+  const bool case_cords = valve_case->cords && !valve_case->cords->cords.empty();
+  if ((options.primary_compliance > 0.0 || options.secondary_compliance > 0.0) && case_cords)
     std::fprintf(stderr,
                  "note: heuristic: the case's own cords keep their compliance; "
                  "--primary-compliance and --secondary-compliance apply to placed cords\n");
+  // The placement options were taken without a word on a case whose cords are placed already.
+  const HeuristicCommandOptions defaults;
+  if (case_cords && (options.primary_spacing_mm != defaults.primary_spacing_mm ||
+                     options.secondary_spacing_mm != defaults.secondary_spacing_mm ||
+                     options.secondary_depth_mm != defaults.secondary_depth_mm))
+    std::fprintf(stderr,
+                 "note: heuristic: the case's own cords keep their insertions (the heuristic "
+                 "gives them tips and rest lengths); --primary-spacing, --secondary-spacing and "
+                 "--secondary-depth apply when it places the cords\n");
   HeuristicOptions heuristic;
   heuristic.primary_spacing_mm = options.primary_spacing_mm;
   heuristic.secondary_spacing_mm = options.secondary_spacing_mm;
@@ -85,6 +95,14 @@ int runHeuristic(const HeuristicCommandOptions& options) {
               << ": cords: the heuristic placed no cords (no free edge found?)\n";
     return kExitBadInput;
   }
+  const bool any_secondary = std::any_of(set.cords.begin(), set.cords.end(), [](const Cord& c) {
+    return c.kind == CordKind::kSecondary;
+  });
+  if (!case_cords && !any_secondary)
+    std::fprintf(stderr,
+                 "note: heuristic: no secondary cord placed: no leaflet vertex lies "
+                 "--secondary-depth %g mm (along mesh edges) in from the free edge\n",
+                 options.secondary_depth_mm);
   writeCordSet(options.out_file, set, &valve_case->mesh);
   forgetPublished(options.out_file);  // now the user's file (staged_output.h)
   std::cout << "heuristic cord set: " << set.cords.size() << " cords on " << set.tips.size()
