@@ -412,6 +412,24 @@ TEST(SweepCordCommand, SetChangesEveryClosureAndIsRecorded) {
   EXPECT_EQ(summary["settings_overrides"], nlohmann::json({"pressure_mmhg=80"}));
 }
 
+// A sweep fails at its lowest failing scale, the same for any thread count, and stops there:
+// every closure of a diverging sweep used to run before it failed.
+TEST(SweepCordCommand, StopsAtItsLowestFailingScaleWhateverTheThreadCount) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  for (const int threads : {1, 2}) {
+    const auto r =
+        runChordfit("sweep-cord " + quoted(small) + " --set youngs_modulus_mpa=0.001 --threads " +
+                    std::to_string(threads) + " --out " + quoted(dir / "sweep"));
+    EXPECT_EQ(r.exit_code, 3) << r.err;
+    EXPECT_NE(r.err.find("[  1/101] scale 0.9500: failed (below)"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("[  2/101]"), std::string::npos) << "printed past the failure: " << r.err;
+    EXPECT_NE(r.err.find("simulation failed at scale 0.95: simulation diverged"), std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "sweep"));
+  }
+}
+
 TEST(SweepCordCommand, RejectsBadOptionsWithExitCode2NamingTheOption) {
   TempDir dir;
   const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
