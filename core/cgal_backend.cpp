@@ -578,6 +578,11 @@ std::string checkObjIndices(const std::string& bytes) {
                " vertices precede this line (" + range + std::to_string(before) + ")";
     }
   }
+  // CGAL refuses a file without faces with its bare "could not parse"; the other formats say
+  // "no faces".
+  if (face == 0)
+    return vertices == 0 ? "no vertices and no faces (no 'v' or 'f' line: is this an OBJ file?)"
+                         : "no faces (no 'f' line)";
   return "";
 }
 

@@ -365,6 +365,13 @@ TEST_F(MeshIoTest, ObjQuadWithNormalsTexturesAndPolylinesReadsAsTwoTriangles) {
   EXPECT_EQ(F, squareFaces());
 }
 
+TEST_F(MeshIoTest, ObjWithoutFacesSaysSo) {
+  EXPECT_EQ(readFails(write("points.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n")).what,
+            "no faces (no 'f' line)");
+  EXPECT_EQ(readFails(write("blank.obj", "# nothing\n")).what,
+            "no vertices and no faces (no 'v' or 'f' line: is this an OBJ file?)");
+}
+
 // The format separates words by blanks; CGAL alone read "f\t1\t2\t3" as a one-corner face.
 TEST_F(MeshIoTest, ObjWithTabSeparatedWordsReadsLikeSpaces) {
   const fs::path path = write("tabs.obj",
