@@ -419,6 +419,15 @@ TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
   EXPECT_NE(report.find("## Locked cords"), std::string::npos);
   EXPECT_NE(report.find("| Cord | Group | Segment | Kind | Locked length (mm) |"),
             std::string::npos);
+  // The cord table: the seed rest length, the start (the manual 0.8), the fitted length and the
+  // scale of the seed rest length (the start was shown as "seed length" beside scale 0.8).
+  const std::regex row(
+      "\\n\\| 0 \\| [^|]+ \\| [a-z]+ \\| ([0-9.]+) \\| ([0-9.]+) \\| ([0-9.]+) \\| "
+      "0\\.8000 \\|");
+  std::smatch cells;
+  ASSERT_TRUE(std::regex_search(report, cells, row)) << report;
+  EXPECT_NEAR(std::stod(cells[2]), 0.8 * std::stod(cells[1]), 1e-3);
+  EXPECT_EQ(cells[2], cells[3]) << "a locked cord keeps its start";
 
   // Closures cut short by the step cap: the probe's are counted apart from the fit's.
   const auto capped = runChordfit(fit + " --set max_steps=150 --out " + quoted(dir / "capped"));
@@ -524,7 +533,12 @@ TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
   EXPECT_NE(common, 1.0) << "the heuristic's cords are too long: the common stage moves them";
   EXPECT_EQ(metrics["prefit_primary_factor"].get<double>(), common);
   EXPECT_EQ(metrics["prefit_secondary_factor"].get<double>(), common);
+  EXPECT_FALSE(metrics["prefit_kind_ran"].get<bool>());
   EXPECT_LE(metrics["forward_sims"].get<int>(), 17);  // budget 16 + the closure written
+  // The report said "per kind: primaries 0.7, secondaries 0.7" as if the stage had run.
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
+                .find("; per kind: not run (--max-sims 16 leaves too few closures)"),
+            std::string::npos);
 }
 
 // Options that only move PM tips, given to a fit that does not: a note, and the fit runs; the

@@ -57,12 +57,15 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
   const std::vector<std::string> groups = inverse::cordGroups(c, fit.seed);
   const Eigen::VectorXd& spans = fit.closed_spans;
   std::ostringstream md;
-  md << "| Cord | Group | Kind | Seed length (mm) | Fitted length (mm) | Scale (× seed length) | "
-        "Closed span (mm) "
-        "| "
-        "± SD (%) | Sensitivity (mm per 1 %) | Provenance | Locked |\n"
-        "|---:|---|---|---:|---:|---:|---:|---:|---:|---|---|\n";
-  char line[360];
+  // Start: the --seed-cords set's length, where the fit began (a manual edit's); the scale is
+  // always of the cord's seed rest length (seed_rest_length_mm, the heuristic's), as in the cord
+  // file: Scale x Seed rest length = Fitted length. One column for both read "seed 23.084,
+  // scale 0.8" for a manual cord whose seed rest length is 28.855.
+  md << "| Cord | Group | Kind | Seed rest length (mm) | Start length (mm) | Fitted length (mm) | "
+        "Scale (× seed rest length) | Closed span (mm) | ± SD (%) | Sensitivity (mm per 1 %) | "
+        "Provenance | Locked |\n"
+        "|---:|---|---|---:|---:|---:|---:|---:|---:|---:|---|---|\n";
+  char line[400];
   for (std::size_t i = 0; i < fit.fitted.cords.size(); ++i) {
     const Cord& s = fit.seed.cords[i];
     const Cord& f = fit.fitted.cords[i];
@@ -76,9 +79,10 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
     const bool measured = u.sd != "–" && u.sd != "prior only";
     if (shared && measured && slackAtSpan(span, f.rest_length)) u.sd += " (group's; slack)";
     std::snprintf(line, sizeof line,
-                  "| %zu | %s | %s | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
-                  groups[i].c_str(), toString(f.kind), s.rest_length, f.rest_length, f.scale(),
-                  span, slackAtSpan(span, f.rest_length) ? " (slack)" : "", u.sd.c_str(),
+                  "| %zu | %s | %s | %.3f | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
+                  groups[i].c_str(), toString(f.kind), f.seed_rest_length, s.rest_length,
+                  f.rest_length, f.scale(), span,
+                  slackAtSpan(span, f.rest_length) ? " (slack)" : "", u.sd.c_str(),
                   u.sensitivity.c_str(), toString(f.provenance), f.locked ? "yes" : "no");
     md << line;
   }
@@ -635,6 +639,9 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   };
   if (const std::string why = notRun(fit.prefit_ran, true); !why.empty())
     md << "- global pre-fit: " << why << "\n";
+  else if (!fit.prefit_kind_ran)
+    md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: not run (--max-sims "
+       << o.max_sims << " leaves too few closures)\n";
   else
     md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: primaries "
        << fit.prefit_primary_factor << ", secondaries " << fit.prefit_secondary_factor << "\n";
@@ -734,8 +741,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
      << slackCords(fit) << " of " << fit.fitted.cords.size() << " cords are slack. "
      << (fit.uncertainty.ok()
              ? std::to_string(identifiedCords(fit)) + " of " + std::to_string(freeCords(fit)) +
-                   " free cords are determined to better than 3 % (taut, "
-                   "moving the data, SD below 3 %)."
+                   " free cords are determined to better than 3 % (taut, moving the data, not at "
+                   "a scale bound, SD below 3 %)."
              : std::string("How well the data determine the cords was not "
                            "computed."))
      << "\n\n"
