@@ -61,7 +61,11 @@ SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& s
     const double reference = std::min(
         cord.kind == CordKind::kPrimary ? proposal.primary_reference : proposal.secondary_reference,
         scale_upper);
-    if (!(reference > scaleOf(c))) continue;
+    // A scale within rounding of the reference is at it (0.6999999999999998 was "raised" to the
+    // 0.7 of the lower bound, and a closure spent on it), as a bound within 1e-9 counts as
+    // reached elsewhere in the fit.
+    constexpr double kSameScale = 1e-9;
+    if (!(reference > scaleOf(c) + kSameScale)) continue;
     proposal.cords.push_back(static_cast<int>(c));
     proposal.scales.push_back(reference);
   }

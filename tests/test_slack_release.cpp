@@ -61,6 +61,18 @@ TEST(SlackRelease, RaisesSlackCordsBelowTheMedianOfTheTautCordsOfTheirKind) {
   EXPECT_NEAR(p.scales[1], 0.72, 1e-12);
 }
 
+// A slack cord within rounding of its kind's typical scale is at it: it was "raised" from
+// 0.6999999999999998 to 0.7, a closure spent on nothing.
+TEST(SlackRelease, ACordWithinRoundingOfTheTypicalScaleIsNotRaised) {
+  Fixture f;
+  f.add(CordKind::kPrimary, 0.70, true);
+  f.add(CordKind::kPrimary, 0.70, true);
+  f.add(CordKind::kPrimary, 0.6999999999999998, false);
+  f.add(CordKind::kPrimary, 0.699, false);
+  const SlackReleaseProposal p = f.propose();
+  EXPECT_EQ(p.cords, std::vector<int>{3});
+}
+
 TEST(SlackRelease, TheRescaledSegmentsCordsDoNotSetTheTypicalScale) {
   Fixture f;
   f.add(CordKind::kPrimary, 0.78, true);
