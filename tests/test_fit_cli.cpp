@@ -172,6 +172,22 @@ TEST(FitCommand, TipWeightIsRecordedInMetricsAndReport) {
   EXPECT_EQ(metrics["options"]["prefit"], false);
   EXPECT_EQ(metrics["options"]["uncertainty"], false);
   EXPECT_EQ(metrics["options"]["tip_box_mm"].get<double>(), 8.0);
+
+  // With the uncertainty, each offset says whether the tracings determine it (more than 2 SD
+  // from 0); the start's zero offsets are not, and the terminal says how many are.
+  const auto r =
+      runChordfit("fit " + quoted(smallCase()) +
+                  " --params scales+tips --no-prefit --max-sims 1 --out " + quoted(dir / "sd"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("PM tips: 0 of 6 tip offsets determined (more than 2 SD from 0)"),
+            std::string::npos)
+      << r.out;
+  const std::string with_sd = testing::readText(dir / "sd" / "report.md");
+  EXPECT_NE(with_sd.find("| Parameter | Offset (mm) | ± SD (mm) | Determined |"),
+            std::string::npos);
+  EXPECT_TRUE(std::regex_search(with_sd, std::regex("\\| tip anterolateral x \\| 0\\.000 \\| "
+                                                    "[0-9.]+ \\| no \\|")))
+      << with_sd;
 }
 
 // A seed whose free cords are all manual (edit-cords --all): the cord pre-fits would close

@@ -356,6 +356,7 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
+  std::cout << tipOffsetsLine(fit);
   if (fit.tissue_retry.ran || !fit.tissue_retry.skipped.empty())
     std::cout << "tissue retry: " << tissueRetryLine(fit, o) << "\n";
   std::cout << lockedProbeSummary(*valve_case, o, fit);

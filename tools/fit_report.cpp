@@ -557,18 +557,47 @@ std::string tipTable(const inverse::FitOutcome& fit) {
     if (md.tellp() == 0)
       md << "## PM tips\n\nOffset of each tip coordinate from its seed position (mm, within "
             "--tip-box, pulled toward 0 by --tip-weight) and its SD from the Jacobian at the "
-            "fit.\n\n"
-            "| Parameter | Offset (mm) | ± SD (mm) |\n|---|---:|---:|\n";
+            "fit. An offset within "
+         << formatWeight(kTipOffsetDeterminedSds)
+         << " SD of zero is not determined by the tracings: the tip may as well have stayed "
+            "where the seed put it, and on a synthetic case it can move away from the true tip "
+            "(docs/fitting.md, \"What is weak\").\n\n"
+            "| Parameter | Offset (mm) | ± SD (mm) | Determined |\n|---|---:|---:|---|\n";
     const Eigen::Index i = static_cast<Eigen::Index>(p);
+    const bool known = fit.uncertainty.ok();
     md << "| " << fit.parameter_names[p] << " | " << formatFixed(fit.x(i), 3) << " | "
-       << (fit.uncertainty.ok() ? formatFixed(fit.uncertainty.sd(i), 3) : std::string("–"))
-       << (fit.uncertainty.ok() && fit.uncertainty.at_bound[p] ? " (at bound)" : "") << " |\n";
+       << (known ? formatFixed(fit.uncertainty.sd(i), 3) : std::string("–"))
+       << (known && fit.uncertainty.at_bound[p] ? " (at bound)" : "") << " | "
+       << (!known                        ? "–"
+           : tipOffsetDetermined(fit, p) ? "yes"
+                                         : "no")
+       << " |\n";
   }
   if (md.tellp() > 0) md << "\n";
   return md.str();
 }
 
 }  // namespace
+
+bool tipOffsetDetermined(const inverse::FitOutcome& fit, std::size_t p) {
+  const Eigen::Index i = static_cast<Eigen::Index>(p);
+  return fit.uncertainty.ok() && !fit.parameter_is_scale[p] &&
+         std::abs(fit.x(i)) > kTipOffsetDeterminedSds * fit.uncertainty.sd(i);
+}
+
+std::string tipOffsetsLine(const inverse::FitOutcome& fit) {
+  int tips = 0, determined = 0;
+  for (std::size_t p = 0; p < fit.parameter_is_scale.size(); ++p) {
+    if (fit.parameter_is_scale[p]) continue;
+    ++tips;
+    determined += tipOffsetDetermined(fit, p) ? 1 : 0;
+  }
+  if (tips == 0 || !fit.uncertainty.ok()) return "";
+  return "PM tips: " + std::to_string(determined) + " of " + std::to_string(tips) +
+         " tip offsets determined (more than " + formatWeight(kTipOffsetDeterminedSds) +
+         " SD from 0); the others are moves the tracings do not call for (report.md, \"PM "
+         "tips\")\n";
+}
 
 int slackCords(const inverse::FitOutcome& fit) {
   const Eigen::VectorXd& spans = fit.closed_spans;
