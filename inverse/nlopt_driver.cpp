@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <new>
 #include <vector>
@@ -81,16 +82,24 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
   try {
     const nlopt::result result = opt.optimize(x, value);
     switch (result) {
-      case nlopt::FTOL_REACHED:
-        message = "converged: relative cost change below ftol";
+      case nlopt::FTOL_REACHED: {
+        char text[96];
+        std::snprintf(text, sizeof text,
+                      "converged: relative cost change below ftol (%g) between two evaluations",
+                      settings.function_tolerance);
+        message = text;
         break;
+      }
       case nlopt::XTOL_REACHED:
         message = "converged: relative step below xtol";
         break;
       case nlopt::MAXEVAL_REACHED:
         // maxeval is set from the remaining budget but also counts revisits of cached points,
         // which cost no closure: a budget stop only when no closure is left.
-        message = "stopped: NLopt's evaluation count reached (closures left)";
+        message = "stopped: NLopt's evaluation limit reached with " +
+                  std::to_string(objective.maxSims() - objective.forwardSims()) +
+                  " closures of the budget left (NLopt also counts revisits of points already "
+                  "closed, which cost none)";
         budget_spent = !objective.budgetAllows(1);
         break;
       default:
