@@ -8,6 +8,7 @@
 #include <regex>
 #include <sstream>
 
+#include "core/csv_text.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -537,6 +538,24 @@ TEST(FitCommand, GroupBoundsThatShrinkACordBelowOneMillimetreAreRefused) {
   // Per cord the same bounds are fine: the fit runs.
   const auto scales = runChordfit(fit + quoted(dir / "scales") + " --no-prefit");
   EXPECT_EQ(scales.exit_code, 0) << scales.err;
+}
+
+// convergence.csv's last row counts every closure of the fit (metrics.json's forward_sims less
+// the closure written): a Ceres solve that ended on a trial it rejected (--params groups on the
+// bundled case: parameter tolerance after a rejected step) left that closure out, 110 of 111.
+TEST(FitCommand, ConvergenceCsvCountsEveryClosureOfTheFit) {
+  TempDir dir;
+  const auto r =
+      runChordfit("fit " + quoted(std::filesystem::path(CHORDFIT_CASES_DIR) / "prolapse-P2") +
+                  " --params groups --fd-warm --max-sims 300 --no-uncertainty --quiet --out " +
+                  quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  const auto rows = parseSimpleCsv(testing::readText(dir / "fit" / "convergence.csv"));
+  ASSERT_GE(rows.size(), 2u);
+  EXPECT_EQ(rows[0][5], "forward_sims");
+  EXPECT_EQ(std::stoi(rows.back()[5]), metrics["forward_sims"].get<int>() - 1)
+      << testing::readText(dir / "fit" / "convergence.csv");
 }
 
 // A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
