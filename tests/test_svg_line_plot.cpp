@@ -78,5 +78,34 @@ TEST(SvgLinePlots, DrawsMarkersOfEachShapeOverTheLinesAndTheLegendInItsMargin) {
   EXPECT_GT(std::stod(svg.substr(x, svg.find('\'', x) - x)), 600.0 - 165.0);
 }
 
+// A point at the data's extreme keeps its marker inside the frame, even when a tick falls just
+// below it (costs of 507 on a log axis from 500 put half of each marker under the frame).
+TEST(SvgLinePlots, KeepsMarkersAtTheDataExtremesInsideTheFrame) {
+  PlotPanel panel{"cost", "forward runs", "cost", {}, true};
+  PlotSeries points{"cost", {0, 10, 20, 30}, {5000, 900, 507, 507}, true, false};
+  points.marker_radius = 4.0;
+  panel.series.push_back(points);
+  const std::string svg = svgLinePlots({panel}, 1, 600, 300);
+  auto attribute = [&](std::size_t from, const std::string& name) {
+    const std::size_t at = svg.find(" " + name + "='", from) + name.size() + 3;
+    return std::stod(svg.substr(at, svg.find('\'', at) - at));
+  };
+  const std::size_t frame = svg.find("<rect x=");
+  const double left = attribute(frame, "x"), top = attribute(frame, "y");
+  const double right = left + attribute(frame, "width"), bottom = top + attribute(frame, "height");
+  int markers = 0;
+  for (std::size_t at = svg.find("<circle"); at != std::string::npos;
+       at = svg.find("<circle", at + 1)) {
+    const double cx = attribute(at, "cx"), cy = attribute(at, "cy"), r = attribute(at, "r");
+    if (cx > right) continue;  // the legend's sample
+    ++markers;
+    EXPECT_GE(cx - r, left) << svg.substr(at, 80);
+    EXPECT_LE(cx + r, right) << svg.substr(at, 80);
+    EXPECT_GE(cy - r, top) << svg.substr(at, 80);
+    EXPECT_LE(cy + r, bottom) << svg.substr(at, 80);
+  }
+  EXPECT_GE(markers, 4);  // and the legend's sample, when inside the frame
+}
+
 }  // namespace
 }  // namespace chordfit
