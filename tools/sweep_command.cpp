@@ -295,22 +295,31 @@ int runSweepCord(const SweepCordOptions& options) {
   if (!options.settings_overrides.empty())
     summary["settings_overrides"] = options.settings_overrides;
   if (!options.tissue_file.empty()) summary["tissue_file"] = options.tissue_file;
+  // The sweep's scale multiplies the cord's length in the swept cord set (1 = as given), not
+  // its seed rest length as the cord file's "scale" does: the axis says which.
+  char axis[96];
+  std::snprintf(axis, sizeof axis, "cord %d's length / %.3f mm (its length in the cord set)", cord,
+                base);
+  // The legends right of the frames: a map that rises to the right ran under them.
+  constexpr double kLegendMargin = 170.0;
   std::vector<PlotPanel> panels;
   if (tracing_points.rows() > 0) {
     summary["mean_deviation"] = noiseJson(mapNoise(s, deviation, options.window), s, deviation);
     panels.push_back({"Mean deviation to the tracings",
-                      "scale of cord " + std::to_string(cord),
+                      axis,
                       "mean deviation (mm)",
                       {{"mean deviation", s, deviation, true, true}},
-                      false});
+                      false,
+                      kLegendMargin});
   }
   // The insertion: the cord's point between vertices when it has one, else its vertex (the
   // CSV's vertex_* columns keep their names for scripts written against them).
   panels.push_back({"Height of the cord's insertion above the closed annulus plane",
-                    "scale of cord " + std::to_string(cord),
+                    axis,
                     "height (mm)",
                     {{"insertion (vertex " + std::to_string(vertex) + ")", s, height, true, true}},
-                    false});
+                    false,
+                    kLegendMargin});
 
   StagedOutput staged(options.out_dir, sweepCordOutputFiles(), {}, "sweep-cord");
   const std::filesystem::path& out = staged.dir();
