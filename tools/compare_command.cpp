@@ -249,7 +249,7 @@ std::string noiseFloorLine(const std::optional<CaseTruth>& truth) {
   char line[200];
   std::snprintf(line, sizeof line,
                 "noise floor: the true cords closed on the truth's finer mesh reach AvgD %.2f mm "
-                "(truth/metrics.json); closed on this case's mesh they may not\n",
+                "(truth/metrics.json); closed on this case's mesh they may not.\n",
                 truth->noise_floor_mm);
   return line;
 }
