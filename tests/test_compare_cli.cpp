@@ -183,7 +183,7 @@ TEST_F(CompareCommand, MeasuresEachCordSetAgainstTheCasesTruth) {
     EXPECT_EQ(t[6], "manual") << i;
   }
   const std::string md = readText(out / "compare.md");
-  EXPECT_NE(md.find("| Cord | Group | Kind | True (mm) | Taut | heuristic | true |"),
+  EXPECT_NE(md.find("| Cord | Group | Kind | True (mm) | Taut in the truth | heuristic | true |"),
             std::string::npos)
       << md;
   EXPECT_NE(md.find("(+0.0 %) |\n"), std::string::npos) << md;

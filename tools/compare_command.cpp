@@ -137,7 +137,8 @@ std::string recoveryText(const TruthRecovery& r) {
   std::snprintf(text, sizeof text, "%.1f %% (%d cords)", r.median_error_pct, r.cords);
   std::string line = text;
   if (r.taut_cords > 0) {
-    std::snprintf(text, sizeof text, ", taut %.1f %% (%d)", r.median_error_taut_pct, r.taut_cords);
+    std::snprintf(text, sizeof text, ", taut in the truth %.1f %% (%d)", r.median_error_taut_pct,
+                  r.taut_cords);
     line += text;
   } else {
     line += ", none taut in the truth";
@@ -214,7 +215,7 @@ std::string perCordTruthTable(const ValveCase& c, const std::vector<ComparedSet>
       "\nPer cord: each set's rest length (mm) and its error against the true length. Taut: "
       "under tension in the true closed valve; a cord slack there is bounded by the tracings "
       "from below only, so its error says little about a fit.\n\n| Cord | Group | Kind | True "
-      "(mm) | Taut |";
+      "(mm) | Taut in the truth |";
   std::string rule = "|---:|---|---|---:|---|";
   for (const ComparedSet& s : sets) {
     md += " " + s.label + " |";
