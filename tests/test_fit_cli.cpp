@@ -618,6 +618,8 @@ TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
   EXPECT_NE(report.find("- slack release: not run with --params groups"), std::string::npos);
   // A slack cord's SD is its group's, and the table says so.
   EXPECT_NE(report.find(" (group's; slack) |"), std::string::npos) << report;
+  EXPECT_NE(report.find(" (group's) | fitted |"), std::string::npos)
+      << "the sensitivity is the group's too";
 }
 
 // The whole fit (pre-fits, optimiser, slack release, uncertainty, the closure written) gives

@@ -78,6 +78,8 @@ std::string cordTable(const ValveCase& c, const inverse::FitOutcome& fit) {
         p >= 0 && std::count(fit.cord_parameter.begin(), fit.cord_parameter.end(), p) > 1;
     const bool measured = u.sd != "–" && u.sd != "prior only";
     if (shared && measured && slackAtSpan(span, f.rest_length)) u.sd += " (group's; slack)";
+    // The sensitivity too is the group factor's: all its cords move together.
+    if (shared && measured) u.sensitivity += " (group's)";
     std::snprintf(line, sizeof line,
                   "| %zu | %s | %s | %.3f | %.3f | %.3f | %.4f | %.3f%s | %s | %s | %s | %s |\n", i,
                   groups[i].c_str(), toString(f.kind), f.seed_rest_length, s.rest_length,
