@@ -29,18 +29,38 @@ struct SideFile {
   std::string name;  // as written in case.json, used in messages
 };
 
-// Whether the file `name` (at `path`) that the field `where` gives can be read. An empty name
-// or a path that is no readable file (a directory, a device) is the field's mistake, reported
-// there with the name; an empty name used to parse the case directory itself as JSON, and a
-// device to be read forever. A missing file is left to its reader ("<name>: file not found").
-bool fileFieldUsable(const std::string& name, const fs::path& path, const std::string& where,
-                     JsonFields& fields) {
+// The directory a relative file name is looked for in, as the user can find it again: absolute,
+// without "." steps or a trailing separator (the case directory is often given as ".").
+std::string searchedDirectory(const fs::path& dir) {
   std::error_code ec;
-  const std::string problem = name.empty()            ? "no file given (an empty file name)"
-                              : !fs::exists(path, ec) ? ""
-                                                      : inputFileProblem(path);
+  fs::path shown = fs::absolute(dir.empty() ? fs::path(".") : dir, ec).lexically_normal();
+  if (shown.has_parent_path() && shown.filename().empty()) shown = shown.parent_path();
+  return ec ? dir.string() : shown.string();
+}
+
+// Whether the file `name` that the field `where` gives can be read, looked for in `dir`. An
+// empty name, a missing file or a path that is no readable file (a directory, a device) is the
+// field's mistake, reported there with the name; a missing one also with the directory searched
+// ("error: nope.ply: file not found" named neither the field nor where it was looked for). An
+// empty name used to parse the case directory itself as JSON, and a device to be read forever.
+bool fileFieldUsable(const std::string& name, const fs::path& dir, const std::string& where,
+                     JsonFields& fields) {
+  const fs::path path = dir / name;
+  std::error_code ec;
+  const bool named_entry_exists = fs::exists(fs::symlink_status(path, ec));
+  std::string problem;
+  if (name.empty()) {
+    problem = "no file given (an empty file name)";
+  } else if (!named_entry_exists) {
+    problem = "\"" + name + "\": file not found";
+    if (fs::path(name).is_relative()) problem += " in " + searchedDirectory(dir);
+  } else if (!fs::exists(path, ec) && !ec) {
+    problem = "\"" + name + "\" is a symbolic link to nothing (its target is missing)";
+  } else if (const std::string unusable = inputFileProblem(path); !unusable.empty()) {
+    problem = "\"" + name + "\" " + unusable;
+  }
   if (problem.empty()) return true;
-  fields.error(where, name.empty() ? problem : "\"" + name + "\" " + problem);
+  fields.error(where, problem);
   return false;
 }
 
@@ -51,7 +71,7 @@ std::optional<SideFile> sideFile(const json& object, const std::string& where,
   if (value == nullptr) return std::nullopt;
   std::string name;
   if (!fields.text(*value, fieldPath(where, key), name) ||
-      !fileFieldUsable(name, dir / name, fieldPath(where, key), fields))
+      !fileFieldUsable(name, dir, fieldPath(where, key), fields))
     return std::nullopt;
   return SideFile{dir / name, name};
 }
@@ -278,7 +298,7 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
     ok &= fields.points(*points, fieldPath(where, "points"), tracing.points);
   } else if (file != nullptr) {
     if (fields.text(*file, fieldPath(where, "file"), name) &&
-        fileFieldUsable(name, dir / name, fieldPath(where, "file"), fields) &&
+        fileFieldUsable(name, dir, fieldPath(where, "file"), fields) &&
         readCurve(dir / name, curve, fields.diagnostics(), name)) {
       tracing.points = curve.points;
     } else {

@@ -66,9 +66,37 @@ TEST_F(ValidateCommand, AcceptsAGoodCaseAndPrintsItsSummary) {
   EXPECT_NE(r.out.find("valid"), std::string::npos) << r.out;
 }
 
-TEST_F(ValidateCommand, ReportsAMissingFile) {
+// A missing file is named at the field that gives it, with the directory it was looked for
+// in: "error: nope.ply: file not found" said neither which field nor where.
+TEST_F(ValidateCommand, ReportsAMissingFileAtItsFieldWithTheDirectorySearched) {
+  const std::string case_dir = std::filesystem::absolute(dir_.path()).lexically_normal().string();
   std::filesystem::remove(dir_ / "leaflets.json");
-  expectError("leaflets\\.json", "file not found");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: case.json: leaflets.labels: \"leaflets.json\": file not found in " +
+                       case_dir + "\n"),
+            std::string::npos)
+      << r.err;
+  writeCase(dir_.path(), valve_);
+  editCaseJson([](nlohmann::json& j) { j["mesh"] = "nope.ply"; });
+  expectError("case\\.json", "mesh: \"nope\\.ply\": file not found in /");
+  editCaseJson([](nlohmann::json& j) {
+    j["mesh"] = "open.ply";
+    j["cords"] = "sub/cords.json";
+  });
+  expectError("case\\.json", "cords: \"sub/cords\\.json\": file not found in /");
+  // A tracing's curve file, named in tracings.json.
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                                "file": "nope.csv"}]})");
+  editCaseJson([](nlohmann::json& j) { j.erase("cords"); });
+  expectError("tracings\\.json", "tracings\\[0\\]\\.file: \"nope\\.csv\": file not found in /");
+  // A link to nothing is not "not found": the name is there.
+  std::filesystem::create_symlink("gone.json", dir_ / "linked.json");
+  editCaseJson([](nlohmann::json& j) {
+    j.erase("tracings");
+    j["pm_tips"] = "linked.json";
+  });
+  expectError("case\\.json", "pm_tips: \"linked\\.json\" is a symbolic link to nothing");
 }
 
 TEST_F(ValidateCommand, ReportsAMissingCaseDirectory) {
