@@ -187,6 +187,32 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
   return ok && keys_known;
 }
 
+// Each tip's name once: tips are found by name (edit-cords --move-tip) and name the cord groups
+// ("anterior/anterolateral"), so two tips of one name merged their groups and --move-tip moved
+// the later one without a word. An unnamed tip is called "tip<index>" (readTips).
+bool tipNamesDistinct(const json& array, const std::string& where, const std::vector<PmTip>& tips,
+                      JsonFields& fields) {
+  bool ok = true;
+  for (std::size_t i = 1; i < tips.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (tips[j].name != tips[i].name) continue;
+      const std::string earlier = array[j].contains("name") ? fieldPath(indexPath(where, j), "name")
+                                                            : indexPath(where, j) + " (unnamed)";
+      if (array[i].contains("name")) {
+        fields.error(
+            fieldPath(indexPath(where, i), "name"),
+            "\"" + tips[i].name + "\" repeats " + earlier + ": each tip needs a name of its own");
+      } else {
+        fields.error(indexPath(where, i), "unnamed, it is called \"" + tips[i].name + "\", which " +
+                                              earlier + " gives: each tip needs a name of its own");
+      }
+      ok = false;
+      break;
+    }
+  }
+  return ok;
+}
+
 }  // namespace
 
 bool readTips(const json& array, const std::string& where, JsonFields& fields,
@@ -222,7 +248,7 @@ bool readTips(const json& array, const std::string& where, JsonFields& fields,
     }
     tips.push_back(tip);
   }
-  return ok;
+  return ok && tipNamesDistinct(array, where, tips, fields);
 }
 
 bool readCordSet(const std::filesystem::path& path, const std::string& file, CordSet& set,

@@ -300,6 +300,33 @@ TEST_F(ValidateCommand, ReportsARepeatedCordAndTwoTipsInOnePlace) {
   expectError("cords\\.json", "tips\\[1\\]\\.position: less than 1 mm from tips\\[0\\]\\.position");
 }
 
+// Tips are found by name (edit-cords --move-tip) and name the cord groups: two tips of one name
+// validated, and --move-tip moved the second without a word.
+TEST_F(ValidateCommand, ReportsATipNameGivenTwiceInACordSetOrInPmTips) {
+  writeText(dir_ / "cords.json", R"({"format": "chordfit-cordset", "version": 1,
+      "tips": [{"name": "anterolateral", "position": [0, 5, -20]},
+               {"name": "anterolateral", "position": [0, -5, -20]}],
+      "cords": [{"tip": 0, "vertex": 9, "rest_length_mm": 18.0},
+                {"tip": 1, "vertex": 12, "rest_length_mm": 18.0}]})");
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  expectError("cords\\.json",
+              "tips\\[1\\]\\.name: \"anterolateral\" repeats tips\\[0\\]\\.name: each tip "
+              "needs a name of its own");
+  writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "pm", "position": [0, 5, -20]},
+                                                {"name": "al", "position": [0, -5, -20]},
+                                                {"name": "pm", "position": [5, 0, -20]}]})");
+  editCaseJson([](nlohmann::json& j) {
+    j.erase("cords");
+    j["pm_tips"] = "pm_tips.json";
+  });
+  expectError("pm_tips\\.json", "tips\\[2\\]\\.name: \"pm\" repeats tips\\[0\\]\\.name");
+  // An unnamed tip is "tip<index>": a named one may not take that name from it.
+  writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "tip1", "position": [0, 5, -20]},
+                                                {"position": [0, -5, -20]}]})");
+  expectError("pm_tips\\.json",
+              "tips\\[1\\]: unnamed, it is called \"tip1\", which tips\\[0\\]\\.name gives");
+}
+
 // A piece of the mesh with no ring vertex hangs from nothing: a stray copy of the leaflets
 // drifted to the step cap and exit 0.
 TEST_F(ValidateCommand, ReportsAPieceOfTheMeshThatNoRingVertexIsOn) {

@@ -146,6 +146,9 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
   CordSet long_cord = readCords(kSmallCase / "cords.json");
   long_cord.cords[0].seed_rest_length = long_cord.cords[0].rest_length = 300.0;
   writeCordSet(dir / "long.json", long_cord);
+  CordSet same_names = readCords(kSmallCase / "cords.json");
+  same_names.tips[1].name = same_names.tips[0].name;
+  writeCordSet(dir / "same_names.json", same_names);
   for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
            {"", "nothing to do"},
            {"--segment P4=1.1", "--segment P4=1.1: no cord in segment \"P4\""},
@@ -164,7 +167,10 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--move-tip anterolateral=1,2", "the offset must be three finite numbers"},
            {"--move-tip anterolateral=1e9,0,0", "--move-tip: tips[0].position: (1e+09, "},
            {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
-           {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"}}) {
+           {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"},
+           // Two tips of one name: which one --move-tip means is unknown (it moved the second).
+           {"--cords " + quoted(dir / "same_names.json") + " --move-tip anterolateral=0,0,-1",
+            "same_names.json: tips[1].name: \"anterolateral\" repeats tips[0].name"}}) {
     const auto r =
         runChordfit("edit-cords " + quoted(kSmallCase) + " " + arguments + " --out " + quoted(out));
     EXPECT_EQ(r.exit_code, 2) << arguments;
