@@ -168,6 +168,20 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--move-tip anterolateral=1e9,0,0", "--move-tip: tips[0].position: (1e+09, "},
            {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
            {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"},
+           // A cord, group, segment or tip given twice: the last one silently won (scales) or
+           // they added up (tip offsets).
+           {"--cord 1=1.2 --cord 1=0.8",
+            "--cord 1=0.8: cord 1 is already scaled by --cord 1=1.2: give each cord once"},
+           {"--cord 0,1,2=1.2 --cord 2,3=0.8",
+            "--cord 2,3=0.8: cord 2 is already scaled by --cord 0,1,2=1.2"},
+           {"--segment P2=1.1 --segment P2=0.9",
+            "--segment P2=0.9: segment \"P2\" is already scaled by --segment P2=1.1"},
+           {"--group posterior/anterolateral=1.1 --group posterior/anterolateral=0.9",
+            "group \"posterior/anterolateral\" is already scaled by --group "
+            "posterior/anterolateral=1.1"},
+           {"--move-tip anterolateral=0,0,-1 --move-tip anterolateral=0,0,-2",
+            "--move-tip anterolateral=0,0,-2: tip \"anterolateral\" is already moved by --move-tip "
+            "anterolateral=0,0,-1: give one offset per tip"},
            // Two tips of one name: which one --move-tip means is unknown (it moved the second).
            {"--cords " + quoted(dir / "same_names.json") + " --move-tip anterolateral=0,0,-1",
             "same_names.json: tips[1].name: \"anterolateral\" repeats tips[0].name"}}) {

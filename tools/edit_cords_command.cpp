@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <string>
@@ -112,6 +113,14 @@ std::string namesOf(const std::set<std::string>& names) {
   return text;
 }
 
+// "--cord 1=0.8: cord 1 is already scaled by --cord 1=1.2: give each cord once". Within one
+// option the last of two requests for the same thing used to win without a word; across
+// options (--all, then --group, ...) the more specific one wins by design (docs/fitting.md).
+std::string givenTwice(const std::string& request, const std::string& what, const char* done,
+                       const std::string& earlier, const std::string& advice) {
+  return request + ": " + what + " is already " + done + " by " + earlier + ": " + advice;
+}
+
 // One scaling request, resolved to cord indices.
 struct ScaleRequest {
   std::string what;  // "--group anterior/anterolateral=0.9"
@@ -166,6 +175,7 @@ int runEditCords(const EditCordsOptions& options) {
   const auto byName = [&](const std::string& option, const std::vector<std::string>& items,
                           const std::vector<std::string>& names_of_cords,
                           const std::set<std::string>& names, const char* kind) {
+    std::map<std::string, std::string> scaled_by;  // name -> the request that scales it
     for (const std::string& item : items) {
       ScaleRequest r{option + " " + item, {}, 1.0};
       std::string name;
@@ -173,6 +183,11 @@ int runEditCords(const EditCordsOptions& options) {
       if (!names.count(name)) {
         problem = option + " " + item + ": no cord in " + kind + " \"" + name + "\" (the cords' " +
                   kind + "s: " + namesOf(names) + ")";
+        return false;
+      }
+      if (const auto [earlier, first] = scaled_by.emplace(name, r.what); !first) {
+        problem = givenTwice(r.what, std::string(kind) + " \"" + name + "\"", "scaled",
+                             earlier->second, "give each " + std::string(kind) + " once");
         return false;
       }
       for (int i = 0; i < count; ++i)
@@ -185,6 +200,7 @@ int runEditCords(const EditCordsOptions& options) {
       !byName("--segment", options.segment_scales, segment, segments, "segment")) {
     return usage(problem);
   }
+  std::map<int, std::string> cord_scaled_by;  // cord -> the --cord that scales it
   for (const std::string& item : options.cord_scales) {
     ScaleRequest r{"--cord " + item, {}, 1.0};
     std::string name;
@@ -193,10 +209,16 @@ int runEditCords(const EditCordsOptions& options) {
         !parseCordList("--cord " + item, name, count, {}, false, index, problem)) {
       return usage(problem);
     }
+    for (const int i : index) {
+      if (const auto [earlier, first] = cord_scaled_by.emplace(i, r.what); !first)
+        return usage(givenTwice(r.what, "cord " + std::to_string(i), "scaled", earlier->second,
+                                "give each cord once"));
+    }
     r.cords.assign(index.begin(), index.end());
     requests.push_back(r);
   }
   std::vector<std::pair<int, Eigen::Vector3d>> moves;  // tip index, offset
+  std::map<int, std::string> tip_moved_by;             // tip index -> the --move-tip moving it
   std::set<std::string> tip_names;
   for (const PmTip& tip : set.tips) tip_names.insert(tip.name);
   for (const std::string& item : options.tip_moves) {
@@ -214,6 +236,10 @@ int runEditCords(const EditCordsOptions& options) {
       return usage("--move-tip " + item +
                    ": the offset must be three finite numbers DX,DY,DZ (mm)");
     }
+    // Offsets of one tip would add up, and each line printed would show the sum.
+    if (const auto [earlier, first] = tip_moved_by.emplace(tip, "--move-tip " + item); !first)
+      return usage(givenTwice("--move-tip " + item, "tip \"" + set.tips[tip].name + "\"", "moved",
+                              earlier->second, "give one offset per tip"));
     moves.emplace_back(tip, offset);
   }
   std::set<int> unlock;

@@ -231,12 +231,15 @@ void addEditCords(CLI::App& app, EditCordsOptions& o) {
   cmd->add_option("--all", o.all_scale, "Scale every cord: S");
   cmd->add_option("--group", o.group_scales,
                   "Scale a leaflet/tip group: NAME=S, e.g. posterior/posteromedial=0.9 "
-                  "(repeatable)");
+                  "(repeatable, each group once)");
   cmd->add_option("--segment", o.segment_scales,
-                  "Scale the cords of a Carpentier segment: SEG=S, e.g. P2=1.2 (repeatable)");
-  cmd->add_option("--cord", o.cord_scales, "Scale cords by index: K=S or K,K=S (repeatable)");
+                  "Scale the cords of a Carpentier segment: SEG=S, e.g. P2=1.2 (repeatable, each "
+                  "segment once)");
+  cmd->add_option("--cord", o.cord_scales,
+                  "Scale cords by index: K=S or K,K=S (repeatable, each cord once)");
   cmd->add_option("--move-tip", o.tip_moves,
-                  "Move a PM tip: NAME=DX,DY,DZ in mm, e.g. anterolateral=0,0,-2 (repeatable)");
+                  "Move a PM tip: NAME=DX,DY,DZ in mm, e.g. anterolateral=0,0,-2 (repeatable, "
+                  "each tip once)");
   cmd->add_option("--lock", o.lock,
                   "Lock cords after the scaling: K,K,... | edited | all (fit keeps them)");
   cmd->add_option("--unlock", o.unlock, "Unlock cords before the scaling: K,K,... | all");
