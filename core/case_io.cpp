@@ -528,6 +528,15 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
 
 }  // namespace
 
+std::string caseNameProblem(const std::string& name) {
+  const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
+  if (std::any_of(name.begin(), name.end(), control))
+    return "contains a control character (a newline, tab or NUL): give a name of printable "
+           "characters";
+  if (name.find_first_not_of(' ') == std::string::npos) return "is blank: give the case a name";
+  return "";
+}
+
 std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagnostics) {
   const std::size_t problems_before = diagnostics.problems().size();
   if (!fs::is_directory(directory)) {
@@ -574,14 +583,10 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
   ValveCase c;
   c.name = directory.filename().string();
   if (const json* name = fields.member(*document, "", "name", false)) {
-    // The name titles figures (SVG, where a NUL or other control character is not allowed
-    // even escaped) and tables (where a newline ends the row).
-    if (fields.text(*name, "name", c.name) &&
-        std::any_of(c.name.begin(), c.name.end(),
-                    [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; }))
-      fields.error("name",
-                   "contains a control character (a newline, tab or NUL): give a name "
-                   "of printable characters");
+    if (fields.text(*name, "name", c.name)) {
+      if (const std::string problem = caseNameProblem(c.name); !problem.empty())
+        fields.error("name", problem);
+    }
   }
   const bool valve_ok = readValve(*document, directory, fields, c);
   readOptionalParts(*document, directory, fields, c.mesh.V.rows() > 0 && valve_ok, c);
@@ -599,10 +604,12 @@ void writeCase(const fs::path& directory, const ValveCase& c) {
 
   json document = {{"format", "chordfit-case"},
                    {"version", kCaseFormatVersion},
-                   {"name", c.name},
                    {"mesh", "open.ply"},
                    {"leaflets", {{"names", c.mesh.leaflet_names}, {"labels", "leaflets.json"}}},
                    {"annulus", {{"ring", "annulus_ring.json"}, {"closed", "annulus_closed.json"}}}};
+  // A case built without a name is named after its directory when read (an empty "name" is
+  // refused: caseNameProblem).
+  if (!c.name.empty()) document["name"] = c.name;
   if (!c.tracings.empty()) {
     json list = json::array();
     for (const Tracing& t : c.tracings) {

@@ -18,6 +18,12 @@ constexpr int kCaseFormatVersion = 1;
 // short tracings, dangling cord references) and returns nullopt if there was any.
 std::optional<ValveCase> loadCase(const std::filesystem::path& directory, Diagnostics& diagnostics);
 
+// Why `name` cannot name a case, or "" when it can. The name titles figures (SVG, where a NUL
+// or other control character is not allowed even escaped) and table rows (where a newline ends
+// the row, and a blank name leaves the Case cell empty). loadCase checks case.json's "name"
+// with it, make-valve and import-mesh their --name before writing anything.
+std::string caseNameProblem(const std::string& name);
+
 // Reads a tracings file on its own (the format of case.json's "tracings", docs/case-format.md),
 // e.g. to add tracings to a case being built: curve files it names are relative to its own
 // directory, leaflet names resolve against `leaflet_names`. Returns false with the problems in

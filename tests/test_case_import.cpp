@@ -354,6 +354,25 @@ TEST(ImportMeshCli, NamesTheLandmarkPointOrTheClosedAnnulusFileAtFault) {
   EXPECT_FALSE(fs::exists(dir / "case"));
 }
 
+// A name with a control character was refused only when the staged case was read back, as
+// case.json's; it is --name's, as make-valve's is (the same check).
+TEST(ImportMeshCli, RefusesANameWithAControlCharacterOrABlankOneAsItsOption) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  for (const auto& [name, message] : std::vector<std::pair<std::string, std::string>>{
+           {"\"$(printf 'a\\tb')\"",
+            "error: import-mesh: --name: contains a control character (a newline, tab or NUL): "
+            "give a name of printable characters\n"},
+           {"'  '", "error: import-mesh: --name: is blank: give the case a name"}}) {
+    const auto r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                               quoted(dir / "landmarks.json") + " --name " + name + " --out " +
+                               quoted(dir / "case"));
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.out;
+    EXPECT_NE(r.err.find(message), std::string::npos) << name << ": " << r.err;
+    EXPECT_FALSE(fs::exists(dir / "case")) << name;
+  }
+}
+
 // The case's default name is its directory's, also when --out ends with a slash (it was "").
 TEST(ImportMeshCli, NamesTheCaseAfterItsDirectoryWithATrailingSlash) {
   TempDir dir;

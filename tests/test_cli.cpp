@@ -314,6 +314,40 @@ TEST(ChordfitCli, ValidateOfADirectoryWithoutCaseJsonSaysWhatACaseIs) {
   EXPECT_NE(r.err.find("make-valve, import-mesh or make-case"), std::string::npos) << r.err;
 }
 
+// A case name titles figures and table rows: make-valve wrote a case validate then refused
+// (a newline in --name) or one with an empty Case cell (--name ""), and exited 0. Refused
+// before anything is written, as import-mesh refuses them (test_case_import.cpp).
+TEST(ChordfitCli, MakeValveRefusesANameWithAControlCharacterOrABlankOne) {
+  TempDir dir;
+  for (const auto& [name, message] : std::vector<std::pair<std::string, std::string>>{
+           {"\"$(printf 'a\\nb')\"",
+            "error: make-valve: --name: contains a control character (a newline, tab or NUL): "
+            "give a name of printable characters\n"},
+           {"''", "error: make-valve: --name: is blank: give the case a name"},
+           {"'  '", "error: make-valve: --name: is blank"}}) {
+    const auto r =
+        runChordfit("make-valve --edge 3 --out " + quoted(dir / "case") + " --name " + name);
+    EXPECT_EQ(r.exit_code, 2) << name << ": " << r.out;
+    EXPECT_NE(r.err.find(message), std::string::npos) << name << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "case")) << name;
+  }
+}
+
+// A blank "name" in case.json gave the same empty cell.
+TEST(ChordfitCli, ValidateRefusesABlankCaseName) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("make-valve --edge 3 --out " + quoted(dir / "case")).exit_code, 0);
+  std::string text = testing::readText(dir / "case" / "case.json");
+  const std::string named = "\"name\": \"parametric-mitral\"";
+  ASSERT_NE(text.find(named), std::string::npos) << text;
+  text.replace(text.find(named), named.size(), "\"name\": \" \"");
+  testing::writeText(dir / "case" / "case.json", text);
+  const auto r = runChordfit("validate " + quoted(dir / "case"));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: case.json: name: is blank: give the case a name"), std::string::npos)
+      << r.err;
+}
+
 TEST(ChordfitCli, RejectsANonsenseEdgeLengthWithExitCodeTwo) {
   TempDir dir;
   const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --edge -1");

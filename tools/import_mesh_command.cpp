@@ -188,6 +188,12 @@ std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
 }  // namespace
 
 int runImportMesh(const ImportMeshOptions& options) {
+  // The check loadCase makes of case.json's name, up front and as the option's: the staged case
+  // used to be refused when read back, as case.json's. No --name (or "") names the case after
+  // its directory.
+  if (const std::string problem = caseNameProblem(options.name);
+      !options.name.empty() && !problem.empty())
+    return fail("import-mesh", "--name: " + problem);
   const fs::path out(options.out_dir);
   Diagnostics diagnostics;
   Eigen::MatrixXd V;

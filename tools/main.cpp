@@ -34,7 +34,8 @@ void addMakeValve(CLI::App& app, MakeValveOptions& o) {
   cmd->add_option("--annulus", o.annulus_file,
                   "Annulus polyline (plain JSON point list or Slicer .mrk.json) to use instead "
                   "of the parametric saddle; frame: anterior at +x, atrium at +z");
-  cmd->add_option("--name", o.name, "Case name")->capture_default_str();
+  cmd->add_option("--name", o.name, "Case name (printable characters, not blank)")
+      ->capture_default_str();
   cmd->add_option("--ap", p.ap_diameter_mm, "Anteroposterior annulus diameter (open), mm")
       ->capture_default_str();
   cmd->add_option("--cc", p.cc_diameter_mm, "Commissural annulus diameter (open), mm")
@@ -213,7 +214,8 @@ void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
   cmd->add_option("--pm-tips", o.pm_tips_file,
                   "Curve file with the papillary-muscle tips, anterolateral first (default: "
                   "the heuristic places them)");
-  cmd->add_option("--name", o.name, "Case name (default: the output directory's name)");
+  cmd->add_option("--name", o.name,
+                  "Case name, printable characters (default: the output directory's name)");
   cmd->add_option("--out", o.out_dir,
                   "Output case directory (an earlier chordfit case there is replaced; a file of "
                   "yours the case would replace is refused)")

@@ -48,6 +48,12 @@ std::string optionMessage(const std::string& message) {
 }  // namespace
 
 int runMakeValve(const MakeValveOptions& options) {
+  // The check loadCase makes of case.json's name: without it the case written was one that
+  // validate refused (a newline), or one with an empty Case cell in tables ("").
+  if (const std::string problem = caseNameProblem(options.name); !problem.empty()) {
+    std::cerr << "error: make-valve: --name: " << problem << "\n";
+    return kExitBadInput;
+  }
   ValveParameters parameters = options.parameters;
   if (!options.annulus_file.empty()) {
     Diagnostics diagnostics;
