@@ -354,6 +354,50 @@ TEST(ImportMeshCli, NamesTheLandmarkPointOrTheClosedAnnulusFileAtFault) {
   EXPECT_FALSE(fs::exists(dir / "case"));
 }
 
+// Problems the read-back of the staged case finds used to name its files (annulus_closed.json,
+// pm_tips.json), which the user never saw, with the closed annulus's rows after resampling:
+// they name the --closed-annulus and --pm-tips files, the points counted from 1 in the file.
+TEST(ImportMeshCli, NamesTheUsersFileForAProblemOfTheStagedCase) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  const auto import = [&](const std::string& more) {
+    return runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                       quoted(dir / "landmarks.json") + more + " --out " + quoted(dir / "case"));
+  };
+  const Eigen::MatrixXd closed = valve().valve_case.annulus_closed;
+  // The 6th point of the user's curve far above the valve: named as point 6 of that file.
+  Eigen::MatrixXd one_far = closed;
+  one_far(5, 2) += 150.0;
+  writePointList(dir / "one_far.json", one_far, true);
+  auto r = import(" --closed-annulus " + quoted(dir / "one_far.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: " + (dir / "one_far.json").string() + ": point 6: ("),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find(" mm from the valve mesh"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("annulus_closed.json"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("point 1:"), std::string::npos) << "only the user's point 6: " << r.err;
+  // A collapsed annulus: a problem of the whole curve, found after resampling.
+  const Eigen::RowVector3d centre = closed.colwise().mean();
+  const Eigen::MatrixXd collapsed = (0.1 * (closed.rowwise() - centre)).rowwise() + centre;
+  writePointList(dir / "collapsed.json", collapsed, true);
+  r = import(" --closed-annulus " + quoted(dir / "collapsed.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: " + (dir / "collapsed.json").string() +
+                       ": after resampling onto the annulus ring: the closed annulus is "),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("annulus_closed.json"), std::string::npos) << r.err;
+  // A PM tip above the annulus: point 2 of the --pm-tips file, not pm_tips.json's tips[1].
+  writePointList(dir / "tips.json", Eigen::MatrixXd{{2, 12, -18}, {2, -12, 30}});
+  r = import(" --pm-tips " + quoted(dir / "tips.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: " + (dir / "tips.json").string() + ": point 2: "), std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("pm_tips.json"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "case"));
+}
+
 // A name with a control character was refused only when the staged case was read back, as
 // case.json's; it is --name's, as make-valve's is (the same check).
 TEST(ImportMeshCli, RefusesANameWithAControlCharacterOrABlankOneAsItsOption) {

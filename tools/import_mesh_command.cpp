@@ -3,6 +3,7 @@
 // then published (tools/staged_output.h), so a failure leaves the directory as it was.
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
@@ -141,6 +142,54 @@ int failImport(const ImportMeshOptions& options, const ImportedCase& imported) {
   return fail(options.mesh_file, imported.error);
 }
 
+// The row of a list field a case check names ("points[4]", "tips[1].position": 4, 1), or -1
+// when `where` is not in the list `list`.
+int listRow(const std::string& where, const std::string& list) {
+  const std::string prefix = list + "[";
+  if (where.rfind(prefix, 0) != 0) return -1;
+  return std::atoi(where.c_str() + prefix.size());
+}
+
+// "point 5" for row 4: a point of the user's curve file, counted from 1 in the file's order as
+// the landmarks are (landmarkPoints).
+std::string pointOfFile(int row) { return "point " + std::to_string(row + 1); }
+
+// A problem of the staged case's read-back under the input the user gave for that file: the
+// staged names (annulus_closed.json, pm_tips.json) are files the user never saw, and the closed
+// annulus's rows are ring positions after resampling, not the --closed-annulus file's points.
+// The files import-mesh derives itself (labels, ring) keep their names.
+Problem asTheUsersInput(Problem problem, const ImportMeshOptions& options) {
+  if (problem.file == "open.ply") {
+    problem.file = options.mesh_file;  // written as read: the same vertices and triangles
+  } else if (problem.file == "annulus_closed.json" && !options.closed_annulus_file.empty()) {
+    problem.file = options.closed_annulus_file;
+    const int row = listRow(problem.where, "points");
+    problem.where = "after resampling onto the annulus ring" +
+                    (row >= 0 ? ", at ring position " + std::to_string(row + 1) : "");
+  } else if (problem.file == "pm_tips.json" && !options.pm_tips_file.empty()) {
+    problem.file = options.pm_tips_file;  // one tip per point, in the file's order
+    if (const int row = listRow(problem.where, "tips"); row >= 0) problem.where = pointOfFile(row);
+  } else if (problem.file == "tracings.json" && !options.tracings_file.empty()) {
+    problem.file = options.tracings_file;  // the same tracings in the same order
+  }
+  return problem;
+}
+
+// Each point of the user's closed annulus curve within reach of the valve (case_extent.h),
+// named by its place in the file: checked on the case's resampled annulus, a far point was
+// named as a ring position of annulus_closed.json.
+bool closedAnnulusNearValve(const Eigen::MatrixXd& V, const Curve& closed, const std::string& file,
+                            Diagnostics& diagnostics) {
+  Diagnostics far;
+  if (checkPointsNearValve(V, closed.points, file, "points", far)) return true;
+  for (Problem problem : far.problems()) {
+    if (const int row = listRow(problem.where, "points"); row >= 0)
+      problem.where = pointOfFile(row);
+    diagnostics.error(problem.file, problem.where, problem.what);
+  }
+  return false;
+}
+
 // The first file of `staging` that would replace one in `out` that no chordfit run wrote, or
 // nullopt. The inputs are the user's own files and often sit where the case goes (the mesh as
 // open.ply, the tracings as tracings.json): those are refused, not replaced; an earlier
@@ -159,6 +208,7 @@ std::optional<fs::path> userFileInTheWay(const fs::path& staging, const fs::path
 // prints it and returns nullopt, leaving `out` as it was (removed again when this created it).
 std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
                                                           const ValveCase& valve_case,
+                                                          const ImportMeshOptions& options,
                                                           ValveCase& loaded) {
   std::error_code ec;
   const bool out_existed = fs::exists(out, ec);
@@ -171,7 +221,12 @@ std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
     const std::optional<fs::path> in_the_way = userFileInTheWay(staged.dir(), out);
     if (!read_back) {
       std::cerr << "error: import-mesh: the imported case does not validate:\n";
-      check.print(std::cerr);
+      Diagnostics named;
+      for (const Problem& problem : check.problems()) {
+        const Problem p = asTheUsersInput(problem, options);
+        named.error(p.file, p.where, p.what);
+      }
+      named.print(std::cerr);
     } else if (in_the_way) {
       std::cerr << "error: import-mesh: --out: " << in_the_way->string()
                 << ": exists and was not written by chordfit; import-mesh does not replace it "
@@ -214,6 +269,8 @@ int runImportMesh(const ImportMeshOptions& options) {
   // The mesh's units first: a mesh in metres made every landmark "130 mm from the nearest
   // boundary loop", blaming the landmarks.
   if (diagnostics.ok()) checkValveSpan(V, options.mesh_file, diagnostics);
+  if (diagnostics.ok() && closed.points.rows() > 0)
+    closedAnnulusNearValve(V, closed, options.closed_annulus_file, diagnostics);
   if (!diagnostics.ok()) return reportProblems(diagnostics);
   if (landmarks.points.rows() != 3) {
     return fail(options.landmarks_file,
@@ -271,7 +328,7 @@ int runImportMesh(const ImportMeshOptions& options) {
   fitStepCapToMesh(imported.valve_case);
   ValveCase loaded;
   const std::optional<StagedOutput::Published> published =
-      writeValidatedCase(out, imported.valve_case, loaded);
+      writeValidatedCase(out, imported.valve_case, options, loaded);
   if (!published) return kExitBadInput;
 
   const ValveCase& c = imported.valve_case;
