@@ -6,6 +6,7 @@
 // count is passed straight to std::vector::resize. The pre-checks below reject such files
 // with a located message before CGAL sees them.
 #include "core/cgal_backend.h"
+#include "core/counted.h"
 #include "core/text_case.h"
 
 #include <algorithm>
@@ -491,9 +492,6 @@ std::string checkOff(const std::string& bytes) {
   // few faces dropped the others without a word.
   const std::size_t end = first_face + static_cast<std::size_t>(counts[1]);
   if (end < lines.size()) {
-    const auto counted = [](unsigned long long n, const char* one, const char* many) {
-      return std::to_string(n) + " " + (n == 1 ? one : many);
-    };
     return "line " + std::to_string(lines[end].number) + ": the header declares " +
            counted(counts[0], "vertex", "vertices") + " and " +
            counted(counts[1], "face", "faces") + ", but " +

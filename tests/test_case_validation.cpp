@@ -415,6 +415,24 @@ TEST_F(ValidateCommand, SkipsAByteOrderMarkInACsvCurveAndNamesItInAMesh) {
   expectError("open\\.ply", "starts with a UTF-8 byte-order mark");
 }
 
+// One tracing, one cord, one tip: the summary read "1 polylines", "1 cords on 1 tips".
+TEST_F(ValidateCommand, SummaryCountsOneOfAThingInTheSingular) {
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                                "points": [[1, 0, -2], [2, 0, -2]]}]})");
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords = {cord};
+  writeCordSet(dir_ / "cords.json", set);
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  const testing::CommandResult r = validate();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("tracings:  1 polyline, 2 points\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("cords:     1 cord on 1 tip\n"), std::string::npos) << r.out;
+}
+
 // The case's name titles SVG figures (no control characters allowed) and Markdown tables.
 TEST_F(ValidateCommand, ReportsAControlCharacterInTheCaseName) {
   editCaseJson([](nlohmann::json& j) { j["name"] = "two\nlines"; });

@@ -459,6 +459,22 @@ TEST(ChordfitCli, HeuristicRejectsANonPositiveSpacingOrDepth) {
   EXPECT_FALSE(std::filesystem::exists(dir / "cords.json"));
 }
 
+// "27 cords on 1 PM tips": a case whose pm_tips has one tip.
+TEST(ChordfitCli, HeuristicCountsOnePmTipInTheSingular) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  ASSERT_EQ(runChordfit("make-valve --edge 3 --out " + quoted(case_dir)).exit_code, 0);
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir / "case.json"));
+  c["pm_tips"] = "pm_tips.json";
+  testing::writeText(case_dir / "case.json", c.dump(2));
+  testing::writeText(case_dir / "pm_tips.json",
+                     R"({"tips": [{"name": "single", "position": [0, 0, -20]}]})");
+  const auto r = runChordfit("heuristic " + quoted(case_dir) + " --out " + quoted(dir / "h.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::regex line("heuristic cord set: [0-9]+ cords on 1 PM tip -> ");
+  EXPECT_TRUE(std::regex_search(r.out, line)) << r.out;
+}
+
 // --secondary-spacing 1e-9 used to take 21 GB and --primary-spacing 1e-8 to place 1 cord
 // (the count overflowed an int); spacings below 0.1 mm are refused before the case is read.
 TEST(ChordfitCli, HeuristicRefusesASpacingBelowATenthOfAMillimetre) {

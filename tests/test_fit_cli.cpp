@@ -44,6 +44,18 @@ std::string refusedFitMessage(const std::string& arguments) {
   return r.err;
 }
 
+// "at most 3 forward runs, 1 threads": the fit's first line counts one thread in the singular.
+TEST(FitCommand, CountsOneThreadInTheSingular) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --no-prefit --no-uncertainty --max-sims 3 --threads 1 --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find(": 32 cords, scales, ceres, at most 3 forward runs, 1 thread\n"),
+            std::string::npos)
+      << r.out;
+}
+
 TEST(FitCommand, RejectsAnUnknownOptimizerWithExitCode2) {
   const std::string err = refusedFitMessage("--optimizer newton");
   EXPECT_NE(err.find("--optimizer"), std::string::npos) << err;

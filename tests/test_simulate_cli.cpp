@@ -365,6 +365,8 @@ TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   ASSERT_EQ(one.exit_code, 0) << one.err;
   const auto two = runChordfit(args + " --threads 2 --out " + quoted(dir / "two"));
   ASSERT_EQ(two.exit_code, 0) << two.err;
+  EXPECT_NE(one.err.find("over 9 scales, 1 thread\n"), std::string::npos) << one.err;
+  EXPECT_NE(two.err.find("over 9 scales, 2 threads\n"), std::string::npos) << two.err;
   const std::string csv = testing::readText(dir / "one" / "sweep.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 9) << "header + scales 0.98..1.02";
   EXPECT_EQ(csv, testing::readText(dir / "two" / "sweep.csv"));

@@ -20,6 +20,7 @@
 #include "core/case_io.h"
 #include "core/closure_model.h"
 #include "core/cordset_io.h"
+#include "core/counted.h"
 #include "core/heuristic.h"
 #include "core/metrics.h"
 #include "core/synthetic_case.h"
@@ -422,11 +423,12 @@ std::string caseSummary(const ValveCase& c) {
       << " closed-state positions\n";
   Eigen::Index points = 0;
   for (const Tracing& t : c.tracings) points += t.points.rows();
-  out << "  tracings:  " << c.tracings.size() << " polylines, " << points << " points\n";
+  out << "  tracings:  " << counted(c.tracings.size(), "polyline") << ", "
+      << counted(points, "point") << "\n";
   out << "  PM tips:   " << (c.tips ? std::to_string(c.tips->size()) : "none (heuristic)") << "\n";
   out << "  cords:     "
-      << (c.cords ? std::to_string(c.cords->cords.size()) + " cords on " +
-                        std::to_string(c.cords->tips.size()) + " tips"
+      << (c.cords ? counted(c.cords->cords.size(), "cord") + " on " +
+                        counted(c.cords->tips.size(), "tip")
                   : "none (automatic placement + heuristic)")
       << "\n";
   return out.str();

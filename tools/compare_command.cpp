@@ -17,6 +17,7 @@
 #include "core/atomic_file.h"
 #include "core/case_io.h"
 #include "core/closure_model.h"
+#include "core/counted.h"
 #include "core/enface_figure.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
@@ -396,8 +397,8 @@ int runCompare(const CompareOptions& options) {
   for (std::size_t i = 0; i < sets.size(); ++i) {
     ComparedSet& s = sets[i];
     if (!options.quiet) {
-      std::fprintf(stderr, "compare: [%zu/%zu] %s: closing with %zu cords\n", i + 1, sets.size(),
-                   s.label.c_str(), s.cords.cords.size());
+      std::fprintf(stderr, "compare: [%zu/%zu] %s: closing with %s\n", i + 1, sets.size(),
+                   s.label.c_str(), counted(s.cords.cords.size(), "cord").c_str());
     }
     const SimulationResult closed = simulateClosure(s.valve_case, s.cords, settings);
     if (!closed.ok()) return reportClosureFailure(closed, s.file, " (nothing written)");

@@ -15,6 +15,7 @@
 #include "core/carpentier.h"
 #include "core/case_extent.h"
 #include "core/cordset_io.h"
+#include "core/counted.h"
 #include "core/metrics.h"
 #include "inverse/fit_parameters.h"
 #include "tools/command_support.h"
@@ -267,7 +268,7 @@ int runEditCords(const EditCordsOptions& options) {
     }
     const int locked = static_cast<int>(r.cords.size()) - changed;
     left_locked += locked;
-    std::printf("  %-40s %3d cords scaled", r.what.c_str(), changed);
+    std::printf("  %-40s %3d %s scaled", r.what.c_str(), changed, nounFor(changed, "cord").c_str());
     if (locked > 0) std::printf(", %d locked left alone", locked);
     std::printf("\n");
   }
@@ -311,10 +312,10 @@ int runEditCords(const EditCordsOptions& options) {
   const auto locked_in_all = std::count_if(set.cords.begin(), set.cords.end(),
                                            [](const Cord& cord) { return cord.locked; });
   std::printf(
-      "edit-cords: %d cords, %zu edited, %zu locked by --lock, %zu unlocked, %ld locked in "
+      "edit-cords: %s, %zu edited, %zu locked by --lock, %zu unlocked, %ld locked in "
       "all -> %s\n",
-      count, edited.size(), lock.size(), unlock.size(), static_cast<long>(locked_in_all),
-      options.out_file.c_str());
+      counted(count, "cord").c_str(), edited.size(), lock.size(), unlock.size(),
+      static_cast<long>(locked_in_all), options.out_file.c_str());
   bool any_changed = false;
   for (int i = 0; i < count; ++i) {
     any_changed |= before.cords[i].rest_length != set.cords[i].rest_length ||
@@ -340,9 +341,9 @@ int runEditCords(const EditCordsOptions& options) {
   }
   if (left_locked > 0) {
     std::printf(
-        "  (%d locked cord%s left alone by the scalings; --unlock them first to change "
+        "  (%s left alone by the scalings; --unlock them first to change "
         "them)\n",
-        left_locked, left_locked == 1 ? "" : "s");
+        counted(left_locked, "locked cord").c_str());
   }
   if (!any_changed && !requests.empty() && moves.empty())
     std::fprintf(stderr, "warning: edit-cords: nothing changed: %s\n",

@@ -14,6 +14,7 @@
 #include "core/atomic_file.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
+#include "core/counted.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
 #include "core/simulator.h"
@@ -196,9 +197,9 @@ int runFit(const FitCommandOptions& o) {
   options.uncertainty = o.uncertainty;
   options.probe_locked = o.uncertainty;  // the after-fit diagnostics go together
   if (!o.quiet) {
-    std::printf("fitting %s: %zu cords, %s, %s, at most %d forward runs, %d threads\n",
-                valve_case->name.c_str(), seed->cords.size(), o.params.c_str(), o.optimizer.c_str(),
-                o.max_sims, o.threads);
+    std::printf("fitting %s: %s, %s, %s, at most %s, %s\n", valve_case->name.c_str(),
+                counted(seed->cords.size(), "cord").c_str(), o.params.c_str(), o.optimizer.c_str(),
+                counted(o.max_sims, "forward run").c_str(), counted(o.threads, "thread").c_str());
     const std::string skip_reason = inverse::prefitSkipReason(*seed);
     if (o.prefit && !skip_reason.empty())
       std::printf("pre-fits skipped: %s\n", skip_reason.c_str());
@@ -324,8 +325,8 @@ int runFit(const FitCommandOptions& o) {
                             o.optimizer + ", " + o.params + ")"}));
   const StagedOutput::Published published = staged.publish();
 
-  std::printf("fit: %s after %d forward run%s, %.1f s (%s)\n", o.optimizer.c_str(),
-              fit.forward_sims, fit.forward_sims == 1 ? "" : "s", fit.seconds,
+  std::printf("fit: %s after %s, %.1f s (%s)\n", o.optimizer.c_str(),
+              counted(fit.forward_sims, "forward run").c_str(), fit.seconds,
               fit.termination.c_str());
   // NLopt's local methods stop on a relative cost change between evaluations, which a
   // simulator's map can meet far from a minimum (bobyqa on the quick start's case: AvgD

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/cordset.h"
+#include "core/counted.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 
@@ -635,7 +636,7 @@ int freeCords(const inverse::FitOutcome& fit) {
 }
 
 std::string extraClosures(int closures, int unsettled) {
-  return std::to_string(closures) + " extra closures" +
+  return counted(closures, "extra closure") +
          (unsettled > 0 ? ", " + std::to_string(unsettled) + " unsettled" : "");
 }
 

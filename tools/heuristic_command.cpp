@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "core/cordset_io.h"
+#include "core/counted.h"
 #include "core/heuristic.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -105,8 +106,8 @@ int runHeuristic(const HeuristicCommandOptions& options) {
                  options.secondary_depth_mm);
   writeCordSet(options.out_file, set, &valve_case->mesh);
   forgetPublished(options.out_file);  // now the user's file (staged_output.h)
-  std::cout << "heuristic cord set: " << set.cords.size() << " cords on " << set.tips.size()
-            << " PM tips -> " << options.out_file << "\n";
+  std::cout << "heuristic cord set: " << counted(set.cords.size(), "cord") << " on "
+            << counted(set.tips.size(), "PM tip") << " -> " << options.out_file << "\n";
   printCordSummary(set, valve_case->mesh);
   return kExitOk;
 }

@@ -17,6 +17,7 @@
 #include "core/carpentier.h"
 #include "core/case_io.h"
 #include "core/closure_model.h"
+#include "core/counted.h"
 #include "core/forward_map_noise.h"
 #include "core/metrics.h"
 #include "core/parallel_for.h"
@@ -186,8 +187,9 @@ int runSweepCord(const SweepCordOptions& options) {
     std::cerr << tissueBesideCordsNote("sweep-cord", options.cords_file, "--tissue FILE");
   const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(*valve_case, *cords);
   if (cord < 0 || cord >= static_cast<int>(cords->cords.size())) {
-    std::cerr << "error: sweep-cord: --cord: no such cord (the set has " << cords->cords.size()
-              << " cords" << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
+    std::cerr << "error: sweep-cord: --cord: no such cord (the set has "
+              << counted(cords->cords.size(), "cord")
+              << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
     return kExitBadInput;
   }
   const auto case_settings = caseSettingsOrReport(
@@ -200,8 +202,8 @@ int runSweepCord(const SweepCordOptions& options) {
   const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case->tracings);
   const double base = cords->cords[cord].rest_length;
   const int vertex = cords->cords[cord].vertex;
-  std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %d scales, %d threads\n",
-               cord, vertex, base, count, options.threads);
+  std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %s, %s\n", cord, vertex, base,
+               counted(count, "scale").c_str(), counted(options.threads, "thread").c_str());
 
   // Each point is an independent full closure from the open state; results go to their own
   // slot, so the output does not depend on the thread count or the order of completion. The
