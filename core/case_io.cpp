@@ -367,6 +367,14 @@ bool readTipsFile(const SideFile& file, ValveCase& c, Diagnostics& diagnostics) 
   return readSideArray(file, "tips", diagnostics, [&](const json& list, JsonFields& fields) {
     std::vector<PmTip> tips;
     if (!readTips(list, "tips", fields, tips)) return false;
+    // An empty list read as a case without tips (the heuristic placed them) although the case
+    // names a tips file: say so rather than guess which was meant.
+    if (tips.empty()) {
+      fields.error("tips",
+                   "no tips: give at least one, or leave pm_tips out of case.json (the heuristic "
+                   "then places the tips)");
+      return false;
+    }
     c.tips = tips;
     return true;
   });

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "core/carpentier.h"
+#include "core/counted.h"
 #include "core/graph_distance.h"
 #include "core/mesh_topology.h"
 
@@ -192,6 +193,28 @@ double heuristicRestLength(const Eigen::Vector3d& p, const Plane& annulus_plane,
   return std::abs(annulus_plane.signedDistance(p)) + (p - tip).norm();
 }
 
+namespace {
+
+// Whether heuristicCordSet takes its tips from the case's cords (else it places the cords).
+bool usesCaseCords(const ValveCase& valve_case) {
+  return valve_case.cords && !valve_case.cords->cords.empty();
+}
+
+}  // namespace
+
+std::string pmTipsCountProblem(const ValveCase& valve_case) {
+  if (!valve_case.tips || !usesCaseCords(valve_case)) return "";
+  const std::size_t given = valve_case.tips->size();
+  const std::vector<PmTip>& paired = valve_case.cords->tips;
+  if (given == paired.size()) return "";
+  std::string names;
+  for (const PmTip& tip : paired) names += (names.empty() ? "" : ", ") + tip.name;
+  return counted(given, "PM tip") + " for the cord set's " + counted(paired.size(), "tip") + " (" +
+         names +
+         "): with the case's cords the heuristic takes each tip's position from the PM tip "
+         "in the same place in the list, so the counts must match";
+}
+
 CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& options) {
   const ValveMesh& mesh = valve_case.mesh;
   const AnnulusFrame frame = openAnnulusFrame(mesh);
@@ -200,7 +223,7 @@ CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& op
   std::vector<int> subset;
   std::vector<std::string> tip_names{"anterolateral", "posteromedial"};
   std::vector<double> compliance;
-  if (valve_case.cords && !valve_case.cords->cords.empty()) {
+  if (usesCaseCords(valve_case)) {
     tip_names.clear();
     for (const PmTip& tip : valve_case.cords->tips) tip_names.push_back(tip.name);
     for (const Cord& cord : valve_case.cords->cords) {

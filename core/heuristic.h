@@ -10,6 +10,7 @@
 #pragma once
 
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "core/annulus_plane.h"
@@ -70,9 +71,17 @@ double heuristicRestLength(const Eigen::Vector3d& p, const Plane& annulus_plane,
 
 // The heuristic cord set of a case. Cord vertices (and points), kinds and tip subsets come from the
 // case's cords when it has them (the user's choice), else from automatic placement and
-// the side split; tip positions come from the case's pm_tips when given, else from the
-// paper's formula. Rest lengths always from the paper's formula; every cord has
+// the side split; tip positions come from the case's pm_tips when given (with the case's cords
+// only when pmTipsCountProblem is empty: the tips pair by their place in the list), else from
+// the paper's formula. Rest lengths always from the paper's formula; every cord has
 // provenance heuristic, scale 1 and the case cord's compliance (0 otherwise).
 CordSet heuristicCordSet(const ValveCase& valve_case, const HeuristicOptions& options = {});
+
+// Why heuristicCordSet cannot use the case's pm_tips, or "" when it can (or there are none).
+// With the case's own cords, each cord-set tip takes the position (and name) of the pm_tips tip
+// in the same place in the list, so the counts must match; with another count pm_tips was
+// ignored without a word and the paper's formula placed the tips. Without cords any count
+// works (each placed cord goes to the nearest tip).
+std::string pmTipsCountProblem(const ValveCase& valve_case);
 
 }  // namespace chordfit

@@ -327,6 +327,46 @@ TEST_F(ValidateCommand, ReportsATipNameGivenTwiceInACordSetOrInPmTips) {
               "tips\\[1\\]: unnamed, it is called \"tip1\", which tips\\[0\\]\\.name gives");
 }
 
+// pm_tips beside cords was used only by `chordfit heuristic`; simulate and fit close the cords
+// on the cord set's own tips. validate says so, and an empty tips list is an error (it read as
+// no tips).
+TEST_F(ValidateCommand, NotesWhoUsesPmTipsBesideCordsAndRefusesAnEmptyTipsList) {
+  CordSet set;
+  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  set.tips.push_back({"posteromedial", Eigen::Vector3d(0, -5, -20), std::nullopt});
+  Cord cord;
+  cord.vertex = 9;
+  cord.rest_length = cord.seed_rest_length = 20.0;
+  set.cords = {cord};
+  writeCordSet(dir_ / "cords.json", set);
+  writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "al", "position": [0, 4, -20]},
+                                                {"name": "pm", "position": [0, -4, -20]}]})");
+  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  testing::CommandResult r = validate();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.out.find("note:"), std::string::npos) << "cords alone: " << r.out;
+  editCaseJson([](nlohmann::json& j) { j["pm_tips"] = "pm_tips.json"; });
+  r = validate();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("note: case.json: pm_tips and cords are both given: simulate, fit, "
+                       "sweep-cord, compare and edit-cords take the cords with the cord set's own "
+                       "tips and do not read pm_tips; only `chordfit heuristic` uses it"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("valid\n"), std::string::npos) << r.out;
+  // Another count than the cord set's: the heuristic cannot pair them, and refuses.
+  writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "al", "position": [0, 4, -20]}]})");
+  r = validate();
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("1 PM tip for the cord set's 2 tips"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("`chordfit heuristic` refuses"), std::string::npos) << r.out;
+
+  writeText(dir_ / "pm_tips.json", R"({"tips": []})");
+  expectError("pm_tips\\.json",
+              "tips: no tips: give at least one, or leave pm_tips out of "
+              "case\\.json");
+}
+
 // A piece of the mesh with no ring vertex hangs from nothing: a stray copy of the leaflets
 // drifted to the step cap and exit 0.
 TEST_F(ValidateCommand, ReportsAPieceOfTheMeshThatNoRingVertexIsOn) {

@@ -475,6 +475,40 @@ TEST(ChordfitCli, HeuristicCountsOnePmTipInTheSingular) {
   EXPECT_TRUE(std::regex_search(r.out, line)) << r.out;
 }
 
+// With the case's own cords, the heuristic takes each cord-set tip's position from the pm_tips
+// tip in the same place in the list; with another count it ignored pm_tips without a word.
+TEST(ChordfitCli, HeuristicRefusesPmTipsItCannotPairWithTheCasesCords) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  std::filesystem::copy(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", case_dir,
+                        std::filesystem::copy_options::recursive);
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir / "case.json"));
+  c["pm_tips"] = "pm_tips.json";
+  testing::writeText(case_dir / "case.json", c.dump(2));
+  testing::writeText(case_dir / "pm_tips.json", R"({"tips": [
+      {"name": "anterolateral", "position": [0, 6, -22]},
+      {"name": "posteromedial", "position": [0, -7, -22]},
+      {"name": "third", "position": [3, 0, -24]}]})");
+  auto r = runChordfit("heuristic " + quoted(case_dir) + " --out " + quoted(dir / "h.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("error: heuristic: " + case_dir.string() +
+                       ": pm_tips: 3 PM tips for the cord set's 2 tips"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "h.json"));
+  // Two: used, in the cord set's order.
+  testing::writeText(case_dir / "pm_tips.json", R"({"tips": [
+      {"name": "anterolateral", "position": [0, 6, -22]},
+      {"name": "posteromedial", "position": [0, -7, -22]}]})");
+  r = runChordfit("heuristic " + quoted(case_dir) + " --out " + quoted(dir / "h.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  Diagnostics diagnostics;
+  CordSet set;
+  ASSERT_TRUE(readCordSet(dir / "h.json", "h.json", set, diagnostics));
+  ASSERT_EQ(set.tips.size(), 2u);
+  EXPECT_EQ(set.tips[1].position, Eigen::Vector3d(0, -7, -22));
+}
+
 // --secondary-spacing 1e-9 used to take 21 GB and --primary-spacing 1e-8 to place 1 cord
 // (the count overflowed an int); spacings below 0.1 mm are refused before the case is read.
 TEST(ChordfitCli, HeuristicRefusesASpacingBelowATenthOfAMillimetre) {

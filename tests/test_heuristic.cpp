@@ -72,6 +72,21 @@ TEST(HeuristicCordSet, UsesTipsGivenByTheCase) {
   EXPECT_NEAR(set.cords[1].rest_length, 8.0 + std::sqrt(4.0 + 144.0), kExact);
 }
 
+// With the case's cords, pm_tips pair with the cord set's tips by their place in the list: a
+// count that does not match was ignored without a word (the formula placed the tips).
+TEST(HeuristicCordSet, NamesPmTipsItCannotPairWithTheCasesCords) {
+  ValveCase c = coneWithUserCords();
+  EXPECT_EQ(pmTipsCountProblem(c), "") << "no pm_tips";
+  c.tips = std::vector<PmTip>{{"anterolateral", Eigen::Vector3d(0, 4, -20), std::nullopt}};
+  EXPECT_NE(pmTipsCountProblem(c).find("1 PM tip for the cord set's 2 tips"), std::string::npos)
+      << pmTipsCountProblem(c);
+  c.tips->push_back({"posteromedial", Eigen::Vector3d(0, -4, -20), std::nullopt});
+  EXPECT_EQ(pmTipsCountProblem(c), "");
+  c.cords.reset();
+  c.tips->push_back({"third", Eigen::Vector3d(4, 0, -20), std::nullopt});
+  EXPECT_EQ(pmTipsCountProblem(c), "") << "without cords, any count: each cord to its nearest";
+}
+
 TEST(SplitBySide, PutsPositiveLateralCoordinateOnTheAnterolateralTip) {
   const ValveCase c = testing::tinyConeCase();
   const AnnulusFrame frame = openAnnulusFrame(c.mesh);

@@ -70,6 +70,13 @@ int runHeuristic(const HeuristicCommandOptions& options) {
   }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
+  // heuristicCordSet would ignore such pm_tips without a word and place the tips by the formula.
+  if (const std::string problem = pmTipsCountProblem(*valve_case); !problem.empty()) {
+    std::cerr << "error: heuristic: " << options.case_dir << ": pm_tips: " << problem
+              << "; give pm_tips the cord set's tips in its order, or leave pm_tips out of "
+                 "case.json (the paper's formula then places them)\n";
+    return kExitBadInput;
+  }
   const bool case_cords = valve_case->cords && !valve_case->cords->cords.empty();
   if ((options.primary_compliance > 0.0 || options.secondary_compliance > 0.0) && case_cords)
     std::fprintf(stderr,

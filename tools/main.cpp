@@ -60,7 +60,9 @@ void addMakeValve(CLI::App& app, MakeValveOptions& o) {
 
 void addHeuristic(CLI::App& app, HeuristicCommandOptions& o) {
   CLI::App* cmd = app.add_subcommand(
-      "heuristic", "Build the paper's heuristic cord set (automatic cord placement if needed)");
+      "heuristic",
+      "Build the paper's heuristic cord set (automatic cord placement if needed; the tips at the "
+      "case's pm_tips, paired by order with the case's cords' tips when it has cords)");
   cmd->add_option("CASE_DIR", o.case_dir, "Case directory")->required();
   cmd->add_option("--out", o.out_file, "Output CordSet JSON")->required();
   cmd->add_option("--primary-spacing", o.primary_spacing_mm,
