@@ -194,13 +194,19 @@ std::string drawEnface(const ValveCase& valve_case, const Eigen::MatrixXd& close
     segment_sum[segment] += ring_points[i];
     ++segment_count[segment];
   }
-  svg << "<g class=\"segments\" font-size=\"11\" fill=\"#222\" text-anchor=\"middle\">\n";
+  // A label beside the ring's side is anchored at its end nearer the ring, so that its width
+  // runs away from the leaflets (centred, P1 and P3 touched the tissue drawn past the ring).
+  svg << "<g class=\"segments\" font-size=\"11\" fill=\"#222\">\n";
+  const double centre_x = px(Eigen::Vector2d::Zero()).x();
   for (int segment = 0; segment < 6; ++segment) {
     if (segment_count[segment] == 0) continue;
     const Eigen::Vector2d middle = segment_sum[segment] / segment_count[segment];
     const Eigen::Vector2d label = middle + 2.5 * middle.normalized();
-    svg << "<text x=\"" << px(label).x() << "\" y=\"" << px(label).y() + 4 << "\">"
-        << escapeXml(segmentName(mesh.leaflet_names, segment)) << "</text>\n";
+    const double side =
+        (px(label).x() - centre_x) / (px(label) - px(Eigen::Vector2d::Zero())).norm();
+    const char* anchor = side > 0.7 ? "start" : side < -0.7 ? "end" : "middle";
+    svg << "<text x=\"" << px(label).x() << "\" y=\"" << px(label).y() + 4 << "\" text-anchor=\""
+        << anchor << "\">" << escapeXml(segmentName(mesh.leaflet_names, segment)) << "</text>\n";
   }
   svg << "</g>\n";
 
