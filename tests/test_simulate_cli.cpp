@@ -354,6 +354,15 @@ TEST_F(SimulateCommand, ASheetStretchedManyTimesItsAreaIsADivergenceNotAResult) 
       runChordfit("simulate " + quoted(case_dir_) + " --set youngs_modulus_mpa=0.5 --quiet --out " +
                   quoted(dir_ / "soft"));
   EXPECT_EQ(soft.exit_code, 0) << "soft tissue that holds together is a result: " << soft.err;
+  // The result itself is checked, not only the run every 100 steps: on the bundled small case
+  // 0.045 MPa passes 4 times its area early, and ends at 4.5 times.
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const auto end =
+      runChordfit("simulate " + quoted(small) + " --set youngs_modulus_mpa=0.045 --quiet --out " +
+                  quoted(dir_ / "end"));
+  EXPECT_EQ(end.exit_code, 3) << end.err;
+  EXPECT_NE(end.err.find("times their rest area ("), std::string::npos) << end.err;
+  EXPECT_NE(end.err.find(") at the end;"), std::string::npos) << end.err;
 }
 
 // sweep-cord over a short range: one row per scale, the same bytes with 1 or 2 threads.
