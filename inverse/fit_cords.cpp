@@ -245,7 +245,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.prefit_ran = true;
     outcome.prefit_factor = result.factor;
     outcome.prefit_primary_factor = result.primary_factor;
-    outcome.prefit_kind_ran = prefit.kind_points > 0;
+    outcome.prefit_kind_stage = result.kind_stage;
     outcome.prefit_secondary_factor = result.secondary_factor;
     start_set = result.start;
     start_evaluation = result.best;

@@ -105,9 +105,9 @@ struct FitOutcome {
   bool tissue_prefit_ran = false;  // enabled and within the budget, or the kept tissue retry's
   double prefit_factor = 1.0;      // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
-  bool prefit_kind_ran = false;  // the global pre-fit's kind stage (not when the budget was short)
-  std::vector<std::string> segment_prefit_changes;  // "P2 1.3", per accepted segment
-  std::vector<std::string> tissue_prefit_changes;   // "A2 0.1", per accepted segment
+  KindStage prefit_kind_stage = KindStage::kNotAsked;  // the global pre-fit's kind stage
+  std::vector<std::string> segment_prefit_changes;     // "P2 1.3", per accepted segment
+  std::vector<std::string> tissue_prefit_changes;      // "A2 0.1", per accepted segment
   // The slack release (slack_release.h): what it proposed at the optimiser's best point, and
   // whether its closure was kept (then `fitted` has it); the data costs of the two closures.
   SlackReleaseProposal slack_release;

@@ -160,6 +160,9 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
                        [&](const Cord& c) { return c.kind == kind && isFreeNonManual(c); });
   };
   const bool has_both = has_free(CordKind::kPrimary) && has_free(CordKind::kSecondary);
+  result.kind_stage = !has_both       ? KindStage::kOneKindFree
+                      : kind_half > 0 ? KindStage::kRan
+                                      : KindStage::kNotAsked;
   for (int kind = 0; has_both && kind_half > 0 && kind < 2; ++kind) {
     const bool secondaries = kind == 0;
     std::vector<std::pair<double, double>> pairs;

@@ -41,10 +41,15 @@ struct PrefitOptions {
   int threads = 2;
 };
 
+// Whether the kind stage ran: not asked for (kind_points 0, e.g. a budget too small for it),
+// or only one cord kind free (the other all manual or locked), so no factor per kind.
+enum class KindStage { kNotAsked, kOneKindFree, kRan };
+
 struct PrefitResult {
   double factor = 1.0;  // best common factor (1: no change)
   // Per kind after the kind stage (= factor when the kind stage kept the common one).
   double primary_factor = 1.0, secondary_factor = 1.0;
+  KindStage kind_stage = KindStage::kNotAsked;
   CordSet start;           // the seed with the factors applied
   ForwardEvaluation best;  // full closure at the best factor
   int forward_sims = 0;

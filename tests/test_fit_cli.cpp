@@ -588,6 +588,32 @@ TEST(FitCommand, SmallBudgetKeepsTheCommonPrefitFactorAndSkipsTheKindStage) {
             std::string::npos);
 }
 
+// Every secondary locked: the kind stage has one kind to move and does not run, and the report
+// says so (it printed "per kind: primaries 0.7, secondaries 0.7" as if it had).
+TEST(FitCommand, ReportsAKindStageWithOneFreeKindAsNotRun) {
+  TempDir dir;
+  const auto cords = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  std::string secondaries;
+  for (std::size_t i = 0; i < cords["cords"].size(); ++i)
+    if (cords["cords"][i]["kind"] == "secondary")
+      secondaries += (secondaries.empty() ? "" : ",") + std::to_string(i);
+  ASSERT_FALSE(secondaries.empty());
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(smallCase()) + " --lock " + secondaries + " --out " +
+                        quoted(dir / "seed.json"))
+                .exit_code,
+            0);
+  const auto metrics = fitSmallCase(
+      "--seed-cords " + quoted(dir / "seed.json") + " --max-sims 40 --no-uncertainty --quiet",
+      dir / "fit");
+  ASSERT_FALSE(metrics.empty());
+  EXPECT_TRUE(metrics["prefit_ran"].get<bool>());
+  EXPECT_FALSE(metrics["prefit_kind_ran"].get<bool>());
+  EXPECT_NE(
+      testing::readText(dir / "fit" / "report.md")
+          .find("; per kind: not run (only one cord kind has free cords that are not manual)"),
+      std::string::npos);
+}
+
 // Options that only move PM tips, given to a fit that does not: a note, and the fit runs; the
 // report says why a pre-fit did not run (it said "segment pre-fit: no change").
 TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {

@@ -261,7 +261,7 @@ int runFit(const FitCommandOptions& o) {
   // Whether the cord pre-fits ran (options.prefit says only that they were asked for), and
   // why not when they were skipped.
   metrics["prefit_ran"] = fit.prefit_ran;
-  metrics["prefit_kind_ran"] = fit.prefit_kind_ran;
+  metrics["prefit_kind_ran"] = fit.prefit_kind_stage == inverse::KindStage::kRan;
   metrics["segment_prefit_ran"] = fit.segment_prefit_ran;
   metrics["tissue_prefit_ran"] = fit.tissue_prefit_ran;
   if (!fit.prefit_skipped.empty()) metrics["prefit_skipped"] = fit.prefit_skipped;

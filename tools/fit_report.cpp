@@ -671,9 +671,12 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   };
   if (const std::string why = notRun(fit.prefit_ran, true); !why.empty())
     md << "- global pre-fit: " << why << "\n";
-  else if (!fit.prefit_kind_ran)
+  else if (fit.prefit_kind_stage == inverse::KindStage::kNotAsked)
     md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: not run (--max-sims "
        << o.max_sims << " leaves too few closures)\n";
+  else if (fit.prefit_kind_stage == inverse::KindStage::kOneKindFree)
+    md << "- global pre-fit factor: " << fit.prefit_factor
+       << "; per kind: not run (only one cord kind has free cords that are not manual)\n";
   else
     md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: primaries "
        << fit.prefit_primary_factor << ", secondaries " << fit.prefit_secondary_factor << "\n";
