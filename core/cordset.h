@@ -76,7 +76,9 @@ std::string cordPointProblem(const CordPoint& point, int vertex_count);
 // prescribed path, so such a cord pulls on nothing, or, through a vertex of weight b, moves
 // that vertex 1/b times as far as the insertion: a 1e-12 weight threw it 1e12 times the
 // cord's stretch at the first step. Every cord of the bundled and benchmark cases inserts
-// wholly off the ring.
+// wholly off the ring. Half the weight bounds that throw at twice the insertion's own move and
+// keeps the insertion nearer the leaflet than the ring; it refuses only insertions within half
+// a triangle of the ring, where no chorda inserts (the rough zone lies 5 mm and more from it).
 constexpr double kMinLeafletInsertionWeight = 0.5;
 std::string cordOnRingProblem(const Cord& cord, const Eigen::VectorXi& ring);
 

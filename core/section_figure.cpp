@@ -153,7 +153,9 @@ std::string sectionFigureSvg(const ValveMesh& mesh, const Eigen::MatrixXd& close
   // u's direction (tracingPlanes: the plane's angle turns it from a toward l, the
   // anterolateral side), so that a reader can tell which end of a section is anterior.
   figure.x_label = "u (mm): +u anterior at 0 deg, turned toward AL";
-  figure.y_label = "height above the annulus plane, atrium up (mm)";  // along n_AP
+  // Along n_AP from the image plane's origin, which is the annulus centre only for planes
+  // placed about it (make-case's): a tracing file may put its origin anywhere in the plane.
+  figure.y_label = "height along the annulus normal, atrium up (mm)";
   figure.columns = std::max(1, std::min<int>(3, static_cast<int>(planes.size())));
   return crossSectionsSvg(panels, figure);
 }

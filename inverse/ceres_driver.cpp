@@ -217,12 +217,13 @@ SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& set
                               objective.best()->cost, objective.best()->mean_deviation_mm);
   // It can also end on a trial it rejects (a step under the parameter tolerance): that closure
   // was run and counted, but no row said so, and convergence.csv's last forward_sims fell one
-  // short of metrics.json's. A row for the closure run last closes the count.
+  // short of metrics.json's. A row for the closure run last closes the count (numbered after
+  // this solve's iterations, as the row above, which it never joins: that one takes the count).
   if (!history.empty() && objective.forwardSims() > history.back().forward_sims) {
     const auto last = objective.latest();
     const bool failed = !last || !last->ok();
-    objective.recordIteration("ceres", history.back().iteration + 1, failed ? NAN : last->cost,
-                              failed ? NAN : last->mean_deviation_mm);
+    objective.recordIteration("ceres", static_cast<int>(summary.iterations.size()),
+                              failed ? NAN : last->cost, failed ? NAN : last->mean_deviation_mm);
   }
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();

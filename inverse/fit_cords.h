@@ -102,7 +102,8 @@ struct FitOutcome {
   // were disabled): e.g. every free cord is manual, so no factor would change a cord.
   std::string prefit_skipped;
   bool prefit_ran = false, segment_prefit_ran = false;  // false also when the budget was short
-  bool tissue_prefit_ran = false;  // enabled and within the budget, or the kept tissue retry's
+  bool tissue_prefit_ran = false;  // --tissue-prefit ran (enabled and within the budget); the
+                                   // tissue retry's run is in tissue_retry
   double prefit_factor = 1.0;      // common factor of the global pre-fit, then per kind:
   double prefit_primary_factor = 1.0, prefit_secondary_factor = 1.0;
   KindStage prefit_kind_stage = KindStage::kNotAsked;  // the global pre-fit's kind stage

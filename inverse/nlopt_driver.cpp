@@ -9,6 +9,8 @@
 
 #include <nlopt.hpp>
 
+#include "core/counted.h"
+
 namespace chordfit::inverse {
 
 namespace {
@@ -97,8 +99,8 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
         // maxeval is set from the remaining budget but also counts revisits of cached points,
         // which cost no closure: a budget stop only when no closure is left.
         message = "stopped: NLopt's evaluation limit reached with " +
-                  std::to_string(objective.maxSims() - objective.forwardSims()) +
-                  " closures of the budget left (NLopt also counts revisits of points already "
+                  counted(objective.maxSims() - objective.forwardSims(), "closure") +
+                  " of the budget left (NLopt also counts revisits of points already "
                   "closed, which cost none)";
         budget_spent = !objective.budgetAllows(1);
         break;

@@ -344,22 +344,22 @@ TEST_F(ValidateCommand, NotesWhoUsesPmTipsBesideCordsAndRefusesAnEmptyTipsList) 
   editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
   testing::CommandResult r = validate();
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.find("note:"), std::string::npos) << "cords alone: " << r.out;
+  EXPECT_EQ(r.err.find("note:"), std::string::npos) << "cords alone: " << r.err;
   editCaseJson([](nlohmann::json& j) { j["pm_tips"] = "pm_tips.json"; });
   r = validate();
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("note: case.json: pm_tips and cords are both given: simulate, fit, "
+  EXPECT_NE(r.err.find("note: case.json: pm_tips and cords are both given: simulate, fit, "
                        "sweep-cord, compare and edit-cords take the cords with the cord set's own "
                        "tips and do not read pm_tips; only `chordfit heuristic` uses it"),
             std::string::npos)
-      << r.out;
+      << r.err;
   EXPECT_NE(r.out.find("valid\n"), std::string::npos) << r.out;
   // Another count than the cord set's: the heuristic cannot pair them, and refuses.
   writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "al", "position": [0, 4, -20]}]})");
   r = validate();
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("1 PM tip for the cord set's 2 tips"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("`chordfit heuristic` refuses"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("1 PM tip for the cord set's 2 tips"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("`chordfit heuristic` refuses"), std::string::npos) << r.err;
 
   writeText(dir_ / "pm_tips.json", R"({"tips": []})");
   expectError("pm_tips\\.json",
@@ -416,7 +416,10 @@ TEST_F(ValidateCommand, ReportsACordInsertedOnTheAnnulusRing) {
               "on ring vertices " +
                   std::to_string(point.vertices[0]) + ", " + std::to_string(point.vertices[1]));
   expectError("cords\\.json", "cords\\[1\\]\\.vertex: the insertion lies on the annulus ring");
-  // The same set given to simulate: refused before any closure.
+  // The same set given to simulate --cords on the case without it: refused before any closure
+  // (by the --cords reader, not by the case's loading).
+  editCaseJson([](nlohmann::json& j) { j.erase("cords"); });
+  ASSERT_EQ(validate().exit_code, 0) << "the case without the cord set is fine";
   const auto r =
       runChordfit("simulate " + testing::quoted(dir_.path()) + " --cords " +
                   testing::quoted(dir_ / "cords.json") + " --out " + testing::quoted(dir_ / "sim"));

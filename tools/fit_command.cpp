@@ -337,10 +337,10 @@ int runFit(const FitCommandOptions& o) {
   if (driver && driver->localDerivativeFree() && fit.termination.rfind("converged", 0) == 0 &&
       unused >= std::max(5, o.max_sims / 20)) {
     std::printf(
-        "note: %s stopped on its tolerance with %d of --max-sims %d closures unused; a "
+        "note: %s stopped on its tolerance with %d of --max-sims %d %s unused; a "
         "derivative-free local method can stop early on a simulator's map (compare with "
         "--optimizer ceres, the default)\n",
-        o.optimizer.c_str(), unused, o.max_sims);
+        o.optimizer.c_str(), unused, o.max_sims, nounFor(o.max_sims, "closure").c_str());
   }
   if (fit.unsettled_sims > 0) {
     std::printf(

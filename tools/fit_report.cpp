@@ -187,8 +187,8 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
         "and is not "
         "probed. Data cost of the fit: "
      << formatFixed(probes.fit_data_cost, 3) << ", AvgD "
-     << formatFixed(probes.fit_mean_deviation_mm, 2) << " mm; " << probes.forward_sims
-     << " closures"
+     << formatFixed(probes.fit_mean_deviation_mm, 2) << " mm; "
+     << counted(probes.forward_sims, "closure")
      << (probes.unsettled_sims > 0 ? " (" + std::to_string(probes.unsettled_sims) +
                                          " reached the step cap without settling)"
                                    : "")
@@ -598,8 +598,8 @@ std::string tipOffsetsLine(const inverse::FitOutcome& fit) {
   if (tips == 0 || !fit.uncertainty.ok()) return "";
   return "PM tips: " + std::to_string(determined) + " of " + std::to_string(tips) +
          " tip offsets determined (more than " + formatWeight(kTipOffsetDeterminedSds) +
-         " SD from 0); the others are moves the tracings do not call for (report.md, \"PM "
-         "tips\")\n";
+         " SD from 0); for the others, no offset fits the tracings about as well "
+         "(report.md, \"PM tips\")\n";
 }
 
 int slackCords(const inverse::FitOutcome& fit) {

@@ -109,8 +109,9 @@ int runHeuristic(const HeuristicCommandOptions& options) {
   if (!case_cords && !any_secondary)
     std::fprintf(stderr,
                  "note: heuristic: no secondary cord placed: no leaflet vertex lies "
-                 "--secondary-depth %g mm (along mesh edges) in from the free edge\n",
-                 options.secondary_depth_mm);
+                 "--secondary-depth %g mm (along mesh edges) in from the free edge and %g mm or "
+                 "more from the annulus\n",
+                 options.secondary_depth_mm, HeuristicOptions{}.min_annulus_distance_mm);
   writeCordSet(options.out_file, set, &valve_case->mesh);
   forgetPublished(options.out_file);  // now the user's file (staged_output.h)
   std::cout << "heuristic cord set: " << counted(set.cords.size(), "cord") << " on "

@@ -36,7 +36,9 @@ int runValidate(const ValidateOptions& options) {
   // The simulator overrides too: simulate and fit would reject them.
   if (!caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kCheck))
     return kExitBadInput;
-  std::cout << caseSummary(*valve_case) << pmTipsBesideCordsNote(*valve_case) << "valid\n";
+  std::cout << caseSummary(*valve_case);
+  std::cerr << pmTipsBesideCordsNote(*valve_case);  // notes go to stderr, as everywhere
+  std::cout << "valid\n";
   return kExitOk;
 }
 
