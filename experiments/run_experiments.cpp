@@ -122,8 +122,8 @@ options:
   --allow-missing    merge/all: exit 0 even when some jobs have no result
 
 Ctrl-C (SIGINT) or SIGTERM stops the whole run: the running chordfit gets the signal and is
-waited for (killed if still running 5 s later), nothing half-made is kept, and the exit code is 130 / 143; rerun the same command
-(without --force) to resume.
+waited for (killed if still running 5 s later), nothing half-made is kept, and the exit code is
+130 / 143; rerun the same command (without --force) to resume.
 )";
 
 struct Arguments {
