@@ -116,6 +116,25 @@ TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {
   EXPECT_DOUBLE_EQ(c.cords[1].rest_length, 1.05 * a.cords[1].seed_rest_length);
 }
 
+// A segment or group typed in another case is the one it names ("p2" was "no cord in segment").
+TEST(EditCordsCli, ASegmentNameInAnotherCaseIsTheSegment) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("edit-cords " + quoted(kSmallCase) + " --segment P2=1.1 --out " +
+                        quoted(dir / "upper.json"))
+                .exit_code,
+            0);
+  const auto r = runChordfit("edit-cords " + quoted(kSmallCase) +
+                             " --segment p2=1.1 --group POSTERIOR/POSTEROMEDIAL=1 --out " +
+                             quoted(dir / "lower.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const CordSet upper = readCords(dir / "upper.json"), lower = readCords(dir / "lower.json");
+  ASSERT_EQ(upper.cords.size(), lower.cords.size());
+  for (std::size_t i = 0; i < upper.cords.size(); ++i)
+    EXPECT_EQ(upper.cords[i].rest_length == upper.cords[i].seed_rest_length,
+              lower.cords[i].rest_length == lower.cords[i].seed_rest_length)
+        << "cord " << i;
+}
+
 TEST(EditCordsCli, MoveTipShiftsTheTipAndKeepsTheRestLengths) {
   TempDir dir;
   const auto r = runChordfit("edit-cords " + quoted(kSmallCase) +

@@ -42,10 +42,12 @@ struct ComparedSet {
   std::optional<TruthRecovery> recovery;  // against the case's truth, when it has one
 };
 
-// One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008), the
-// oranges last: the closed annulus hinges are orange.
-const char* const kSetColours[] = {"#0072b2", "#cc79a7", "#009e73", "#56b4e9",
-                                   "#000000", "#d55e00", "#e69f00"};
+// One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008). The first
+// four are none of the leaflet colours of fit's and simulate's sections.svg (blue anterior,
+// green posterior: a "heuristic" in the anterior blue and a "fit" in the posterior green read
+// as leaflets beside them), the orange last: the closed annulus hinges are orange.
+const char* const kSetColours[] = {"#000000", "#cc79a7", "#56b4e9", "#d55e00",
+                                   "#0072b2", "#009e73", "#e69f00"};
 
 std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets) {
   std::vector<SectionLayer> layers;

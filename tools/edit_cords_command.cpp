@@ -17,6 +17,7 @@
 #include "core/cordset_io.h"
 #include "core/counted.h"
 #include "core/metrics.h"
+#include "core/text_case.h"
 #include "inverse/fit_parameters.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -181,6 +182,14 @@ int runEditCords(const EditCordsOptions& options) {
       ScaleRequest r{option + " " + item, {}, 1.0};
       std::string name;
       if (!splitAssignment(option, item, name, r.scale, problem)) return false;
+      // Segment and leaflet names are the user's to type: "p2" is P2 when no other name
+      // differs from it in case alone.
+      if (!names.count(name)) {
+        std::vector<std::string> alike;
+        for (const std::string& known : names)
+          if (asciiLowercase(known) == asciiLowercase(name)) alike.push_back(known);
+        if (alike.size() == 1) name = alike.front();
+      }
       if (!names.count(name)) {
         problem = option + " " + item + ": no cord in " + kind + " \"" + name + "\" (the cords' " +
                   kind + "s: " + namesOf(names) + ")";
