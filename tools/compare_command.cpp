@@ -45,8 +45,9 @@ struct ComparedSet {
 // One colour per cord set in sections.svg (colour-blind safe, Okabe and Ito 2008). The first
 // four are none of the leaflet colours of fit's and simulate's sections.svg (blue anterior,
 // green posterior: a "heuristic" in the anterior blue and a "fit" in the posterior green read
-// as leaflets beside them), the orange last: the closed annulus hinges are orange.
-const char* const kSetColours[] = {"#000000", "#cc79a7", "#56b4e9", "#d55e00",
+// as leaflets beside them), and black only third (the tracing points are black rings); the
+// orange last: the closed annulus hinges are orange.
+const char* const kSetColours[] = {"#cc79a7", "#d55e00", "#000000", "#56b4e9",
                                    "#0072b2", "#009e73", "#e69f00"};
 
 std::string sectionsSvg(const ValveCase& c, const std::vector<ComparedSet>& sets) {
