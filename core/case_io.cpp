@@ -51,6 +51,9 @@ bool fileFieldUsable(const std::string& name, const fs::path& dir, const std::st
   std::string problem;
   if (name.empty()) {
     problem = "no file given (an empty file name)";
+  } else if (!named_entry_exists && ec && ec != std::errc::no_such_file_or_directory) {
+    // A directory on the way the user may not search is not a missing file.
+    problem = "\"" + name + "\": cannot be looked up (" + ec.message() + ")";
   } else if (!named_entry_exists) {
     problem = "\"" + name + "\": file not found";
     if (fs::path(name).is_relative()) problem += " in " + searchedDirectory(dir);
