@@ -12,6 +12,7 @@
 #include "core/contact.h"
 #include "core/cord_insertion.h"
 #include "core/mesh_topology.h"
+#include "core/metrics.h"
 #include "core/sweep_team.h"
 #include "core/xpbd_constraints.h"
 
@@ -250,20 +251,6 @@ bool usesEdgeContactOnEdges(const SimulationSettings& settings, const Eigen::Mat
   return upperMedian(std::move(lengths)) >= settings.edge_contact_edge_ratio * contact_thickness_mm;
 }
 
-// The state of one run and the three phases of a time step (Ten Minute Physics style: the
-// loop in simulate() reads as predict / solve / update). Flat arrays x, x_prev, v: 3 #V.
-// Total area of a sheet, sum over triangles of |(b - a) x (c - a)| / 2 (V: rows are vertices).
-template <class Positions>
-double surfaceAreaOf(const Positions& V, const Eigen::MatrixXi& F) {
-  double twice = 0.0;
-  for (Eigen::Index t = 0; t < F.rows(); ++t) {
-    const Vec3 a = V.row(F(t, 0)).transpose(), b = V.row(F(t, 1)).transpose(),
-               c = V.row(F(t, 2)).transpose();
-    twice += (b - a).cross(c - a).norm();
-  }
-  return 0.5 * twice;
-}
-
 // The divergence a sheet stretched to `area` (of `rest_area`) is, for SimulationResult::error.
 std::string stretchedSheetError(double area, double rest_area, const std::string& when,
                                 const SimulationSettings& settings) {
@@ -277,6 +264,8 @@ std::string stretchedSheetError(double area, double rest_area, const std::string
   return text;
 }
 
+// The state of one run and the three phases of a time step (Ten Minute Physics style: the
+// loop in simulate() reads as predict / solve / update). Flat arrays x, x_prev, v: 3 #V.
 class Stepper {
  public:
   Stepper(const SimulationModel& model, const SimulationSettings& settings, System sys, double dt,
@@ -520,10 +509,11 @@ class Stepper {
 
   int contactCount() const { return static_cast<int>(contacts_.size()); }
 
-  // Total area of the sheet now, sum over triangles of |(b - a) x (c - a)| / 2.
+  // Total area of the sheet now (metrics.h), on a copy of the positions: called every
+  // kAreaCheckEvery steps only.
   double sheetArea() const {
     using Positions = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;
-    return surfaceAreaOf(Eigen::Map<const Positions>(x_.data(), n_, 3), model_.F);
+    return surfaceArea(Eigen::Map<const Positions>(x_.data(), n_, 3), model_.F);
   }
 
   // Kinetic energy sum_i m_i |v_i|^2 / 2 of the free vertices (fictitious masses included).
@@ -710,7 +700,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
   constexpr double kMaxAreaGrowth = 4.0;
   constexpr double kRunawayAreaGrowth = 10.0;
   constexpr int kAreaCheckEvery = 100;
-  const double rest_area = surfaceAreaOf(model.V_rest, model.F);
+  const double rest_area = surfaceArea(model.V_rest, model.F);
 
   Stepper stepper(model, settings, std::move(sys), dt, max_step, thickness,
                   start ? *start : model.V_rest);
@@ -798,7 +788,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
     stepper.setFreePositionsToMean(position_sum, averaged, result);
     result.averaged_steps = averaged;
   }
-  if (const double area = surfaceAreaOf(result.V, model.F); area > kMaxAreaGrowth * rest_area) {
+  if (const double area = surfaceArea(result.V, model.F); area > kMaxAreaGrowth * rest_area) {
     result.error = stretchedSheetError(area, rest_area, "at the end", settings);
     result.diverged = true;
   }
