@@ -10,6 +10,7 @@
 #include <set>
 
 #include "core/cgal_backend.h"
+#include "core/joined.h"
 #include "core/simulator.h"
 #include "core/tracing_sampler.h"
 
@@ -348,10 +349,7 @@ std::string table1Header(const std::string& first_column) {
 }
 
 std::string joinSegments(const std::vector<std::string>& segments) {
-  if (segments.empty()) return "none";
-  std::string joined;
-  for (const std::string& name : segments) joined += (joined.empty() ? "" : ", ") + name;
-  return joined;
+  return segments.empty() ? "none" : joined(segments, ", ");
 }
 
 namespace {

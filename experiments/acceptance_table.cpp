@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "core/cohort_presets.h"
+#include "core/joined.h"
 #include "experiments/result_fields.h"
 
 namespace chordfit::experiments {

@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/joined.h"
 #include "core/svg_line_plot.h"
 #include "experiments/acceptance_table.h"
 #include "experiments/result_fields.h"

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/joined.h"
+
 namespace chordfit::experiments {
 
 using nlohmann::json;
@@ -22,12 +24,6 @@ std::string mdNumber(double value, int digits) {
 
 double number(const json& j, const char* key) {
   return j.contains(key) && j.at(key).is_number() ? j.at(key).get<double>() : kNaN;
-}
-
-std::string joined(const std::vector<std::string>& strings, const char* separator) {
-  std::string text;
-  for (const std::string& s : strings) text += (text.empty() ? "" : separator) + s;
-  return text;
 }
 
 std::string segments(const json& j, const char* key, const char* separator) {

@@ -18,8 +18,6 @@ std::string fixed(double value, int digits);
 std::string mdNumber(double value, int digits = 2);
 // j[key] as a number, NaN when missing or not a number.
 double number(const nlohmann::json& j, const char* key);
-// The strings joined by `separator`.
-std::string joined(const std::vector<std::string>& strings, const char* separator);
 // The string array j[key] joined by `separator` ("" when missing).
 std::string segments(const nlohmann::json& j, const char* key, const char* separator);
 // Markdown cell of the segment list j[key]: "P2, A2", "none" for an empty list, "–" when

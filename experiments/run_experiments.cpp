@@ -24,6 +24,7 @@
 
 #include "core/atomic_file.h"
 #include "core/csv_text.h"
+#include "core/joined.h"
 #include "core/synthetic_case.h"
 #include "experiments/acceptance_table.h"
 #include "experiments/experiment_jobs.h"
@@ -35,6 +36,7 @@ namespace {
 
 namespace fs = std::filesystem;
 using namespace chordfit::experiments;
+using chordfit::joined;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kExitOk = 0;

@@ -245,8 +245,8 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     outcome.prefit_ran = true;
     outcome.prefit_factor = result.factor;
     outcome.prefit_primary_factor = result.primary_factor;
-    outcome.prefit_kind_stage = result.kind_stage;
     outcome.prefit_secondary_factor = result.secondary_factor;
+    outcome.prefit_kind_stage = result.kind_stage;
     start_set = result.start;
     start_evaluation = result.best;
     record("prefit", 1, start_evaluation, start_evaluation.cost);

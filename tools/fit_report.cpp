@@ -6,6 +6,7 @@
 
 #include "core/cordset.h"
 #include "core/counted.h"
+#include "core/joined.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 
@@ -223,13 +224,6 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
 
 }  // namespace
 
-// A segment's tissue changes, "P3 0.3, cords 1.5; A2 0.1": one change may itself hold a comma.
-std::string joinTissueChanges(const std::vector<std::string>& changes) {
-  std::string joined;
-  for (const std::string& change : changes) joined += (joined.empty() ? "" : "; ") + change;
-  return joined;
-}
-
 std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o) {
   const inverse::TissueRetry& r = fit.tissue_retry;
   if (!o.tissue_retry) return "off (--no-tissue-retry)";
@@ -243,7 +237,8 @@ std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOpti
   line += "softer tissue there (the tissue pre-fit): ";
   if (r.tissue_changes.empty())
     return line + "none fitted the tracings better, so the fit is the first (" + closures + ")";
-  line += joinTissueChanges(r.tissue_changes) + ", then the fit again on it";
+  // Tissue changes are joined by "; ": one may itself hold a comma ("P3 0.3, cords 1.5").
+  line += joined(r.tissue_changes, "; ") + ", then the fit again on it";
   if (!r.error.empty()) return line + " failed (" + r.error + "; " + closures + "); not kept";
   line += ": data cost " + formatFixed(r.data_cost_with, 3) + ", AvgD " +
           formatFixed(r.mean_mm_with, 2) + " mm, prolapse missed in " +
@@ -367,8 +362,7 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
         "no free cord there reaches the upper scale bound, and no softer tissue there fitted "
         "the tracings better (the tissue retry)";
   } else if (retry.ran && !retry.kept && retry.missing_after.empty()) {
-    hint += "softer tissue made the flap (the tissue retry: " +
-            joinTissueChanges(retry.tissue_changes) +
+    hint += "softer tissue made the flap (the tissue retry: " + joined(retry.tissue_changes, "; ") +
             ") but fitted the tracings no better, so the fit keeps the cords alone (report.md, "
             "\"tissue retry\")";
   } else if (retry.ran) {
