@@ -2,7 +2,6 @@
 // map (scale -> closed state) is. DESIGN §7: the map must be reproducible to far below the
 // finite-difference step, or the Jacobian is noise.
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -212,46 +211,32 @@ int runSweepCord(const SweepCordOptions& options) {
   std::mutex print;
   std::vector<char> finished(count, 0);
   int printed = 0;
-  // The sweep fails at its lowest failing scale. Points are taken in scale order, so once one
-  // fails only the points below it still need to run (one of them may fail too): the same
-  // error for any thread count, without running the rest (a diverging sweep ran every one of
-  // its closures before failing).
-  std::atomic<int> lowest_failed{count};
   auto printFinished = [&] {
     for (; printed < count && finished[printed]; ++printed) {
-      if (printed > lowest_failed.load()) {
-        printed = count;  // the sweep stops at the failure
-        return;
-      }
       const SweepPoint& p = points[printed];
       if (!p.error.empty()) {
         std::fprintf(stderr, "  [%3d/%d] scale %.4f: failed (below)\n", printed + 1, count,
                      p.scale);
-        continue;
+        printed = count;  // the sweep stops at its lowest failing scale
+        return;
       }
       std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n",
                    printed + 1, count, p.scale, p.height, p.mean_deviation,
                    p.converged ? "" : " (not converged)");
     }
   };
-  parallelFor(count, std::max(1, options.threads), [&](int i) {
+  // The sweep fails at its lowest failing scale: a failed point throws, and parallelFor then
+  // runs only the scales below it (one of them may fail too) and rethrows the lowest, as with
+  // one thread: the same error for any thread count, without running the rest (a diverging
+  // sweep ran every one of its closures before failing). The points say which failed.
+  struct ScaleFailed {};
+  const auto sweepPoint = [&](int i) {
     SweepPoint& p = points[i];
     p.scale = 1.0 - options.range + i * options.step;
-    if (i > lowest_failed.load()) {  // not needed: a lower scale failed
-      const std::lock_guard<std::mutex> lock(print);
-      finished[i] = 1;
-      printFinished();
-      return;
-    }
     CordSet scaled = *cords;
     scaled.cords[cord].rest_length = base * p.scale;
     const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
     p.error = r.error;
-    if (!r.ok()) {
-      int lowest = lowest_failed.load();
-      while (i < lowest && !lowest_failed.compare_exchange_weak(lowest, i)) {
-      }
-    }
     p.diverged = r.diverged;
     p.converged = r.converged;
     p.steps = r.steps;
@@ -262,10 +247,18 @@ int runSweepCord(const SweepCordOptions& options) {
         p.mean_deviation = pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
       }
     }
-    const std::lock_guard<std::mutex> lock(print);
-    finished[i] = 1;
-    printFinished();
-  });
+    {
+      const std::lock_guard<std::mutex> lock(print);
+      finished[i] = 1;
+      printFinished();
+    }
+    if (!r.ok()) throw ScaleFailed{};
+  };
+  try {
+    parallelFor(count, std::max(1, options.threads), sweepPoint);
+  } catch (const ScaleFailed&) {
+    // Reported below, from the lowest point with an error.
+  }
   for (const SweepPoint& p : points) {
     if (!p.error.empty()) {
       std::cerr << "error: " << options.case_dir << ": "
