@@ -137,10 +137,9 @@ int runProgram(const std::vector<std::string>& args, const fs::path& log) {
   sigprocmask(SIG_SETMASK, &previous, nullptr);  // a pending stop is forwarded here
   if (spawned != 0) return -1;
   if (g_stop_signal != 0) ::kill(pid, g_stop_signal);  // requested before the child existed
-  const int status_or_failure = waitForChild(pid);
+  const int status = waitForChild(pid);                // a wait status is never negative
   g_child_pid = 0;
-  if (status_or_failure < 0) return -1;
-  const int status = status_or_failure;
+  if (status < 0) return -1;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
 }
