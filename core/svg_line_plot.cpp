@@ -143,8 +143,9 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
   const double legend_width = 30.0 + 6.2 * static_cast<double>(longest_label);
   const double legend_x = panel.legend_margin > 0.0 ? left + margin_left + plot_w + 12.0
                                                     : left + margin_left + plot_w - legend_width;
-  // Every line first, then every marker, so that no line hides a marker.
-  for (int pass = 0; pass < 2; ++pass) {
+  // Every line first, then every marker, so that no line hides a marker; the markers of the
+  // series drawn on top last (pass 2), and the legend with them.
+  for (int pass = 0; pass < 3; ++pass) {
     for (std::size_t k = 0; k < panel.series.size(); ++k) {
       const PlotSeries& s = panel.series[k];
       const std::string colour =
@@ -168,14 +169,14 @@ void drawPanel(std::ostringstream& svg, const PlotPanel& panel, double left, dou
         svg << "<path d='" << path << "' fill='none' stroke='" << colour << "' stroke-width='1.5'"
             << (s.dashed ? " stroke-dasharray='6,4'" : "") << "/>\n";
       }
-      if (pass == 1 && s.markers) {
+      if (pass == (s.on_top ? 2 : 1) && s.markers) {
         for (std::size_t i = 0; i < n; ++i) {
           const double y = ty(s.y[i]);
           if (!std::isfinite(y) || !std::isfinite(s.x[i])) continue;
           drawMarker(svg, s.marker, px(s.x[i]), py(y), s.marker_radius, colour);
         }
       }
-      if (pass == 0) continue;
+      if (pass < 2) continue;
       // The legend entry: the line and the marker as drawn (a marker at least 3 px, so that a
       // small one reads).
       const double ly = top + margin_top + 14 + 16 * static_cast<double>(k);

@@ -22,6 +22,9 @@ struct PlotSeries {
   // Radius of the marker's circumcircle, px. Above 2.5 px a marker gets a white rim, which
   // keeps it apart from a line or marker under it.
   double marker_radius = 2.0;
+  // Markers drawn over those of every other series (its legend entry keeps its place): a few
+  // key points among many small ones, which would otherwise cover them.
+  bool on_top = false;
 };
 
 struct PlotPanel {

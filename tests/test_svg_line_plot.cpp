@@ -78,6 +78,32 @@ TEST(SvgLinePlots, DrawsMarkersOfEachShapeOverTheLinesAndTheLegendInItsMargin) {
   EXPECT_GT(std::stod(svg.substr(x, svg.find('\'', x) - x)), 600.0 - 165.0);
 }
 
+// A series drawn on top has its markers over those of the series after it, while its legend
+// entry keeps its place: convergence.svg's segment pre-fit diamond was hidden under the run of
+// COBYLA's small circles that starts at the same closure.
+TEST(SvgLinePlots, DrawsTheMarkersOfASeriesOnTopLastAndKeepsTheLegendOrder) {
+  PlotPanel panel{"stages", "x", "y", {}, false, 150.0};
+  PlotSeries stage{"pre-fit", {2}, {1}, true, false, false, "#009E73", PlotMarker::kDiamond, 6.0};
+  stage.on_top = true;
+  panel.series.push_back(stage);
+  panel.series.push_back({"iterations",
+                          {2, 3, 4},
+                          {1, 1, 1},
+                          true,
+                          false,
+                          false,
+                          "#0072B2",
+                          PlotMarker::kCircle,
+                          3.5});
+  const std::string svg = svgLinePlots({panel}, 1, 600, 300);
+  const std::size_t diamond = svg.find("<polygon");
+  const std::size_t last_circle = svg.rfind("<circle");
+  ASSERT_NE(diamond, std::string::npos);
+  ASSERT_NE(last_circle, std::string::npos);
+  EXPECT_GT(diamond, svg.find("<circle")) << "the diamond over the first circle";
+  EXPECT_LT(svg.find(">pre-fit</text>"), svg.find(">iterations</text>")) << "legend order kept";
+}
+
 // A point at the data's extreme keeps its marker inside the frame, even when a tick falls just
 // below it (costs of 507 on a log axis from 500 put half of each marker under the frame).
 TEST(SvgLinePlots, KeepsMarkersAtTheDataExtremesInsideTheFrame) {

@@ -471,6 +471,9 @@ PlotSeries stageSeries(const std::string& stage, const std::string& optimizer) {
     series.colour = style.colour;
     series.marker = style.marker;
     series.marker_radius = style.radius;
+    // A stage's one point often shares its closure with the optimiser's first iteration
+    // and is surrounded by the optimiser's points.
+    series.on_top = true;
     return series;
   }
   const std::string full = "-full";
