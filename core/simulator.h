@@ -11,7 +11,8 @@
 // Units: mm, g, ms, N, MPa (material.h).
 //
 // Time step (simulator.cpp, Stepper): predict (v += dt f/m, drag, x~ = x + dt v + w impulse),
-// solve (Gauss-Seidel: edges, areas, bending, contacts, cords), update (v = (x - x_prev)/dt).
+// solve (Gauss-Seidel: edges, areas, bending, area floors, contacts, cords), update
+// (v = (x - x_prev)/dt).
 // Only the quasi-static equilibrium is used, which shapes three choices:
 //   - lambda is warm-started across steps for the material and the cords (xpbd_constraints.h),
 //     so the equilibrium is the elastic one with 2 iterations (textbook XPBD would be

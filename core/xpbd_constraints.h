@@ -63,7 +63,13 @@ struct AreaConstraint {
 // 0), min_area a fraction of the rest area (SimulationSettings::area_floor_fraction). The
 // compliant area term above stores an energy; this one only keeps a triangle from being
 // squeezed flat, which the weak area term (K_a = 0.1 E h) allows (docs/performance.md, "Area
-// floor"). Stored as an AreaConstraint with rest_area = min_area.
+// floor"). Stored as an AreaConstraint with rest_area = min_area. Both area terms use the
+// unsigned area, so a triangle turned inside out satisfies them; in the sheet bending resists
+// that. Like the contacts, a floor starts each step from lambda = 0, but its impulse is
+// carried into the next prediction in full (the contacts' in part): a review's one-triangle
+// test held at rest on its floor showed the floor force alternating 3.96 <-> 15.53 N between
+// steps. Left so, untested on a valve, because making it consistent moves the closures the
+// benchmark and the cohort's calibration were made with.
 //
 // Paper eq. 1: C = |x_v - tip| - rest, active only when C >= 0 (the cord pulls, never
 // pushes). The tip is Dirichlet: its position is read from a separate array, never moved.
@@ -71,7 +77,8 @@ struct AreaConstraint {
 // (a point of a triangle, core/cordset.h CordPoint, or a patch around it, cord_insertion.h);
 // then grad_m C = b_m n, n = (x_v - tip) / |x_v - tip|, and the XPBD update (Macklin et al.
 // 2016, eq. 18) is
-//   dlambda = (-C - alpha lambda) / (sum_m b_m^2 w_m + alpha),  dx_m = b_m w_m n dlambda,
+//   dlambda = (-C - a lambda) / (sum_m b_m^2 w_m + a),  dx_m = b_m w_m n dlambda,
+// with a = compliance / dt^2,
 // which is the one-vertex update when the insertion is a vertex (one vertex, b_0 = 1). The
 // cord's tension acts on vertex m as the force b_m T n.
 struct CordConstraint {
@@ -88,9 +95,14 @@ struct CordConstraint {
 // evaluated afresh at every projection (barycentrics b_m by Ericson 2005). When q is interior
 // to the triangle, |x_p - q| is replaced by side * n . (x_p - q) (n the unit normal, side
 // = +-1 the side of the triangle x_p must stay on, fixed by the detector), so that a vertex
-// that crossed the sheet is pushed back; both forms agree, with their gradients, on the
-// boundary of the interior region. Gradients: grad_p C = u, grad_m C = -b_m u with u the unit
-// direction of C's increase (exact: the derivative of the normal is orthogonal to x_p - q).
+// that crossed the sheet over its interior is pushed back. Both forms agree, with their
+// gradients, on the boundary of the interior region on x_p's own side only: a vertex that
+// crossed the sheet and lies over an edge or corner region is pushed away from the edge on
+// the side it is on, so such a crossing stays (it cannot be told there from a vertex that
+// went round a free edge). The closure's self-intersection count reports it; no checked
+// closure has shown one. Gradients: grad_p C = u, grad_m C = -b_m u with u the unit direction
+// of C's increase (exact, checked against finite differences: over the interior the normal's
+// derivative and the closest point's in-plane motion together give -b_m n).
 // Hard (compliance 0), pushes only.
 struct ContactConstraint {
   int p = 0, a = 0, b = 0, c = 0;
