@@ -11,8 +11,8 @@ jobs="${CHORDFIT_JOBS:-$(nproc 2>/dev/null || echo 2)}"
 
 packages=(
   build-essential cmake
-  libeigen3-dev libceres-dev libnlopt-cxx-dev libnanoflann-dev libcgal-dev
-  nlohmann-json3-dev libcli11-dev libtbb-dev libgtest-dev libbenchmark-dev
+  libeigen3-dev libceres-dev libnlopt-cxx-dev libcgal-dev
+  nlohmann-json3-dev libcli11-dev libgtest-dev libbenchmark-dev
 )
 
 say() { printf '\n==> %s\n' "$*"; }

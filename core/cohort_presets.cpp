@@ -86,7 +86,7 @@ ValveParameters normal2Anatomy() {
 }
 
 // The normal anatomy with the degenerative change of an isolated P2 lesion: a taller P2 scallop
-// (14 -> 17 mm; P2 heights above 15 mm are typical of fibroelastic deficiency with redundant P2,
+// (14 -> 16.8 mm; P2 heights above 15 mm are typical of fibroelastic deficiency with redundant P2,
 // Carpentier's "Reconstructive valve surgery" 2010).
 ValveParameters enlargedP2Anatomy() {
   ValveParameters p = normalAnatomy();
@@ -133,7 +133,7 @@ std::vector<CohortPreset> buildPresets() {
   {
     CohortPreset p;
     p.name = "prolapse-P2";
-    p.summary = "isolated P2 prolapse: elongated P2 cords, enlarged P2 (17 mm)";
+    p.summary = "isolated P2 prolapse: elongated P2 cords, enlarged P2 (16.8 mm)";
     p.anatomy = enlargedP2Anatomy();
     p.segment_scale = {0, 0, 0, 0, kElongatedP2, 0};
     p.intended_prolapse = {"P2"};

@@ -211,7 +211,7 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
                                  fixed(config.scale_bounds->second, 2)
                            : "");
   out.markdown =
-      "# Acceptance of the per-cord fit (issue \"Inverse fitting\", item 7)\n\n"
+      "# Acceptance of the per-cord fit\n\n"
       "Per-cord Ceres fit from the heuristic (`" +
       std::string(kFitTag) + "` jobs: `chordfit fit " + fit_options + "`, the merge's plan) on " +
       (case_options.size() == 1 ? "cases made by `chordfit make-case " + *case_options.begin() + "`"

@@ -191,8 +191,8 @@ void addCompare(CLI::App& app, CompareOptions& o) {
                   "Regional tissue files, comma-separated, one per file ('-': the case's own), "
                   "e.g. a tissue-prefit fit's tissue.json");
   cmd->add_option("--out", o.out_dir,
-                  "Write compare.md, compare.csv, sections.svg and enface_K.svg (one per cord "
-                  "set) here");
+                  "Write compare.md, compare.csv, cords.csv (each cord's length per set), "
+                  "sections.svg and enface_K.svg (one per cord set) here");
   cmd->add_flag("--quiet", o.quiet, "No progress lines");
   addSettingOverrides(cmd, o.settings_overrides);
 }
