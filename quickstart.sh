@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # chordfit quick start. Two verbs:
 #   ./quickstart.sh fit    install what is missing, build, fit the cords of the bundled default case
-#   ./quickstart.sh test   install what is missing, build, run the whole test suite (ctest)
-# Works on a fresh Debian (bookworm) or Ubuntu (22.04+) machine; uses sudo when not root.
+#   ./quickstart.sh test   install what is missing, build, run the test suite (ctest), then the
+#                          benchmark pipeline's smoke run (experiments/smoke.sh)
+# Tested on Debian 12 (bookworm). Ubuntu 22.04 ships Ceres 2.0; the build needs Ceres >= 2.1.
+# Other releases are untested. Uses sudo when not root.
 set -euo pipefail
 
 here="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
