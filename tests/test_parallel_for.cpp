@@ -4,8 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <chrono>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "core/parallel_for.h"
@@ -32,6 +34,29 @@ TEST(ParallelFor, RethrowsTheFailureOfTheLowestTaskToTheCaller) {
       EXPECT_EQ(std::string(e.what()), "task 7") << threads << " threads";
     }
   }
+}
+
+// A higher task failing first (sweep-cord's points run out of order on two threads): the tasks
+// below it still run, the lower failure that comes later is the one rethrown, and no task
+// above the first failure starts after it.
+TEST(ParallelFor, AHigherTaskFailingFirstStillReportsTheLowerFailureAndStopsAboveIt) {
+  std::vector<std::atomic<int>> runs(50);
+  try {
+    parallelFor(50, 2, [&](int i) {
+      ++runs[i];
+      if (i == 0) {
+        // Task 0 fails last: the other thread meanwhile reaches task 3.
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        throw std::runtime_error("task 0");
+      }
+      if (i == 3) throw std::runtime_error("task 3");
+    });
+    ADD_FAILURE() << "no exception";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()), "task 0");
+  }
+  for (int i = 0; i <= 3; ++i) EXPECT_EQ(runs[i], 1) << "task " << i;
+  for (int i = 4; i < 50; ++i) EXPECT_EQ(runs[i], 0) << "task " << i << " ran after task 3 failed";
 }
 
 }  // namespace
