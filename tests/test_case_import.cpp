@@ -417,6 +417,22 @@ TEST(ImportMeshCli, RefusesANameWithAControlCharacterOrABlankOneAsItsOption) {
   }
 }
 
+// Without --name the case is named after its directory; a blank directory name was refused only
+// when the staged case was read back ("case.json: name: is blank"), a name the user never gave.
+TEST(ImportMeshCli, RefusesABlankDirectoryNameAsTheDefaultNameUpFront) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  const auto r = runChordfit("import-mesh " + quoted(dir / "valve.ply") + " --landmarks " +
+                             quoted(dir / "landmarks.json") + " --out " + quoted(dir / "  "));
+  EXPECT_EQ(r.exit_code, 2) << r.out;
+  EXPECT_NE(r.err.find("': without --name the case is named after this directory, whose name is "
+                       "blank; give --name"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("case.json"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir / "  "));
+}
+
 // The case's default name is its directory's, also when --out ends with a slash (it was "").
 TEST(ImportMeshCli, NamesTheCaseAfterItsDirectoryWithATrailingSlash) {
   TempDir dir;

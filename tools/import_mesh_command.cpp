@@ -244,12 +244,19 @@ std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
 
 int runImportMesh(const ImportMeshOptions& options) {
   // The check loadCase makes of case.json's name, up front and as the option's: the staged case
-  // used to be refused when read back, as case.json's. No --name (or "") names the case after
-  // its directory.
-  if (const std::string problem = caseNameProblem(options.name);
-      !options.name.empty() && !problem.empty())
-    return fail("import-mesh", "--name: " + problem);
+  // used to be refused when read back, as case.json's, a name the user may never have given. No
+  // --name (or "") names the case after its output directory, also when given as "dir/" or ".".
   const fs::path out(options.out_dir);
+  fs::path named = fs::absolute(out).lexically_normal();
+  if (named.filename().empty()) named = named.parent_path();
+  const std::string name = options.name.empty() ? named.filename().string() : options.name;
+  if (const std::string problem = caseNameProblem(name); !problem.empty()) {
+    if (!options.name.empty()) return fail("import-mesh", "--name: " + problem);
+    return fail("import-mesh", "--out '" + out.string() +
+                                   "': without --name the case is named after this directory, "
+                                   "whose name " +
+                                   problem.substr(0, problem.find(':')) + "; give --name");
+  }
   Diagnostics diagnostics;
   Eigen::MatrixXd V;
   Eigen::MatrixXi F;
@@ -279,10 +286,6 @@ int runImportMesh(const ImportMeshOptions& options) {
                     std::to_string(landmarks.points.rows()));
   }
   const ImportLandmarks l = landmarksOfRows(landmarks.points, 0, 1, 2);
-  // The default name: the output directory's own, also when given as "dir/" or ".".
-  fs::path named = fs::absolute(out).lexically_normal();
-  if (named.filename().empty()) named = named.parent_path();
-  const std::string name = options.name.empty() ? named.filename().string() : options.name;
   ImportedCase imported = importValveCase(V, F, l, closed.points, name);
   if (!imported.ok()) {
     // RAS read as LPS (or the reverse) turns a file half a turn about S: say so when the
