@@ -568,6 +568,13 @@ TEST(FitCommand, ConvergenceCsvCountsEveryClosureOfTheFit) {
   EXPECT_EQ(rows[0][5], "forward_sims");
   EXPECT_EQ(std::stoi(rows.back()[5]), metrics["forward_sims"].get<int>() - 1)
       << testing::readText(dir / "fit" / "convergence.csv");
+  // The case this test is about: the last closure is a trial Ceres rejected (its cost above the
+  // best so far). Should a change of the fit's path end it otherwise, the test would pass
+  // without covering that case: it says so instead.
+  ASSERT_EQ(rows[0][2], "cost");
+  ASSERT_EQ(rows[0][3], "best_cost");
+  EXPECT_GT(std::stod(rows.back()[2]), std::stod(rows.back()[3]))
+      << "the fit no longer ends on a rejected trial; pick options that do";
 }
 
 // A budget too small for the kind stage (inverse/global_prefit.h) still runs the common
