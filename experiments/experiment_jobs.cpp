@@ -26,6 +26,7 @@
 #include "core/cordset_io.h"
 #include "core/mesh_io.h"
 #include "core/synthetic_case.h"
+#include "experiments/result_fields.h"
 
 extern char** environ;
 
@@ -68,7 +69,10 @@ volatile std::sig_atomic_t g_child_pid = 0;
 // Ctrl-C reaches the running chordfit through the terminal's process group, but a `kill` of
 // run_experiments alone would leave it running as an orphan: forward the signal. Only
 // async-signal-safe calls here.
+// SIGHUP (the terminal of a shard closed) stops the run as SIGTERM does, which is also what the
+// child gets: chordfit cleans up after SIGINT and SIGTERM.
 extern "C" void forwardStopSignal(int signal_number) {
+  if (signal_number == SIGHUP) signal_number = SIGTERM;
   g_stop_signal = signal_number;
   const pid_t child = static_cast<pid_t>(g_child_pid);
   if (child > 0) ::kill(child, signal_number);
@@ -123,6 +127,7 @@ int runProgram(const std::vector<std::string>& args, const fs::path& log) {
   sigemptyset(&stop_signals);
   sigaddset(&stop_signals, SIGINT);
   sigaddset(&stop_signals, SIGTERM);
+  sigaddset(&stop_signals, SIGHUP);
   sigprocmask(SIG_BLOCK, &stop_signals, &previous);
   posix_spawnattr_t attributes;
   posix_spawnattr_init(&attributes);
@@ -444,11 +449,13 @@ void installStopHandlers() {
   action.sa_flags = SA_RESTART;
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
+  sigaction(SIGHUP, &action, nullptr);
 }
 
 void restoreDefaultStopHandlers() {
   std::signal(SIGINT, SIG_DFL);
   std::signal(SIGTERM, SIG_DFL);
+  std::signal(SIGHUP, SIG_DFL);
 }
 
 int stopSignal() { return g_stop_signal; }
@@ -473,8 +480,16 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
   const auto start = Clock::now();
   std::string how = "generated";
   if (const fs::path source = matchingSourceCase(spec, paths.case_source); !source.empty()) {
-    fs::create_directories(staging);
-    fs::copy(source, staging, fs::copy_options::recursive);
+    // A copy that fails (an unreadable file) fails this case alone and leaves no staging.
+    std::error_code copy_error;
+    fs::create_directories(staging, copy_error);
+    if (!copy_error) fs::copy(source, staging, fs::copy_options::recursive, copy_error);
+    if (copy_error) {
+      std::error_code ignored;
+      fs::remove_all(staging, ignored);
+      return failure("case " + spec.id + ": cannot copy " + source.string() +
+                     " (--case-source): " + copy_error.message());
+    }
     how = "copied from " + source.string();
   } else if (!runChordfit(
                  paths,
@@ -501,7 +516,15 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
 StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, const JobSpec& job,
                    const RunPaths& paths, bool force) {
   const fs::path result_path = jobResultPath(paths, job.id);
-  if (!force && fs::exists(result_path)) return {true, true, "", "result present"};
+  std::string unusable;
+  if (!force && fs::exists(result_path)) {
+    unusable = jobResultProblem(result_path, job.id);
+    if (unusable.empty()) return {true, true, "", "result present"};
+  }
+  // The old result goes before the job runs: a rerun that fails leaves no result (merge and
+  // check then report the job missing) rather than the old one in the tables without a word.
+  std::error_code removed;
+  fs::remove(result_path, removed);
   const CaseSpec& spec = findCase(plan, job.case_id);
   const StepOutcome made = ensureCase(spec, paths);
   if (!made.ok) return made;
@@ -597,13 +620,14 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
     return failure("job " + job.id + ": " + e.what());
   }
   writeFileAtomically(result_path, result.dump(1) + "\n");
-  char summary[160];
-  std::snprintf(summary, sizeof summary, "AvgD %.2f mm, %d sims, %.1f s",
+  char numbers[96];
+  std::snprintf(numbers, sizeof numbers, "AvgD %.2f mm, %d sims, %.1f s",
                 result["metrics"]["mean_mm"].is_number()
                     ? result["metrics"]["mean_mm"].get<double>()
                     : std::nan(""),
                 result["forward_sims"].get<int>(), result["wall_seconds"].get<double>());
-  return {true, false, "", summary};
+  return {true, false, "",
+          (unusable.empty() ? "" : "the result there " + unusable + ", so ran again: ") + numbers};
 }
 
 }  // namespace chordfit::experiments

@@ -6,6 +6,8 @@
 #include <limits>
 #include <map>
 #include <set>
+#include <stdexcept>
+#include <utility>
 
 #include <nlohmann/json.hpp>
 
@@ -50,17 +52,25 @@ class Merger {
         timing_(!options.no_timing),
         plan_options_(options.plan_options),
         plan_id_(options.plan_id.empty() ? planId(plan) : options.plan_id) {
+    // Every job file is checked before any table is written: a bad one (truncated, another
+    // job's, without a key) stops the merge naming it, with the tables as they were.
     for (const JobSpec& job : plan.jobs) {
-      std::string text;
-      if (readWholeFile(results / "jobs" / (job.id + ".json"), text)) {
-        results_by_job_[job.id] = json::parse(text);
-        ++summary_.jobs_found;
-      } else {
+      const fs::path file = results / "jobs" / (job.id + ".json");
+      if (!fs::exists(file)) {
         summary_.missing_jobs.push_back(job.id);
+        continue;
       }
+      json result;
+      if (const std::string problem = jobResultProblem(file, job.id, &result); !problem.empty())
+        throw std::runtime_error(file.string() + ": " + problem +
+                                 "; remove it (run_experiments run makes it again) or restore it");
+      results_by_job_[job.id] = std::move(result);
+      ++summary_.jobs_found;
     }
   }
 
+  // Every table is made before any is written, so a merge that fails half way (an exception
+  // from a table) leaves the tables of the last merge, not a mix of old and new.
   MergeSummary run() {
     table1();
     acceptance();
@@ -68,6 +78,7 @@ class Merger {
     recovery();
     sensitivity();
     index();
+    for (const auto& [name, text] : pending_) writeFileAtomically(results_ / name, text);
     return summary_;
   }
 
@@ -78,7 +89,7 @@ class Merger {
   }
 
   void write(const std::string& name, const std::string& text) {
-    writeFileAtomically(results_ / name, text);
+    pending_.emplace_back(name, text);
     summary_.written_files.push_back(name);
   }
 
@@ -495,6 +506,7 @@ class Merger {
   std::string plan_options_;
   std::string plan_id_;
   std::map<std::string, json> results_by_job_;
+  std::vector<std::pair<std::string, std::string>> pending_;  // name, text: written by run()
   MergeSummary summary_;
 };
 

@@ -4,11 +4,35 @@
 #include <cmath>
 #include <cstdio>
 
+#include "core/atomic_file.h"
 #include "core/joined.h"
 
 namespace chordfit::experiments {
 
 using nlohmann::json;
+
+std::string jobResultProblem(const std::filesystem::path& file, const std::string& job_id,
+                             json* result) {
+  std::string text;
+  if (!readWholeFile(file, text)) return "cannot be read";
+  json parsed = json::parse(text, nullptr, false);
+  if (parsed.is_discarded() || !parsed.is_object())
+    return "is not a JSON object (truncated or edited?)";
+  if (!parsed.contains("job") || !parsed.at("job").is_string()) return "has no \"job\"";
+  if (parsed.at("job").get<std::string>() != job_id) {
+    return "is the result of job " + parsed.at("job").get<std::string>() +
+           " (a file copied under another name?)";
+  }
+  // Keys runJob writes for every method that the tables read.
+  for (const char* key : {"case", "method", "forward_sims"}) {
+    if (!parsed.contains(key)) return std::string("has no \"") + key + "\"";
+  }
+  if (!parsed.contains("metrics") || !parsed.at("metrics").is_object())
+    return "has no \"metrics\" object";
+  if (!parsed.contains("cords") || !parsed.at("cords").is_array()) return "has no \"cords\" array";
+  if (result) *result = std::move(parsed);
+  return "";
+}
 
 std::string fixed(double value, int digits) {
   if (!std::isfinite(value)) return "";

@@ -2,6 +2,7 @@
 // their numbers for the merged tables: shared by the tables of `merge`.
 #pragma once
 
+#include <filesystem>
 #include <limits>
 #include <string>
 #include <vector>
@@ -9,6 +10,12 @@
 #include <nlohmann/json.hpp>
 
 namespace chordfit::experiments {
+
+// What makes results/jobs/<job_id>.json unusable as that job's result: unreadable, not JSON
+// (e.g. truncated), another job's (a file copied under another name), or without a key every
+// job writes; "" when usable. `result` receives the parsed file when given.
+std::string jobResultProblem(const std::filesystem::path& file, const std::string& job_id,
+                             nlohmann::json* result = nullptr);
 
 inline constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 

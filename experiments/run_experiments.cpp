@@ -3,7 +3,10 @@
 // merges the per-job results into the tables and plots of experiments/results/. See
 // experiments/README.md, "Benchmark experiments". Arguments are parsed by hand (CLI11 is
 // confined to tools/main.cpp for build time).
+#include <unistd.h>
+
 #include <algorithm>
+#include <cerrno>
 #include <chrono>
 #include <csignal>
 #include <cstdio>
@@ -423,6 +426,22 @@ std::string staleJobText(const StaleResult& stale, const char* who) {
 // Before a run starts: a present case or result made with other options than this run's would
 // be reused as if it were made with them (a case whatever --force says, a result unless
 // --force). Returns the message refusing the run, or "".
+// "" when `dir` exists or can be made and a file can be written in it; else what stands in the
+// way. Checked before the first job: a read-only results directory was found only when the
+// first job's result could not be written, after its fit, and the shard ended there.
+std::string unwritableDirectory(const fs::path& dir) {
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) return dir.string() + ": cannot be made (" + ec.message() + ")";
+  const fs::path probe = dir / (".write-test-" + std::to_string(::getpid()));
+  {
+    std::ofstream out(probe);
+    if (!out) return dir.string() + ": cannot be written to (" + std::strerror(errno) + ")";
+  }
+  fs::remove(probe, ec);
+  return "";
+}
+
 std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig& config,
                               const Arguments& a, const RunPaths& paths,
                               const std::vector<const CaseSpec*>& cases,
@@ -525,6 +544,14 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
   if (const std::string refusal = refuseStaleInputs(plan, config, a, paths, cases, jobs);
       !refusal.empty()) {
     std::fprintf(stderr, "run_experiments: error: %s\n", refusal.c_str());
+    return kExitUsage;
+  }
+  if (const std::string problem = unwritableDirectory(a.results / "jobs"); !problem.empty()) {
+    std::fprintf(stderr, "run_experiments: error: --results: %s\n", problem.c_str());
+    return kExitUsage;
+  }
+  if (const std::string problem = unwritableDirectory(a.work); !problem.empty()) {
+    std::fprintf(stderr, "run_experiments: error: --work: %s\n", problem.c_str());
     return kExitUsage;
   }
   std::fprintf(stderr, "run_experiments: shard %d/%d: %zu of %zu cases, %zu of %zu jobs\n",
@@ -787,7 +814,20 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
       found |= rows[r].size() > 9 && rows[r][0] == job.case_id && rows[r][3] == tag &&
                !rows[r][9].empty();
     }
-    if (!found) without_row.push_back(job.id);
+    if (!found) {
+      without_row.push_back(job.id);
+      continue;
+    }
+    // A row whose result file is gone or unusable (a rerun that failed, an edited file): the
+    // tables are older than the jobs.
+    const fs::path file = a.results / "jobs" / (job.id + ".json");
+    if (!fs::exists(file)) {
+      problems.push_back("table1.csv: the row of job " + job.id + " has no result file " +
+                         file.string() + " (gone since the merge: run the job, then merge)");
+    } else if (const std::string problem = jobResultProblem(file, job.id); !problem.empty()) {
+      problems.push_back("table1.csv: the row of job " + job.id + " is of " + file.string() +
+                         ", which " + problem);
+    }
   }
   if (without_row.size() <= kListedAtMost) {
     for (const std::string& id : without_row)

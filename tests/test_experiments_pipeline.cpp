@@ -838,6 +838,74 @@ TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult)
     EXPECT_NE(err.find("stopped by SIGINT during job 1/2"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir / "results" / "table1.csv")) << "a stopped `all` does not merge";
   }
+  {  // SIGHUP (the terminal of a shard closed) stops the run as SIGTERM does: it killed
+     // run_experiments alone (exit 129) and left its chordfit running as an orphan.
+    TempDir dir;
+    const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
+    const pid_t runner = startRunner("run --force" + options(dir, fake), dir / "err", false);
+    ASSERT_GT(runner, 0);
+    const pid_t child = waitForFakeChild(dir.path());
+    ASSERT_GT(child, 0) << readText(dir / "err");
+    kill(runner, SIGHUP);
+    const int status = waitForRunner(runner);
+    const std::string err = readText(dir / "err");
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << "status " << status << err;
+    EXPECT_FALSE(stillRunning(child)) << "the chordfit of the job was left running";
+    EXPECT_NE(err.find("resume with: "), std::string::npos) << err;
+  }
+}
+
+// A job result that cannot be one (truncated, another job's file, or replaced by a failed
+// rerun) is never tabulated: `run` runs such a job again, a rerun removes the old result before
+// it starts (a failed --force rerun used to leave the old one, and merge and check passed), and
+// `merge` refuses a bad file by name before it writes any table.
+TEST_F(ExperimentsPipeline, BadOrStaleJobResultsAreRunAgainOrRefusedByName) {
+  TempDir dir;
+  const fs::path jobs = dir / "results" / "jobs";
+  const fs::path heuristic = jobs / "normal-1_s2__heuristic.json";
+  const fs::path truth = jobs / "normal-1_s2__truth.json";
+  const std::string good_heuristic = fixtureResult("heuristic", 1.25, {{0.5, 0.10}}).dump();
+  const std::string good_truth = fixtureResult("truth", 0.40, {{0.5, 0.0}}).dump();
+  writeText(heuristic, good_heuristic);
+  writeText(truth, good_truth);
+  const std::string merge =
+      "merge --smoke --methods heuristic,truth --no-timing --results " + quoted(dir / "results");
+  ASSERT_EQ(runRunner(merge).exit_code, 0);
+  const std::string table = readText(dir / "results" / "table1.csv");
+
+  // merge: a truncated file and a file of another job are named; no table is written.
+  writeText(heuristic, good_heuristic.substr(0, good_heuristic.size() / 2));
+  auto r = runRunner(merge);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(heuristic.string() + ": is not a JSON object (truncated or edited?)"),
+            std::string::npos)
+      << r.err;
+  writeText(heuristic, good_truth);
+  r = runRunner(merge);
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_NE(r.err.find(heuristic.string() +
+                       ": is the result of job normal-1_s2__truth (a file copied under another "
+                       "name?)"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(readText(dir / "results" / "table1.csv"), table) << "tables rewritten";
+
+  // run: the bad result is run again (here by a chordfit that fails, so no result is left).
+  const fs::path bundled = fs::path(CHORDFIT_EXE).parent_path().parent_path() / "cases";
+  const fs::path fake = writeFakeChordfit(dir.path(), "exit 1");
+  const std::string run = "run --smoke --methods heuristic,truth --case-source " + quoted(bundled) +
+                          " --chordfit " + quoted(fake) + " --work " + quoted(dir / "work") +
+                          " --results " + quoted(dir / "results");
+  r = runRunner(run);
+  EXPECT_EQ(lines(readText(dir / "calls")).size(), 1u) << "only the bad result's job: " << r.err;
+  EXPECT_FALSE(fs::exists(heuristic)) << r.err;
+  EXPECT_TRUE(fs::exists(truth));
+  // run --force with a chordfit that fails: the old result does not outlive the failed rerun.
+  r = runRunner(run + " --force");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_FALSE(fs::exists(truth)) << r.err;
+  r = runRunner("check --smoke --methods heuristic,truth --results " + quoted(dir / "results"));
+  EXPECT_NE(r.exit_code, 0) << "the tables are of results that are gone: " << r.err;
 }
 
 // calibrate_cohort (experiments/README.md "Calibration"): one preset and seed at a coarse edge,
