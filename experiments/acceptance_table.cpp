@@ -93,11 +93,13 @@ std::string acceptanceCsvHeader(bool timing) {
 }
 
 AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLookup& result,
-                                  bool timing, const AcceptanceThresholds& t) {
+                                  const PlanLookup& planned, bool timing,
+                                  const AcceptanceThresholds& t) {
   AcceptanceTables out;
   out.csv = acceptanceCsvHeader(timing);
   std::string rows;
   Tally reduction, floor, prolapse, intended, tissue, recovery, taut_recovery;
+  int planned_cases = 0;                   // with a heuristic and a fit job in the plan
   std::vector<std::string> missing;        // cases without a heuristic or fit result
   std::vector<std::string> missing_truth;  // judged, but without the truth's floor columns
   std::vector<std::string> intended_misses;
@@ -106,6 +108,8 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
   for (const std::string& preset : config.presets) {
     for (int seed : config.seeds) {
       const std::string case_id = baseCaseId(preset, seed);
+      if (!planned(case_id, "heuristic") || !planned(case_id, kFitTag)) continue;
+      ++planned_cases;
       const json* heuristic = result(case_id, "heuristic");
       const json* fit = result(case_id, kFitTag);
       const json* truth = result(case_id, "truth");
@@ -258,6 +262,12 @@ AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLo
       " mm of a plane: " + std::to_string(pooled_near) + " of " +
       std::to_string(pooled_cords - pooled_ruptured) + " unruptured (" +
       std::to_string(pooled_ruptured) + " ruptured left out).\n";
+  if (planned_cases == 0) {
+    out.markdown +=
+        "\n**No case to judge**: no case of this merge's plan has both a heuristic "
+        "and a per-cord Ceres fit job (`" +
+        std::string(kFitTag) + "`; see its --cases, --methods).\n";
+  }
   if (!missing.empty()) {
     out.markdown += "\n**Not judged** (no heuristic or fit result): " + joined(missing, ", ") +
                     "; the counts above leave them out.\n";

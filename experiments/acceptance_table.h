@@ -34,8 +34,14 @@ struct AcceptanceTables {
 using ResultLookup =
     std::function<const nlohmann::json*(const std::string& case_id, const std::string& tag)>;
 
+// planned(case_id, method tag): the merge's plan holds that job. A case whose heuristic or
+// per-cord Ceres fit is not planned (a subset's --cases, --methods) is left out without a word;
+// one whose planned jobs have no result is named as not judged.
+using PlanLookup = std::function<bool(const std::string& case_id, const std::string& tag)>;
+
 AcceptanceTables acceptanceTables(const ExperimentConfig& config, const ResultLookup& result,
-                                  bool timing, const AcceptanceThresholds& thresholds = {});
+                                  const PlanLookup& planned, bool timing,
+                                  const AcceptanceThresholds& thresholds = {});
 
 std::string acceptanceCsvHeader(bool timing);
 

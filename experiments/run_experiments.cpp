@@ -83,7 +83,7 @@ commands:
   run      run the cases and jobs of one shard (--shard i/N); results go to RESULTS/jobs/
   merge    build the tables and plots from RESULTS/jobs/*.json (after all shards ran)
   check    verify that merged tables have every planned row and well-formed columns
-  list     print the plan: cases and jobs with their shard under --shard i/N
+  list     print the plan: its cases and jobs (under --shard i/N only that shard's)
 
 options:
   --plan NAME        full (the default and the committed results: every preset, seeds

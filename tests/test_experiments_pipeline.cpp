@@ -396,6 +396,11 @@ TEST_F(ExperimentsPipeline, MergeTabulatesTheJobResultsItFindsAndListsTheMissing
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(readText(dir / "sensitivity.md").find("No rows: the plan does not hold"),
             std::string::npos);
+  // Without fit jobs in the subset nothing is judged, and no case is called "not judged" as if
+  // its results were missing (every case of the full plan was listed).
+  const std::string acceptance = readText(dir / "acceptance.md");
+  EXPECT_NE(acceptance.find("**No case to judge**"), std::string::npos) << acceptance;
+  EXPECT_EQ(acceptance.find("**Not judged**"), std::string::npos) << acceptance;
   r = runRunner("check" + subset + "--results " + quoted(dir.path()));
   EXPECT_EQ(r.exit_code, 0) << r.out << r.err;
 }
