@@ -505,7 +505,11 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
   fs::rename(staging, dir, ec);  // fails when another shard was first: same files, keep theirs
   if (ec) fs::remove_all(staging);
   if (!fs::exists(dir / "case.json")) {
-    return failure("case " + spec.id + ": " + dir.string() + " missing after generation");
+    // The rename fails onto a directory that is there already without a case (left by an
+    // older or interrupted run, or made by hand).
+    return failure("case " + spec.id + ": " + dir.string() +
+                   (fs::exists(dir) ? " is there without a case.json (left half-made?): remove it"
+                                    : " missing after generation"));
   }
   char seconds[32];
   std::snprintf(seconds, sizeof seconds, " in %.1f s",

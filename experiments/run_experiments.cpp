@@ -546,6 +546,12 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
     std::fprintf(stderr, "run_experiments: error: %s\n", refusal.c_str());
     return kExitUsage;
   }
+  // A missing chordfit failed every case and job in turn ("6 failure(s)" for 2 cases, 4 jobs).
+  if (::access(a.chordfit.c_str(), X_OK) != 0) {
+    std::fprintf(stderr, "run_experiments: error: --chordfit %s: %s (build it, or give its path)\n",
+                 a.chordfit.c_str(), fs::exists(a.chordfit) ? "not executable" : "no such file");
+    return kExitUsage;
+  }
   if (const std::string problem = unwritableDirectory(a.results / "jobs"); !problem.empty()) {
     std::fprintf(stderr, "run_experiments: error: --results: %s\n", problem.c_str());
     return kExitUsage;

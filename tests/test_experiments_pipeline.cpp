@@ -911,6 +911,21 @@ TEST_F(ExperimentsPipeline, BadOrStaleJobResultsAreRunAgainOrRefusedByName) {
   EXPECT_FALSE(fs::exists(truth)) << r.err;
   r = runRunner("check --smoke --methods heuristic,truth --results " + quoted(dir / "results"));
   EXPECT_NE(r.exit_code, 0) << "the tables are of results that are gone: " << r.err;
+
+  // No chordfit: refused before the first case (every case and job failed in turn).
+  r = runRunner("run --smoke --methods heuristic --chordfit " + quoted(dir / "none" / "chordfit") +
+                " --work " + quoted(dir / "work") + " --results " + quoted(dir / "results"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("/none/chordfit: no such file"), std::string::npos) << r.err;
+  // A case directory without a case.json is named as such ("missing after generation").
+  const fs::path other_work = dir / "other-work";
+  writeText(other_work / "cases" / "normal-1_s2" / "cords.json", "{}");
+  r = runRunner("run --smoke --methods heuristic --case-source " + quoted(bundled) +
+                " --chordfit " + quoted(fake) + " --work " + quoted(other_work) + " --results " +
+                quoted(dir / "results"));
+  EXPECT_NE(r.err.find("normal-1_s2 is there without a case.json (left half-made?): remove it"),
+            std::string::npos)
+      << r.err;
 }
 
 // calibrate_cohort (experiments/README.md "Calibration"): one preset and seed at a coarse edge,
