@@ -162,6 +162,7 @@ int usageError(const std::string& message) {
 int parseArguments(int argc, char** argv, Arguments& a) {
   std::vector<std::string> args(argv + 1, argv + argc);
   a.command_line.assign(argv, argv + argc);
+  std::set<std::string> seen;  // options given so far
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];
     auto value = [&](std::string& out) {
@@ -169,6 +170,15 @@ int parseArguments(int argc, char** argv, Arguments& a) {
       out = args[++i];
       return true;
     };
+    // An option given twice used to take its last value without a word (--edge 2 --edge 3,
+    // --smoke --plan full); --smoke is --plan smoke.
+    if (arg.rfind("--", 0) == 0) {
+      const std::string name = arg == "--smoke" ? "--plan" : arg;
+      if (!seen.insert(name).second) {
+        return usageError(name == "--plan" ? "the plan is given twice (--plan, --smoke)"
+                                           : arg + " is given twice");
+      }
+    }
     std::string text;
     if (arg == "--help" || arg == "-h") {
       std::cout << usageText(kUsage);

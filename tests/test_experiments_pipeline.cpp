@@ -226,6 +226,13 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   r = runRunner("list --plan most");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--plan: expected full, reduced or smoke"), std::string::npos) << r.err;
+  // An option given twice took its last value without a word.
+  r = runRunner("list --smoke --plan full");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("the plan is given twice (--plan, --smoke)"), std::string::npos) << r.err;
+  r = runRunner("list --edge 2 --edge 3");
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("--edge is given twice"), std::string::npos) << r.err;
   for (const char* bounds : {"0.6", "1.5,0.7", "0,1.5", "0.6,1.5x"}) {
     r = runRunner(std::string("list --scale-bounds ") + bounds);
     EXPECT_EQ(r.exit_code, 2) << bounds;
