@@ -61,6 +61,10 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
   std::vector<double> step(n);
   for (int p = 0; p < n; ++p) {
     step[p] = parameters.isScale(p) ? settings.initial_scale_step : settings.initial_tip_step_mm;
+    // BOBYQA needs bounds at least two initial steps apart ("insufficient space between the
+    // bounds" after the pre-fits, with --scale-bounds 0.99,1.01): a narrower box gets a smaller
+    // first step.
+    step[p] = std::min(step[p], 0.5 * (parameters.upper()(p) - parameters.lower()(p)));
   }
   opt.set_initial_step(step);
   opt.set_ftol_rel(settings.function_tolerance);
