@@ -228,6 +228,24 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto budget_allows = [&](int sims) {
     return outcome.forward_sims + sims + 1 <= options.max_sims;
   };
+  // A seed outside the bounds (a manual cord edited past them): the pre-fits start where the
+  // optimiser would, from the seed clamped into the bounds. They started from the seed as
+  // given: a cord at 0.06 of its length ran every pre-fit closure to the step cap, and the
+  // factors were fitted to a valve the optimiser never started from.
+  const bool any_prefit =
+      (options.prefit.enabled || options.segment_prefit.enabled || options.tissue_prefit.enabled) &&
+      seed_parameters.size() > 0;
+  if (seed_parameters.startClamped() && any_prefit && budget_allows(1)) {
+    start_set = seed_parameters.apply(seed_parameters.initial());
+    start_evaluation = seed_residual.evaluate(seed_parameters.initial());
+    ++outcome.forward_sims;
+    if (!start_evaluation.ok()) {
+      outcome.error =
+          "closure of the seed clamped into the scale bounds failed: " + start_evaluation.error;
+      return outcome;
+    }
+    record("clamped", 0, start_evaluation, start_evaluation.cost);
+  }
   const std::string skip_reason = prefitSkipReason(seed);
   const bool prefit_has_cords = skip_reason.empty();
   if ((options.prefit.enabled || options.segment_prefit.enabled) && seed_parameters.size() > 0)
@@ -239,7 +257,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     prefit.threads = options.finite_difference.threads;
     // The kind stage only when it fits as well (a small budget keeps the common factor).
     if (!budget_allows(common_sims + 2 * prefit.kind_points)) prefit.kind_points = 0;
-    const PrefitResult result = globalScalePrefit(valve_case, seed, outcome.seed_evaluation,
+    const PrefitResult result = globalScalePrefit(valve_case, start_set, start_evaluation,
                                                   options.bounds, seed_residual, prefit);
     outcome.forward_sims += result.forward_sims;
     outcome.prefit_ran = true;

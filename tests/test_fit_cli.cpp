@@ -774,5 +774,74 @@ TEST(FitCommand, RejectsAFiniteDifferenceStepNotBelowTheLowerScaleBound) {
       << err;
 }
 
+// `edit-cords SMALL_CASE EDITS --out FILE`, expected to succeed.
+void editSmallCase(const std::string& edits, const std::filesystem::path& file) {
+  const auto r =
+      runChordfit("edit-cords " + quoted(smallCase()) + " " + edits + " --out " + quoted(file));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+}
+
+// A seed outside the scale bounds starts where the bounds put it, for the pre-fits and the
+// optimiser alike (found by a probe of the fit):
+//   - every cord at 1.6 (all manual: no pre-fit): Ceres refused to start, counting a Jacobian
+//     of every parameter ("66 runs, 58 left") where the clamped start's taut cords needed 6,
+//     and wrote the clamped start, worse than the seed, without a convergence.csv row for it;
+//   - one manual cord at 0.06 of its length: the pre-fits closed the valve with it as given (every
+//     closure ran to the step cap) and fitted their factors to a valve the optimiser never saw.
+TEST(FitCommand, ASeedOutsideTheBoundsStartsClampedForThePrefitsAndTheOptimiser) {
+  TempDir dir;
+  editSmallCase("--all 1.6", dir / "long.json");
+  auto metrics = fitSmallCase(
+      "--seed-cords " + quoted(dir / "long.json") + " --max-sims 60 --no-uncertainty --quiet",
+      dir / "long");
+  ASSERT_FALSE(metrics.empty());
+  EXPECT_LT(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>())
+      << metrics["termination"];
+  auto rows = parseSimpleCsv(testing::readText(dir / "long" / "convergence.csv"));
+  ASSERT_GE(rows.size(), 4u);
+  EXPECT_EQ(rows[2][0], "clamped");
+  EXPECT_EQ(rows.back()[5], std::to_string(metrics["forward_sims"].get<int>() - 1));
+
+  editSmallCase("--cord 0=0.06", dir / "short.json");
+  metrics = fitSmallCase(
+      "--seed-cords " + quoted(dir / "short.json") + " --max-sims 60 --no-uncertainty --quiet",
+      dir / "short");
+  ASSERT_FALSE(metrics.empty());
+  rows = parseSimpleCsv(testing::readText(dir / "short" / "convergence.csv"));
+  ASSERT_GE(rows.size(), 4u);
+  EXPECT_EQ(rows[2][0], "clamped");
+  EXPECT_EQ(rows[3][0], "prefit");
+  // The pre-fit improves on the clamped start it began from (it began from the seed as given,
+  // and its closures did not settle).
+  EXPECT_LT(std::stod(rows[3][2]), std::stod(rows[2][2]));
+  EXPECT_LT(metrics["unsettled_sims"].get<int>(), 5);
+}
+
+// Per cord the bounds multiply the seed rest length: a manual cord edited to 0.045 of it (1.1 mm)
+// starts clamped at 0.7 of 25 mm, and the fit was refused as if 0.7 applied to 1.1 mm.
+TEST(FitCommand, ChecksTheScaleBoundsOnTheSeedRestLengthsPerCord) {
+  TempDir dir;
+  editSmallCase("--cord 0=0.045", dir / "tiny.json");
+  const auto metrics = fitSmallCase(
+      "--seed-cords " + quoted(dir / "tiny.json") + " --max-sims 20 --no-uncertainty --quiet",
+      dir / "fit");
+  EXPECT_FALSE(metrics.empty());
+}
+
+// Closures that reached the step cap are in report.md, not only on the terminal.
+TEST(FitCommand, ReportSaysWhenClosuresDidNotSettle) {
+  TempDir dir;
+  const auto metrics =
+      fitSmallCase("--set max_steps=150 --max-sims 20 --no-uncertainty --quiet", dir / "fit");
+  ASSERT_FALSE(metrics.empty());
+  ASSERT_GT(metrics["unsettled_sims"].get<int>(), 0);
+  const std::string report = testing::readText(dir / "fit" / "report.md");
+  EXPECT_NE(report.find("- unsettled: " + std::to_string(metrics["unsettled_sims"].get<int>()) +
+                        " of the fit's"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("the closure written out did not settle"), std::string::npos) << report;
+}
+
 }  // namespace
 }  // namespace chordfit

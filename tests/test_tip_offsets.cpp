@@ -37,6 +37,15 @@ TEST(TipOffsets, AreDeterminedOnlyBeyondTwoSdOfZeroOnEitherSide) {
       << line;
 }
 
+// An offset held at its --tip-box bound is the bound's, not the tracings' (a probe's fit showed
+// "tip anterolateral x | 8.000 | 2.061 (at bound) | yes").
+TEST(TipOffsets, AtTheirBoundAreNotDetermined) {
+  inverse::FitOutcome fit = fitWithTips();
+  fit.uncertainty.at_bound[1] = true;
+  EXPECT_FALSE(tipOffsetDetermined(fit, 1));
+  EXPECT_TRUE(tipOffsetDetermined(fit, 3));
+}
+
 TEST(TipOffsets, AreNotJudgedWithoutAnUncertaintyOrWithoutTips) {
   inverse::FitOutcome fit = fitWithTips();
   fit.uncertainty.error = "too few residuals";

@@ -123,9 +123,13 @@ int runFit(const FitCommandOptions& o) {
   }
   // A scale at either bound must leave a cord set the readers take (cords.json is read
   // back for the fitted closure); found after the fit, it would cost the whole run.
+  // Per cord (scales, scales+tips) a scale multiplies the seed rest length, whatever the cord's
+  // present length (a manual 0.045 of it starts clamped): check the lengths the bounds reach.
+  const bool per_cord = *mode != inverse::ParameterMode::kGroups;
   for (const Cord& cord : seed->cords) {
     if (cord.locked) continue;
-    const double length = std::max(cord.seed_rest_length, cord.rest_length);
+    const double length =
+        per_cord ? cord.seed_rest_length : std::max(cord.seed_rest_length, cord.rest_length);
     const double reach = length * o.scale_bounds[1];
     if (reach > kMaxCordRestLengthMm) {
       std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
@@ -133,7 +137,8 @@ int runFit(const FitCommandOptions& o) {
                 << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
       return kExitBadInput;
     }
-    const double shortest = std::min(cord.seed_rest_length, cord.rest_length);
+    const double shortest =
+        per_cord ? cord.seed_rest_length : std::min(cord.seed_rest_length, cord.rest_length);
     const double shrunk = shortest * o.scale_bounds[0];
     if (shrunk < kMinCordRestLengthMm) {
       std::cerr << "error: fit: --scale-bounds: the lower bound " << o.scale_bounds[0]

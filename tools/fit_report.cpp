@@ -457,6 +457,7 @@ PlotSeries stageSeries(const std::string& stage, const std::string& optimizer) {
   };
   static const Style kStyles[] = {
       {"seed", "seed", "#000000", PlotMarker::kCircle, 5.0},
+      {"clamped", "clamped: seed clamped into the bounds", "#999999", PlotMarker::kCircle, 5.0},
       {"prefit", "prefit: global pre-fit", "#CC79A7", PlotMarker::kSquare, 6.5},
       {"segments", "segments: segment pre-fit", "#009E73", PlotMarker::kDiamond, 6.0},
       {"tissue", "tissue: tissue pre-fit", "#56B4E9", PlotMarker::kTriangleDown, 6.5},
@@ -581,7 +582,7 @@ std::string tipTable(const inverse::FitOutcome& fit) {
 
 bool tipOffsetDetermined(const inverse::FitOutcome& fit, std::size_t p) {
   const Eigen::Index i = static_cast<Eigen::Index>(p);
-  return fit.uncertainty.ok() && !fit.parameter_is_scale[p] &&
+  return fit.uncertainty.ok() && !fit.parameter_is_scale[p] && !fit.uncertainty.at_bound[p] &&
          std::abs(fit.x(i)) > kTipOffsetDeterminedSds * fit.uncertainty.sd(i);
 }
 
@@ -724,6 +725,15 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   md << "- forward simulations: " << fit.forward_sims + 1 << " (" << fit.forward_sims
      << " in the fit, 1 for the closure written out; metrics.json forward_sims), fit time: "
      << formatFixed(fit.seconds, 1) << " s, threads: " << o.threads << "\n";
+  // Closures that reached the step cap (the terminal said so; the report did not).
+  if (fit.unsettled_sims > 0)
+    md << "- unsettled: " << fit.unsettled_sims << " of the fit's " << fit.forward_sims
+       << " closures reached the step cap (max_steps) before the quasi-static criterion; each is "
+          "the mean of its last steps (metrics.json unsettled_sims)\n";
+  if (fit.final_evaluation.ok() && !fit.final_evaluation.converged)
+    md << "- **the closure written out did not settle**: it reached the step cap and is the "
+          "mean of its last steps (metrics.json converged false); its numbers are less "
+          "certain than a settled closure's\n";
   md << "- termination: " << fit.termination << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n\n";

@@ -25,7 +25,8 @@ std::string uncertaintyCsv(const inverse::FitOutcome& fit);
 
 // A PM tip offset (--params scales+tips) is determined by the tracings when it lies more than
 // kTipOffsetDeterminedSds of its SD from 0 (about 95 % two-sided under the Jacobian's normal
-// approximation); within that, zero fits as well. Measured on the quick-start case: offsets
+// approximation); within that, zero fits as well. An offset at its --tip-box bound is not
+// (the bound, not the tracings, holds it there; as for cords). Measured on the quick-start case: offsets
 // within 1 SD moved the anterolateral tip from 0.87 to 4.23 mm off the true one.
 constexpr double kTipOffsetDeterminedSds = 2.0;
 bool tipOffsetDetermined(const inverse::FitOutcome& fit, std::size_t parameter);
