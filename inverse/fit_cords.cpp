@@ -400,8 +400,11 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
           retry.kept = retry.data_cost_with <
                        retry.data_cost_without * (1.0 - options.tissue_retry_min_gain);
           if (retry.kept) {
+            // The first optimisation's stop stays on record (only the retry's was).
+            const std::string first_termination = run->termination;
             run = std::move(second);
             adopt(*run);
+            outcome.termination += "; before the tissue retry: " + first_termination;
             outcome.tissue = softened.tissue;
             outcome.tissue_prefit_changes = softened.changed;
           }
