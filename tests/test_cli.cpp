@@ -475,6 +475,34 @@ TEST(ChordfitCli, HeuristicCountsOnePmTipInTheSingular) {
   EXPECT_TRUE(std::regex_search(r.out, line)) << r.out;
 }
 
+// A tracing repeated point for point (a file pasted twice) counts its points twice and narrows
+// the fit's SDs by about sqrt(2): validate and fit say so (it was accepted without a word).
+TEST(ChordfitCli, ValidateAndFitNoteTracingsRepeatedPointForPoint) {
+  TempDir dir;
+  const auto case_dir = dir / "case";
+  std::filesystem::copy(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", case_dir,
+                        std::filesystem::copy_options::recursive);
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir / "case.json"));
+  const auto tracings_file = case_dir / c["tracings"].get<std::string>();
+  nlohmann::json tracings = nlohmann::json::parse(testing::readText(tracings_file));
+  const std::size_t n = tracings["tracings"].size();
+  ASSERT_GE(n, 2u);
+  tracings["tracings"].push_back(tracings["tracings"][1]);
+  testing::writeText(tracings_file, tracings.dump());
+  const std::string note = "note: tracings[" + std::to_string(n) +
+                           "] repeats tracings[1] point for point: its points count twice";
+  auto r = runChordfit("validate " + quoted(case_dir));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(note), std::string::npos) << r.err;
+  r = runChordfit("fit " + quoted(case_dir) + " --max-sims 2 --no-uncertainty --quiet --out " +
+                  quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find(note), std::string::npos) << r.err;
+  // The bundled case has none.
+  r = runChordfit("validate " + quoted(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal"));
+  EXPECT_EQ(r.err.find("repeats tracings"), std::string::npos) << r.err;
+}
+
 // With the case's own cords, the heuristic takes each cord-set tip's position from the pm_tips
 // tip in the same place in the list; with another count it ignored pm_tips without a word.
 TEST(ChordfitCli, HeuristicRefusesPmTipsItCannotPairWithTheCasesCords) {

@@ -407,6 +407,29 @@ std::string closedValveSummary(const ValveMetrics& m, const std::string& indent)
   return text;
 }
 
+std::string duplicateTracingsNote(const ValveCase& valve_case) {
+  constexpr int kNamedAtMost = 3;
+  std::string note;
+  int repeats = 0;
+  const auto& tracings = valve_case.tracings;
+  for (std::size_t t = 1; t < tracings.size(); ++t) {
+    for (std::size_t u = 0; u < t; ++u) {
+      if (tracings[t].points.rows() != tracings[u].points.rows() ||
+          tracings[t].points != tracings[u].points)
+        continue;
+      if (++repeats <= kNamedAtMost)
+        note += "note: tracings[" + std::to_string(t) + "] repeats tracings[" + std::to_string(u) +
+                "] point for point: its points count twice in the fit, and the fit's SDs "
+                "(uncertainty.csv) come out narrower than the data warrant\n";
+      break;
+    }
+  }
+  if (repeats > kNamedAtMost)
+    note += "note: " + counted(repeats - kNamedAtMost, "more tracing") +
+            (repeats - kNamedAtMost == 1 ? " repeats an earlier one\n" : " repeat earlier ones\n");
+  return note;
+}
+
 std::string caseSummary(const ValveCase& c) {
   std::ostringstream out;
   const ValveMesh& mesh = c.mesh;

@@ -115,4 +115,9 @@ std::string closedValveSummary(const ValveMetrics& metrics, const std::string& i
 // Multi-line human summary of a case (mesh, leaflets, annulus, tracings, tips, cords).
 std::string caseSummary(const ValveCase& valve_case);
 
+// "note: ..." lines for tracings that repeat an earlier one point for point (a file pasted
+// twice): each point then counts twice in the fit, whose SDs come out narrower than the data
+// warrant; "" when none does. validate and fit print it.
+std::string duplicateTracingsNote(const ValveCase& valve_case);
+
 }  // namespace chordfit::cli

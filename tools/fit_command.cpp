@@ -109,6 +109,7 @@ int runFit(const FitCommandOptions& o) {
     std::cerr << "error: " << o.case_dir << ": case.json: tracings: the fit needs tracings\n";
     return kExitBadInput;
   }
+  std::cerr << duplicateTracingsNote(*valve_case);
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
   if (seed->cords.empty()) {

@@ -38,6 +38,7 @@ int runValidate(const ValidateOptions& options) {
     return kExitBadInput;
   std::cout << caseSummary(*valve_case);
   std::cerr << pmTipsBesideCordsNote(*valve_case);  // notes go to stderr, as everywhere
+  std::cerr << duplicateTracingsNote(*valve_case);
   std::cout << "valid\n";
   return kExitOk;
 }
