@@ -787,14 +787,18 @@ TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult)
     EXPECT_NE(r.err.find("0 failed, 2 of the shard's 2 not done"), std::string::npos) << r.err;
     EXPECT_NE(r.err.find("and 1 case(s) failed to generate"), std::string::npos) << r.err;
   }
-  {  // kill -TERM run_experiments: forwarded to its chordfit, waited for, exit 143.
+  // kill -TERM run_experiments: forwarded to its chordfit, waited for, exit 143. SIGHUP (the
+  // terminal of a shard closed) the same: it killed run_experiments alone (exit 129) and left
+  // its chordfit running as an orphan.
+  for (const int signal_number : {SIGTERM, SIGHUP}) {
+    SCOPED_TRACE(signal_number == SIGTERM ? "SIGTERM" : "SIGHUP");
     TempDir dir;
     const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
     const pid_t runner = startRunner("run --force" + options(dir, fake), dir / "err", false);
     ASSERT_GT(runner, 0);
     const pid_t child = waitForFakeChild(dir.path());
     ASSERT_GT(child, 0) << readText(dir / "err");
-    kill(runner, SIGTERM);
+    kill(runner, signal_number);
     const int status = waitForRunner(runner);
     const std::string err = readText(dir / "err");
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << "status " << status << err;
@@ -849,21 +853,6 @@ TEST_F(ExperimentsPipeline, ASignalStopsTheWholeRunAndLeavesNoChildOrHalfResult)
     EXPECT_EQ(calls(dir), 1u) << err;
     EXPECT_NE(err.find("stopped by SIGINT during job 1/2"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir / "results" / "table1.csv")) << "a stopped `all` does not merge";
-  }
-  {  // SIGHUP (the terminal of a shard closed) stops the run as SIGTERM does: it killed
-     // run_experiments alone (exit 129) and left its chordfit running as an orphan.
-    TempDir dir;
-    const fs::path fake = writeFakeChordfit(dir.path(), "exec sleep 60");
-    const pid_t runner = startRunner("run --force" + options(dir, fake), dir / "err", false);
-    ASSERT_GT(runner, 0);
-    const pid_t child = waitForFakeChild(dir.path());
-    ASSERT_GT(child, 0) << readText(dir / "err");
-    kill(runner, SIGHUP);
-    const int status = waitForRunner(runner);
-    const std::string err = readText(dir / "err");
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 143) << "status " << status << err;
-    EXPECT_FALSE(stillRunning(child)) << "the chordfit of the job was left running";
-    EXPECT_NE(err.find("resume with: "), std::string::npos) << err;
   }
 }
 
