@@ -69,8 +69,10 @@ volatile std::sig_atomic_t g_child_pid = 0;
 // Ctrl-C reaches the running chordfit through the terminal's process group, but a `kill` of
 // run_experiments alone would leave it running as an orphan: forward the signal. Only
 // async-signal-safe calls here.
-// SIGHUP (the terminal of a shard closed) stops the run as SIGTERM does, which is also what the
-// child gets: chordfit cleans up after SIGINT and SIGTERM.
+// SIGHUP sent to run_experiments stops the run as SIGTERM does, and the child gets SIGTERM
+// (chordfit cleans up after SIGINT and SIGTERM). A closing terminal sends SIGHUP to the whole
+// foreground group, chordfit included, which then dies without its cleanup; run shards under
+// nohup or in a terminal that stays.
 extern "C" void forwardStopSignal(int signal_number) {
   if (signal_number == SIGHUP) signal_number = SIGTERM;
   g_stop_signal = signal_number;
@@ -517,18 +519,12 @@ StepOutcome ensureCase(const CaseSpec& spec, const RunPaths& paths) {
   return {true, false, "", how + seconds};
 }
 
-StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, const JobSpec& job,
-                   const RunPaths& paths, bool force) {
-  const fs::path result_path = jobResultPath(paths, job.id);
-  std::string unusable;
-  if (!force && fs::exists(result_path)) {
-    unusable = jobResultProblem(result_path, job.id);
-    if (unusable.empty()) return {true, true, "", "result present"};
-  }
-  // The old result goes before the job runs: a rerun that fails leaves no result (merge and
-  // check then report the job missing) rather than the old one in the tables without a word.
-  std::error_code removed;
-  fs::remove(result_path, removed);
+namespace {
+
+// The job itself (runJob decides whether it runs and what becomes of an old result).
+StepOutcome runJobSteps(const ExperimentPlan& plan, const ExperimentConfig& config,
+                        const JobSpec& job, const RunPaths& paths, const fs::path& result_path,
+                        const std::string& unusable) {
   const CaseSpec& spec = findCase(plan, job.case_id);
   const StepOutcome made = ensureCase(spec, paths);
   if (!made.ok) return made;
@@ -632,6 +628,27 @@ StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, c
                 result["forward_sims"].get<int>(), result["wall_seconds"].get<double>());
   return {true, false, "",
           (unusable.empty() ? "" : "the result there " + unusable + ", so ran again: ") + numbers};
+}
+
+}  // namespace
+
+StepOutcome runJob(const ExperimentPlan& plan, const ExperimentConfig& config, const JobSpec& job,
+                   const RunPaths& paths, bool force) {
+  const fs::path result_path = jobResultPath(paths, job.id);
+  std::string unusable;
+  if (!force && fs::exists(result_path)) {
+    unusable = jobResultProblem(result_path, job.id);
+    if (unusable.empty()) return {true, true, "", "result present"};
+  }
+  const StepOutcome outcome = runJobSteps(plan, config, job, paths, result_path, unusable);
+  // A rerun that failed leaves no result (merge and check then report the job missing): a
+  // failed --force rerun left the old one, which merge tabulated without a word. A stopped
+  // one (Ctrl-C) keeps it: the stop is not the job's failure.
+  if (!outcome.ok && outcome.stop_signal == 0) {
+    std::error_code removed;
+    fs::remove(result_path, removed);
+  }
+  return outcome;
 }
 
 }  // namespace chordfit::experiments

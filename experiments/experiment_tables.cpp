@@ -69,8 +69,8 @@ class Merger {
     }
   }
 
-  // Every table is made before any is written, so a merge that fails half way (an exception
-  // from a table) leaves the tables of the last merge, not a mix of old and new.
+  // Every table is made before any is written, so a merge that fails while making them (an
+  // exception from a table) leaves the tables of the last merge, not a mix of old and new.
   MergeSummary run() {
     table1();
     acceptance();

@@ -433,9 +433,6 @@ std::string staleJobText(const StaleResult& stale, const char* who) {
          " records " + describe(stale.mismatch, who) + moreLikeIt(stale.count, "job");
 }
 
-// Before a run starts: a present case or result made with other options than this run's would
-// be reused as if it were made with them (a case whatever --force says, a result unless
-// --force). Returns the message refusing the run, or "".
 // "" when `dir` exists or can be made and a file can be written in it; else what stands in the
 // way. Checked before the first job: a read-only results directory was found only when the
 // first job's result could not be written, after its fit, and the shard ended there.
@@ -452,6 +449,9 @@ std::string unwritableDirectory(const fs::path& dir) {
   return "";
 }
 
+// Before a run starts: a present case or result made with other options than this run's would
+// be reused as if it were made with them (a case whatever --force says, a result unless
+// --force). Returns the message refusing the run, or "".
 std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig& config,
                               const Arguments& a, const RunPaths& paths,
                               const std::vector<const CaseSpec*>& cases,
@@ -557,9 +557,12 @@ int runShard(const ExperimentPlan& plan, const ExperimentConfig& config, const A
     return kExitUsage;
   }
   // A missing chordfit failed every case and job in turn ("6 failure(s)" for 2 cases, 4 jobs).
-  if (::access(a.chordfit.c_str(), X_OK) != 0) {
+  if (!fs::is_regular_file(a.chordfit) || ::access(a.chordfit.c_str(), X_OK) != 0) {
     std::fprintf(stderr, "run_experiments: error: --chordfit %s: %s (build it, or give its path)\n",
-                 a.chordfit.c_str(), fs::exists(a.chordfit) ? "not executable" : "no such file");
+                 a.chordfit.c_str(),
+                 !fs::exists(a.chordfit)            ? "no such file"
+                 : !fs::is_regular_file(a.chordfit) ? "not a file"
+                                                    : "not executable");
     return kExitUsage;
   }
   if (const std::string problem = unwritableDirectory(a.results / "jobs"); !problem.empty()) {

@@ -232,9 +232,13 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   // optimiser would, from the seed clamped into the bounds. They started from the seed as
   // given: a cord at 0.06 of its length ran every pre-fit closure to the step cap, and the
   // factors were fitted to a valve the optimiser never started from.
+  // (Only when a pre-fit stage will run: else the optimiser closes the clamped start itself.)
+  const bool cord_prefit_runs =
+      prefitSkipReason(seed).empty() &&
+      (options.prefit.enabled ||
+       (options.segment_prefit.enabled && options.mode != ParameterMode::kGroups));
   const bool any_prefit =
-      (options.prefit.enabled || options.segment_prefit.enabled || options.tissue_prefit.enabled) &&
-      seed_parameters.size() > 0;
+      (cord_prefit_runs || options.tissue_prefit.enabled) && seed_parameters.size() > 0;
   if (seed_parameters.startClamped() && any_prefit && budget_allows(1)) {
     start_set = seed_parameters.apply(seed_parameters.initial());
     start_evaluation = seed_residual.evaluate(seed_parameters.initial());

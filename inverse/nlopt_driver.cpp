@@ -63,8 +63,9 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
     step[p] = parameters.isScale(p) ? settings.initial_scale_step : settings.initial_tip_step_mm;
     // BOBYQA needs bounds at least two initial steps apart ("insufficient space between the
     // bounds" after the pre-fits, with --scale-bounds 0.99,1.01): a narrower box gets a smaller
-    // first step.
-    step[p] = std::min(step[p], 0.5 * (parameters.upper()(p) - parameters.lower()(p)));
+    // first step, kept below half the width (at exactly half, NLopt's rescaling of group
+    // factors still failed the check by rounding).
+    step[p] = std::min(step[p], 0.45 * (parameters.upper()(p) - parameters.lower()(p)));
   }
   opt.set_initial_step(step);
   opt.set_ftol_rel(settings.function_tolerance);

@@ -490,7 +490,7 @@ TEST(ChordfitCli, ValidateAndFitNoteTracingsRepeatedPointForPoint) {
   tracings["tracings"].push_back(tracings["tracings"][1]);
   testing::writeText(tracings_file, tracings.dump());
   const std::string note = "note: tracings[" + std::to_string(n) +
-                           "] repeats tracings[1] point for point: its points count twice";
+                           "] repeats tracings[1] point for point: its points count again";
   auto r = runChordfit("validate " + quoted(case_dir));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find(note), std::string::npos) << r.err;

@@ -797,9 +797,12 @@ TEST(FitCommand, ASeedOutsideTheBoundsStartsClampedForThePrefitsAndTheOptimiser)
   ASSERT_FALSE(metrics.empty());
   EXPECT_LT(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>())
       << metrics["termination"];
+  // Every cord manual: no pre-fit runs, and Ceres closes the clamped start and goes on.
   auto rows = parseSimpleCsv(testing::readText(dir / "long" / "convergence.csv"));
   ASSERT_GE(rows.size(), 4u);
-  EXPECT_EQ(rows[2][0], "clamped");
+  EXPECT_EQ(rows[2][0], "ceres");
+  EXPECT_EQ(rows[3][0], "ceres");
+  EXPECT_EQ(rows[3][1], "1") << "Ceres made a step";
   EXPECT_EQ(rows.back()[5], std::to_string(metrics["forward_sims"].get<int>() - 1));
 
   editSmallCase("--cord 0=0.06", dir / "short.json");
@@ -815,6 +818,16 @@ TEST(FitCommand, ASeedOutsideTheBoundsStartsClampedForThePrefitsAndTheOptimiser)
   // and its closures did not settle).
   EXPECT_LT(std::stod(rows[3][2]), std::stod(rows[2][2]));
   EXPECT_LT(metrics["unsettled_sims"].get<int>(), 5);
+}
+
+// A budget below one Jacobian and a step: Ceres does not run, and convergence.csv has no row
+// for it (it repeated the pre-fit's closure as "ceres,0").
+TEST(FitCommand, ABudgetTooSmallForCeresAddsNoCeresRow) {
+  TempDir dir;
+  const auto metrics = fitSmallCase("--max-sims 20 --no-uncertainty --quiet", dir / "fit");
+  ASSERT_FALSE(metrics.empty());
+  const std::string csv = testing::readText(dir / "fit" / "convergence.csv");
+  EXPECT_EQ(csv.find("\nceres,"), std::string::npos) << csv;
 }
 
 // Per cord the bounds multiply the seed rest length: a manual cord edited to 0.045 of it (1.1 mm)
@@ -840,7 +853,7 @@ TEST(FitCommand, ReportSaysWhenClosuresDidNotSettle) {
                         " of the fit's"),
             std::string::npos)
       << report;
-  EXPECT_NE(report.find("the closure written out did not settle"), std::string::npos) << report;
+  EXPECT_NE(report.find("the fit's best closure did not settle"), std::string::npos) << report;
 }
 
 }  // namespace

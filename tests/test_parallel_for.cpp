@@ -41,15 +41,20 @@ TEST(ParallelFor, RethrowsTheFailureOfTheLowestTaskToTheCaller) {
 // above the first failure starts after it.
 TEST(ParallelFor, AHigherTaskFailingFirstStillReportsTheLowerFailureAndStopsAboveIt) {
   std::vector<std::atomic<int>> runs(50);
+  std::atomic<bool> task3_failed{false};
   try {
     parallelFor(50, 2, [&](int i) {
       ++runs[i];
       if (i == 0) {
-        // Task 0 fails last: the other thread meanwhile reaches task 3.
-        std::this_thread::sleep_for(std::chrono::milliseconds(200));
+        // Task 0 fails last: it waits (at most 10 s) until the other thread's task 3 has failed.
+        for (int k = 0; k < 10000 && !task3_failed; ++k)
+          std::this_thread::sleep_for(std::chrono::milliseconds(1));
         throw std::runtime_error("task 0");
       }
-      if (i == 3) throw std::runtime_error("task 3");
+      if (i == 3) {
+        task3_failed = true;
+        throw std::runtime_error("task 3");
+      }
     });
     ADD_FAILURE() << "no exception";
   } catch (const std::runtime_error& e) {

@@ -419,7 +419,7 @@ std::string duplicateTracingsNote(const ValveCase& valve_case) {
         continue;
       if (++repeats <= kNamedAtMost)
         note += "note: tracings[" + std::to_string(t) + "] repeats tracings[" + std::to_string(u) +
-                "] point for point: its points count twice in the fit, and the fit's SDs "
+                "] point for point: its points count again in the fit, and the fit's SDs "
                 "(uncertainty.csv) come out narrower than the data warrant\n";
       break;
     }

@@ -731,9 +731,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
        << " closures reached the step cap (max_steps) before the quasi-static criterion; each is "
           "the mean of its last steps (metrics.json unsettled_sims)\n";
   if (fit.final_evaluation.ok() && !fit.final_evaluation.converged)
-    md << "- **the closure written out did not settle**: it reached the step cap and is the "
-          "mean of its last steps (metrics.json converged false); its numbers are less "
-          "certain than a settled closure's\n";
+    md << "- **the fit's best closure did not settle**: it reached the step cap and is the "
+          "mean of its last steps; its numbers are less certain than a settled closure's\n";
   md << "- termination: " << fit.termination << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n\n";
