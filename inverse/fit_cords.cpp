@@ -233,10 +233,11 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   // given: a cord at 0.06 of its length ran every pre-fit closure to the step cap, and the
   // factors were fitted to a valve the optimiser never started from.
   // (Only when a pre-fit stage will run: else the optimiser closes the clamped start itself.)
+  const std::string skip_reason = prefitSkipReason(seed);
+  const bool prefit_has_cords = skip_reason.empty();
   const bool cord_prefit_runs =
-      prefitSkipReason(seed).empty() &&
-      (options.prefit.enabled ||
-       (options.segment_prefit.enabled && options.mode != ParameterMode::kGroups));
+      prefit_has_cords && (options.prefit.enabled || (options.segment_prefit.enabled &&
+                                                      options.mode != ParameterMode::kGroups));
   const bool any_prefit =
       (cord_prefit_runs || options.tissue_prefit.enabled) && seed_parameters.size() > 0;
   if (seed_parameters.startClamped() && any_prefit && budget_allows(1)) {
@@ -250,8 +251,6 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     }
     record("clamped", 0, start_evaluation, start_evaluation.cost);
   }
-  const std::string skip_reason = prefitSkipReason(seed);
-  const bool prefit_has_cords = skip_reason.empty();
   if ((options.prefit.enabled || options.segment_prefit.enabled) && seed_parameters.size() > 0)
     outcome.prefit_skipped = skip_reason;
   const int common_sims = commonStageMaxClosures(options.prefit, options.bounds);
