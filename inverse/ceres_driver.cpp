@@ -157,18 +157,18 @@ SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& set
   // cord there. Counted for every parameter, the check refused starts one Jacobian of 6
   // closures could move ("66 runs, 65 left"). Ceres evaluates the start first anyway.
   bool start_known = objective.cached(start) != nullptr;
-  bool closed_here = false;
+  std::shared_ptr<const ForwardEvaluation> closed_here;  // the start's closure, when run here
   if (!start_known && objective.budgetAllows(1)) {
-    objective.evaluate(start);
-    start_known = closed_here = true;
+    closed_here = objective.evaluate(start);
+    start_known = true;
   }
   // The start's closure, its Jacobian and one trial step: less cannot move x.
   const int first_step_sims = (start_known ? 0 : 1) + objective.jacobianSims(start) + 1;
   if (!objective.budgetAllows(first_step_sims)) {
     // The start's closure, when run here, is the fit's last: convergence.csv gets its row.
-    if (const auto known = objective.cached(start); known && closed_here)
-      objective.recordIteration("ceres", 0, known->ok() ? known->cost : NAN,
-                                known->ok() ? known->mean_deviation_mm : NAN);
+    if (closed_here)
+      objective.recordIteration("ceres", 0, closed_here->ok() ? closed_here->cost : NAN,
+                                closed_here->ok() ? closed_here->mean_deviation_mm : NAN);
     return {{"budget of " + std::to_string(objective.maxSims()) +
                  " forward runs is below one Jacobian and a step (" +
                  std::to_string(first_step_sims) + " runs, " +
