@@ -333,6 +333,27 @@ TEST(FitCommand, ABudgetTooSmallForTheClampedStartExitsWith2NamingMaxSims) {
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
 }
 
+// Bounds that exclude the seed and a budget that leaves Ceres no step: the fit writes the
+// clamped start, worse than the seed, and said nothing about it.
+TEST(FitCommand, AFitWorseThanTheSeedSaysWhyInTheTerminalAndTheReport) {
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --scale-bounds 1.1,1.5 --max-sims 3 --no-uncertainty --out " +
+                             quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
+  ASSERT_GT(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>());
+  EXPECT_NE(r.out.find("note: the fit ends worse than the seed"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("clamped into them"), std::string::npos) << r.out;
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("**the fit ends worse than the seed"),
+            std::string::npos);
+  // A fit that improves on the seed says nothing of the kind.
+  const auto better = runChordfit("fit " + quoted(smallCase()) +
+                                  " --max-sims 15 --no-uncertainty --out " + quoted(dir / "ok"));
+  ASSERT_EQ(better.exit_code, 0) << better.err;
+  EXPECT_EQ(better.out.find("worse than the seed"), std::string::npos) << better.out;
+}
+
 TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   TempDir dir;
   auto seed = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));

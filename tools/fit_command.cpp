@@ -371,6 +371,7 @@ int runFit(const FitCommandOptions& o) {
   std::cout << lockedProbeSummary(*valve_case, o, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
+  if (const std::string note = worseThanSeedNote(fit); !note.empty()) std::cout << "note: " << note;
   if (const std::string hint = missedProlapseHint(*valve_case, o, fit, fit_metrics); !hint.empty())
     std::cout << "note: " << hint;
   if (fit.tissue.size() > 0) {

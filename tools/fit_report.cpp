@@ -317,6 +317,26 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
          "\n";
 }
 
+std::string worseThanSeedNote(const inverse::FitOutcome& fit) {
+  if (!fit.seed_evaluation.ok() || !fit.final_evaluation.ok() ||
+      fit.final_evaluation.cost <= fit.seed_evaluation.cost)
+    return "";
+  const auto clamped =
+      std::find_if(fit.history.begin(), fit.history.end(),
+                   [](const inverse::IterationRecord& r) { return r.stage == "clamped"; });
+  std::string line = "the fit ends worse than the seed (cost " +
+                     formatFixed(fit.seed_evaluation.cost, 1) + " -> " +
+                     formatFixed(fit.final_evaluation.cost, 1) + ", AvgD " +
+                     formatFixed(fit.seed_evaluation.mean_deviation_mm, 2) + " -> " +
+                     formatFixed(fit.final_evaluation.mean_deviation_mm, 2) + " mm)";
+  if (clamped != fit.history.end())
+    return line + ": the seed lies outside the bounds, the fit started from it clamped into " +
+           "them (cost " + formatFixed(clamped->cost, 1) +
+           ") and did not get back below the seed's cost; widen --scale-bounds or give more "
+           "--max-sims\n";
+  return line + ": no point the fit reached inside the bounds was better; give more --max-sims\n";
+}
+
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics) {
   if (!fit_metrics.has_tracings || fit_metrics.prolapse_reconstructed) return "";
@@ -735,7 +755,10 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
           "mean of its last steps; its numbers are less certain than a settled closure's\n";
   md << "- termination: " << fit.termination << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
-     << "\n\n";
+     << "\n";
+  if (const std::string note = worseThanSeedNote(fit); !note.empty())
+    md << "- **" << note.substr(0, note.size() - 1) << "**\n";
+  md << "\n";
   md << "## Table 1: seed vs fit\n\n"
      << table1Header("Cord set") << table1Row("seed", seed_metrics) << table1Row("fit", fit_metrics)
      << "\n";

@@ -26,8 +26,8 @@ std::string uncertaintyCsv(const inverse::FitOutcome& fit);
 // A PM tip offset (--params scales+tips) is determined by the tracings when it lies more than
 // kTipOffsetDeterminedSds of its SD from 0 (about 95 % two-sided under the Jacobian's normal
 // approximation); within that, zero fits as well. An offset at its --tip-box bound is not
-// (the bound, not the tracings, holds it there; as for cords). Measured on the quick-start case: offsets
-// within 1 SD moved the anterolateral tip from 0.87 to 4.23 mm off the true one.
+// (the bound, not the tracings, holds it there; as for cords). Measured on the quick-start case:
+// offsets within 1 SD moved the anterolateral tip from 0.87 to 4.23 mm off the true one.
 constexpr double kTipOffsetDeterminedSds = 2.0;
 bool tipOffsetDetermined(const inverse::FitOutcome& fit, std::size_t parameter);
 // "PM tips: 2 of 6 tip offsets determined ...", or "" without tip parameters or uncertainty.
@@ -56,6 +56,11 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
 // One line, ending in a newline, for report.md and (after "note: ") the terminal.
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics);
+// When the fit ends at a higher cost than the seed as given, why, or "": the fit starts from
+// the seed clamped into the bounds and returns the best point it saw inside them, so a seed
+// outside the bounds can be better than every point the budget reached. One line, ending in a
+// newline, for report.md and (after "note: ") the terminal.
+std::string worseThanSeedNote(const inverse::FitOutcome& fit);
 // What the tissue retry did (FitOptions::tissue_retry), for report.md and the terminal; and
 // metrics.json's "tissue_retry" (docs/outputs.md).
 std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o);
