@@ -73,11 +73,13 @@ volatile std::sig_atomic_t g_child_pid = 0;
 // (chordfit cleans up after SIGINT and SIGTERM). A closing terminal sends SIGHUP to the whole
 // foreground group, chordfit included, which then dies without its cleanup; run shards under
 // nohup or in a terminal that stays.
+// The run itself reports and exits with the signal it received (SIGHUP: 129).
+int signalForChild(int signal_number) { return signal_number == SIGHUP ? SIGTERM : signal_number; }
+
 extern "C" void forwardStopSignal(int signal_number) {
-  if (signal_number == SIGHUP) signal_number = SIGTERM;
   g_stop_signal = signal_number;
   const pid_t child = static_cast<pid_t>(g_child_pid);
-  if (child > 0) ::kill(child, signal_number);
+  if (child > 0) ::kill(child, signalForChild(signal_number));
 }
 
 // A child that outlives a forwarded stop by this long (one that ignores or hangs on SIGINT /
@@ -143,20 +145,23 @@ int runProgram(const std::vector<std::string>& args, const fs::path& log) {
   if (spawned == 0) g_child_pid = pid;
   sigprocmask(SIG_SETMASK, &previous, nullptr);  // a pending stop is forwarded here
   if (spawned != 0) return -1;
-  if (g_stop_signal != 0) ::kill(pid, g_stop_signal);  // requested before the child existed
-  const int status = waitForChild(pid);                // a wait status is never negative
+  // A stop requested before the child existed.
+  if (g_stop_signal != 0) ::kill(pid, signalForChild(g_stop_signal));
+  const int status = waitForChild(pid);  // a wait status is never negative
   g_child_pid = 0;
   if (status < 0) return -1;
   if (WIFEXITED(status)) return WEXITSTATUS(status);
   return WIFSIGNALED(status) ? 128 + WTERMSIG(status) : -1;
 }
 
-// The stop signal a child's exit code means (chordfit dies of SIGINT / SIGTERM, so 130 / 143),
-// or the one run_experiments received; 0 when the run goes on.
+// The stop signal run_experiments received, or else the one a child's exit code means (chordfit
+// dies of SIGINT / SIGTERM, so 130 / 143; a SIGHUP forwarded as SIGTERM is still SIGHUP); 0 when
+// the run goes on.
 int stopSignalOf(int exit_code) {
+  if (g_stop_signal != 0) return g_stop_signal;
   if (exit_code == 128 + SIGINT) return SIGINT;
   if (exit_code == 128 + SIGTERM) return SIGTERM;
-  return g_stop_signal;
+  return 0;
 }
 
 std::string logTail(const fs::path& log, std::size_t lines = 6) {

@@ -126,9 +126,9 @@ options:
   --no-timing        merge: leave out wall-time columns (to diff two runs)
   --allow-missing    merge/all: exit 0 even when some jobs have no result
 
-Ctrl-C (SIGINT) or SIGTERM stops the whole run: the running chordfit gets the signal and is
-waited for (killed if still running 5 s later), nothing half-made is kept, and the exit code is
-130 / 143; rerun the same command (without --force) to resume.
+Ctrl-C (SIGINT), SIGTERM or SIGHUP stops the whole run: the running chordfit gets the signal
+(SIGTERM for SIGHUP) and is waited for (killed if still running 5 s later), nothing half-made is
+kept, and the exit code is 130 / 143 / 129; rerun the same command (without --force) to resume.
 )";
 
 struct Arguments {
@@ -488,7 +488,10 @@ std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig
 }
 
 const char* signalName(int signal_number) {
-  return signal_number == SIGINT ? "SIGINT" : signal_number == SIGTERM ? "SIGTERM" : "a signal";
+  return signal_number == SIGINT    ? "SIGINT"
+         : signal_number == SIGTERM ? "SIGTERM"
+         : signal_number == SIGHUP  ? "SIGHUP"
+                                    : "a signal";
 }
 
 // The command that resumes a stopped run: this one (jobs with a result are kept, so what
