@@ -172,11 +172,17 @@ int parseArguments(int argc, char** argv, Arguments& a) {
     };
     // An option given twice used to take its last value without a word (--edge 2 --edge 3,
     // --smoke --plan full); --smoke is --plan smoke.
+    // --smoke beside --plan smoke says the same thing twice and is accepted.
     if (arg.rfind("--", 0) == 0) {
-      const std::string name = arg == "--smoke" ? "--plan" : arg;
-      if (!seen.insert(name).second) {
-        return usageError(name == "--plan" ? "the plan is given twice (--plan, --smoke)"
-                                           : arg + " is given twice");
+      const bool smoke_again = (arg == "--smoke" && seen.count("--plan") && a.plan == "smoke") ||
+                               (arg == "--plan" && seen.count("--smoke") && i + 1 < args.size() &&
+                                args[i + 1] == "smoke");
+      if (arg == "--smoke" || arg == "--plan") {
+        if (!seen.insert(arg).second) return usageError(arg + " is given twice");
+        if (!smoke_again && seen.count("--smoke") && seen.count("--plan"))
+          return usageError("--smoke is --plan smoke; the plan is given twice (--plan, --smoke)");
+      } else if (!seen.insert(arg).second) {
+        return usageError(arg + " is given twice");
       }
     }
     std::string text;
@@ -262,6 +268,18 @@ int parseArguments(int argc, char** argv, Arguments& a) {
   if (a.shard.count > 1 && a.command != "run" && a.command != "list") {
     return usageError("--shard applies to run and list; merge reads every shard's results");
   }
+  // Switches of another command were ignored without a word (merge --force). The path
+  // options are not: one set of options serves every command of a run.
+  const auto ignored = [&](bool given, const char* option, const char* applies_to) {
+    if (given)
+      std::fprintf(stderr, "run_experiments: note: %s applies to %s; %s ignores it\n", option,
+                   applies_to, a.command.c_str());
+  };
+  ignored(a.force && a.command != "run" && a.command != "all", "--force", "run and all");
+  ignored(a.no_timing && a.command != "merge" && a.command != "all", "--no-timing",
+          "merge and all");
+  ignored(a.allow_missing && a.command != "merge" && a.command != "all", "--allow-missing",
+          "merge and all");
   // A mistyped --case-source used to be ignored without a word (every case generated).
   if (std::error_code ec; !a.case_source.empty() && !fs::is_directory(a.case_source, ec)) {
     return usageError("--case-source " + a.case_source.string() + ": " +

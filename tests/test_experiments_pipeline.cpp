@@ -233,6 +233,20 @@ TEST_F(ExperimentsPipeline, RejectsBadArguments) {
   r = runRunner("list --edge 2 --edge 3");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("--edge is given twice"), std::string::npos) << r.err;
+  // --smoke beside --plan smoke is the same plan twice: it was refused as a conflict.
+  for (const char* both : {"--smoke --plan smoke", "--plan smoke --smoke"}) {
+    r = runRunner(std::string("list ") + both);
+    EXPECT_EQ(r.exit_code, 0) << both << ": " << r.err;
+    EXPECT_EQ(r.out, runRunner("list --smoke").out) << both;
+  }
+  // A switch of another command was ignored without a word.
+  r = runRunner("list --smoke --force --no-timing");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: --force applies to run and all; list ignores it"), std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("note: --no-timing applies to merge and all; list ignores it"),
+            std::string::npos)
+      << r.err;
   for (const char* bounds : {"0.6", "1.5,0.7", "0,1.5", "0.6,1.5x"}) {
     r = runRunner(std::string("list --scale-bounds ") + bounds);
     EXPECT_EQ(r.exit_code, 2) << bounds;
