@@ -23,10 +23,7 @@ struct Optimisation {
   std::shared_ptr<const ForwardEvaluation> best, optimiser_best;
   std::string termination;
   bool switched_to_full_closures = false;
-  bool release_ran = false, release_kept = false;
-  SlackReleaseProposal release;
-  double release_data_cost = 0.0, optimiser_data_cost = 0.0;
-  std::string release_error;
+  SlackReleaseOutcome release;
   std::vector<IterationRecord> history;
   int forward_sims = 0;  // cumulative, every stage of the fit so far
   std::string error;
@@ -79,7 +76,7 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
   const bool release_slack = options.slack_release.enabled && parameters.size() > 0 &&
                              options.mode != ParameterMode::kGroups &&
                              run->forward_sims + 2 <= options.max_sims;
-  run->release_ran = release_slack;
+  run->release.ran = release_slack;
   run->objective = std::make_unique<FitObjective>(
       residual, options.finite_difference, options.max_sims - (release_slack ? 1 : 0),
       run->forward_sims, clock_start, options.on_iteration);
@@ -124,33 +121,35 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
     const Eigen::VectorXi vertex_segment = openStateSegments(run->working_case.mesh);
     std::vector<int> cord_segment;
     for (const Cord& cord : at_best.cords) cord_segment.push_back(vertex_segment(cord.vertex));
-    run->release = proposeSlackRelease(
+    run->release.proposal = proposeSlackRelease(
         at_best, seed, closedSpans(at_best, residual.cordInsertions(), best->closed_V),
         cord_segment, atypicalSegments(run->working_case, best->closed_V, from.rescaled_segments),
         options.bounds.scale_upper);
-    if (!run->release.empty()) {
+    const SlackReleaseProposal& proposal = run->release.proposal;
+    if (!proposal.empty()) {
       // Free non-manual cords are parameters of their own in the per-cord modes.
       Eigen::VectorXd x = best->x;
-      for (std::size_t i = 0; i < run->release.cords.size(); ++i) {
-        const int parameter = parameters.cordParameter()[run->release.cords[i]];
-        if (parameter >= 0) x(parameter) = run->release.scales[i];
+      for (std::size_t i = 0; i < proposal.cords.size(); ++i) {
+        const int parameter = parameters.cordParameter()[proposal.cords[i]];
+        if (parameter >= 0) x(parameter) = proposal.scales[i];
       }
       auto released = std::make_shared<ForwardEvaluation>(residual.evaluate(x));
       ++run->forward_sims;
-      run->optimiser_data_cost = residual.cost(best->data, zero);
+      SlackReleaseOutcome& release = run->release;
+      release.optimiser_data_cost = residual.cost(best->data, zero);
       if (released->ok()) {
-        run->release_data_cost = residual.cost(released->data, zero);
-        run->release_kept = run->release_data_cost <=
-                            run->optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance);
+        release.data_cost = residual.cost(released->data, zero);
+        release.kept = release.data_cost <=
+                       release.optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance);
       } else {
-        run->release_error = released->error;
+        release.error = released->error;
       }
       const IterationRecord r =
-          closureRecord("release", 0, *released, run->release_kept ? released->cost : best->cost,
+          closureRecord("release", 0, *released, run->release.kept ? released->cost : best->cost,
                         run->forward_sims, clock_start);
       run->history.push_back(r);
       if (options.on_iteration) options.on_iteration(r);
-      if (run->release_kept) best = released;
+      if (run->release.kept) best = released;
     }
   }
   run->best = best;
@@ -307,12 +306,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   auto adopt = [&](const Optimisation& run) {
     outcome.termination = run.termination;
     outcome.switched_to_full_closures = run.switched_to_full_closures;
-    outcome.slack_release_ran = run.release_ran;
     outcome.slack_release = run.release;
-    outcome.slack_release_kept = run.release_kept;
-    outcome.slack_release_data_cost = run.release_data_cost;
-    outcome.optimiser_data_cost = run.optimiser_data_cost;
-    outcome.slack_release_error = run.release_error;
     outcome.parameter_names = run.parameters->names();
     outcome.parameter_is_scale.clear();
     for (int p = 0; p < run.parameters->size(); ++p)

@@ -109,13 +109,9 @@ struct FitOutcome {
   KindStage prefit_kind_stage = KindStage::kNotAsked;  // the global pre-fit's kind stage
   std::vector<std::string> segment_prefit_changes;     // "P2 1.3", per accepted segment
   std::vector<std::string> tissue_prefit_changes;      // "A2 0.1", per accepted segment
-  // The slack release (slack_release.h): what it proposed at the optimiser's best point, and
-  // whether its closure was kept (then `fitted` has it); the data costs of the two closures.
-  SlackReleaseProposal slack_release;
-  bool slack_release_ran = false;  // its proposal was made (enabled, not groups, budget left)
-  bool slack_release_kept = false;
-  double slack_release_data_cost = 0.0, optimiser_data_cost = 0.0;
-  std::string slack_release_error;  // its closure failed (then not kept)
+  // The slack release (slack_release.h): what it proposed, and whether its closure was kept
+  // (then `fitted` has it).
+  SlackReleaseOutcome slack_release;
   // Per-vertex tissue the cords were fitted on (tissue pre-fit); empty = the case's own.
   Eigen::VectorXd tissue;
   std::vector<std::string> parameter_names;

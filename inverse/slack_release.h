@@ -58,6 +58,16 @@ struct SlackReleaseProposal {
 std::vector<int> atypicalSegments(const ValveCase& valve_case, const Eigen::MatrixXd& closed_V,
                                   std::vector<int> rescaled);
 
+// What the fit did with a proposal: its closure, and whether it was kept.
+struct SlackReleaseOutcome {
+  SlackReleaseProposal proposal;  // made at the optimiser's best point
+  bool ran = false;               // the proposal was made (enabled, not groups, budget left)
+  bool kept = false;              // its closure fitted no worse (then the fit's result)
+  // The data costs (without regularisation) of the released and of the optimiser's closures.
+  double data_cost = 0.0, optimiser_data_cost = 0.0;
+  std::string error;  // its closure failed (then not kept)
+};
+
 SlackReleaseProposal proposeSlackRelease(const CordSet& fitted, const CordSet& seed,
                                          const Eigen::VectorXd& closed_spans,
                                          const std::vector<int>& cord_segment,

@@ -128,12 +128,12 @@ TEST(SlackReleaseFit, RaisedCordsStaySlackAndTheClosureFitsAsWell) {
       inverse::fitCords(bundled.valve_case, seed, bundled.settings, options);
   ASSERT_TRUE(fit.ok()) << fit.error;
   EXPECT_LE(fit.forward_sims, options.max_sims);
-  const inverse::SlackReleaseProposal& p = fit.slack_release;
+  const inverse::SlackReleaseProposal& p = fit.slack_release.proposal;
   ASSERT_FALSE(p.empty()) << "this fit leaves slack cords below their kind's typical scale";
-  ASSERT_TRUE(fit.slack_release_kept)
-      << "data cost " << fit.optimiser_data_cost << " -> " << fit.slack_release_data_cost;
-  EXPECT_LE(fit.slack_release_data_cost,
-            fit.optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance));
+  ASSERT_TRUE(fit.slack_release.kept) << "data cost " << fit.slack_release.optimiser_data_cost
+                                      << " -> " << fit.slack_release.data_cost;
+  EXPECT_LE(fit.slack_release.data_cost,
+            fit.slack_release.optimiser_data_cost * (1.0 + options.slack_release.cost_tolerance));
   for (std::size_t i = 0; i < p.cords.size(); ++i) {
     const Cord& cord = fit.fitted.cords[p.cords[i]];
     EXPECT_DOUBLE_EQ(cord.scale(), p.scales[i]) << "cord " << p.cords[i];
@@ -145,8 +145,8 @@ TEST(SlackReleaseFit, RaisedCordsStaySlackAndTheClosureFitsAsWell) {
   const inverse::FitOutcome kept =
       inverse::fitCords(bundled.valve_case, seed, bundled.settings, options);
   ASSERT_TRUE(kept.ok()) << kept.error;
-  EXPECT_TRUE(kept.slack_release.empty());
-  EXPECT_FALSE(kept.slack_release_kept);
+  EXPECT_TRUE(kept.slack_release.proposal.empty());
+  EXPECT_FALSE(kept.slack_release.kept);
 }
 
 }  // namespace

@@ -277,10 +277,11 @@ int runFit(const FitCommandOptions& o) {
   metrics["segment_prefit"] = fit.segment_prefit_changes;
   metrics["tissue_prefit"] = fit.tissue_prefit_changes;
   metrics["tissue_retry"] = tissueRetryJson(fit);
-  metrics["slack_release"] = {{"proposed_cords", fit.slack_release.cords.size()},
-                              {"kept", fit.slack_release_kept},
-                              {"primary_reference", fit.slack_release.primary_reference},
-                              {"secondary_reference", fit.slack_release.secondary_reference}};
+  const inverse::SlackReleaseOutcome& release = fit.slack_release;
+  metrics["slack_release"] = {{"proposed_cords", release.proposal.cords.size()},
+                              {"kept", release.kept},
+                              {"primary_reference", release.proposal.primary_reference},
+                              {"secondary_reference", release.proposal.secondary_reference}};
   metrics["distance"] = o.distance;  // the data residual the fit minimised
   metrics["section_weight"] = o.section_weight;
   metrics["tip_weight"] = o.tip_weight;

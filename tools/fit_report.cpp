@@ -100,8 +100,9 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
   if (params == "groups")
     return "not run with --params groups (a group factor moves its slack and taut cords "
            "together)";
-  if (!fit.slack_release_ran) return "not run: --max-sims left no closure for it";
-  const inverse::SlackReleaseProposal& p = fit.slack_release;
+  const inverse::SlackReleaseOutcome& release = fit.slack_release;
+  if (!release.ran) return "not run: --max-sims left no closure for it";
+  const inverse::SlackReleaseProposal& p = release.proposal;
   auto reference = [&](double value) {
     // The reference leaves out the segments the segment pre-fit rescaled or the fit
     // prolapses (slack_release.h): taut cords there do not count.
@@ -113,16 +114,14 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
   if (p.empty()) return "no slack cord below its kind's typical scale (" + typical + ")";
   std::string line =
       std::to_string(p.cords.size()) + " slack cord(s) raised to their kind's " + typical + "; ";
-  if (fit.slack_release_kept) {
-    line += "kept (data cost " + formatFixed(fit.optimiser_data_cost, 3) + " -> " +
-            formatFixed(fit.slack_release_data_cost, 3) + ")";
-  } else if (!fit.slack_release_error.empty()) {
-    line += "not kept: its closure failed (" + fit.slack_release_error + ")";
-  } else {
-    line += "not kept: its closure fits worse (data cost " +
-            formatFixed(fit.optimiser_data_cost, 3) + " -> " +
-            formatFixed(fit.slack_release_data_cost, 3) + ")";
-  }
+  const std::string costs = "data cost " + formatFixed(release.optimiser_data_cost, 3) + " -> " +
+                            formatFixed(release.data_cost, 3);
+  if (release.kept)
+    line += "kept (" + costs + ")";
+  else if (!release.error.empty())
+    line += "not kept: its closure failed (" + release.error + ")";
+  else
+    line += "not kept: its closure fits worse (" + costs + ")";
   return line;
 }
 
