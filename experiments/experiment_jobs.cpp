@@ -412,6 +412,30 @@ std::optional<OptionMismatch> resultOptionMismatch(const json& result, const Job
   return std::nullopt;
 }
 
+std::string otherPlanHint(const OptionMismatch& m, const std::string& plan) {
+  // The plan default a recorded field takes, as the mismatch shows it.
+  auto planValue = [&](const ExperimentConfig& c) -> std::optional<std::string> {
+    if (m.field == "edge_mm" || m.field == "generation.case_edge_mm")
+      return formatNumber(c.edge_mm);
+    if (m.field == "generation.truth_edge_mm") return formatNumber(c.edge_mm / 2);
+    if (m.field == "planes" || m.field == "generation.planes") return formatNumber(c.planes);
+    if (m.field == "max_sims") return formatNumber(c.max_sims);
+    return std::nullopt;
+  };
+  const std::pair<const char*, ExperimentConfig> plans[] = {
+      {"full", fullConfig()}, {"reduced", reducedConfig()}, {"smoke", smokeConfig()}};
+  for (const auto& [name, config] : plans) {
+    if (name == plan) continue;
+    const auto value = planValue(config);
+    if (!value || *value != m.recorded) continue;
+    for (const auto& [own_name, own_config] : plans) {
+      if (own_name == plan && planValue(own_config) == value) return "";
+    }
+    return std::string(" (--plan ") + name + "'s value: were they made with --plan " + name + "?)";
+  }
+  return "";
+}
+
 std::optional<OptionMismatch> caseOptionMismatch(const CaseSpec& spec, const fs::path& case_dir) {
   std::string text;
   if (!readWholeFile(case_dir / "truth" / "truth.json", text)) {

@@ -59,6 +59,11 @@ struct OptionMismatch {
   std::string requested;  // the same for this run's options
 };
 
+// " (--plan smoke's value: were these made with --plan smoke?)" when the recorded value of
+// `m` is another plan's default (full, reduced, smoke) and not that of `plan`; else "". Results
+// of the smoke plan checked without it read as another --edge, and the user reached for --edge.
+std::string otherPlanHint(const OptionMismatch& m, const std::string& plan);
+
 // The first option a job result records that differs from what `spec` and `config` ask of
 // `job`: the case's edge_mm, planes, noise_mm and dropout, and a fit's max_sims and
 // scale_bounds (absent: the fit's default bounds). A key an older result does not record is not

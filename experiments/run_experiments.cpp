@@ -427,8 +427,9 @@ StaleResult staleResults(const ExperimentPlan& plan, const ExperimentConfig& con
 }
 
 // "max_sims 300, the run asks for 150 (--max-sims)".
-std::string describe(const OptionMismatch& m, const char* who) {
-  return m.field + " " + m.recorded + ", " + who + " " + m.requested + " (" + m.option + ")";
+std::string describe(const OptionMismatch& m, const char* who, const std::string& plan) {
+  return m.field + " " + m.recorded + ", " + who + " " + m.requested + " (" + m.option + ")" +
+         otherPlanHint(m, plan);
 }
 
 std::string moreLikeIt(int count, const char* what) {
@@ -446,9 +447,9 @@ StaleResult staleResultsOfPlan(const ExperimentPlan& plan, const ExperimentConfi
 
 // "job ID was run with other options: FILE records max_sims 300, WHO 150 (--max-sims) (2 more
 // jobs like it)", for merge and check.
-std::string staleJobText(const StaleResult& stale, const char* who) {
+std::string staleJobText(const StaleResult& stale, const char* who, const std::string& plan) {
   return "job " + stale.job->id + " was run with other options: " + stale.file.string() +
-         " records " + describe(stale.mismatch, who) + moreLikeIt(stale.count, "job");
+         " records " + describe(stale.mismatch, who, plan) + moreLikeIt(stale.count, "job");
 }
 
 // "" when `dir` exists or can be made and a file can be written in it; else what stands in the
@@ -487,7 +488,7 @@ std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig
     const auto mismatch = caseOptionMismatch(*c, dir);
     if (mismatch && stale_cases++ == 0) {
       first = "case " + c->id + " in " + dir.string() + " was made with " +
-              describe(*mismatch, "this run asks for");
+              describe(*mismatch, "this run asks for", a.plan);
     }
   }
   if (stale_cases > 0) {
@@ -499,7 +500,7 @@ std::string refuseStaleInputs(const ExperimentPlan& plan, const ExperimentConfig
   const StaleResult stale = staleResults(plan, config, jobs, a.results);
   if (stale.count == 0) return "";
   return "job " + stale.job->id + " has a result made with other options: " + stale.file.string() +
-         " records " + describe(stale.mismatch, "this run asks for") +
+         " records " + describe(stale.mismatch, "this run asks for", a.plan) +
          moreLikeIt(stale.count, "job") +
          ". Rerun them with --force (their results are replaced), or give another --results "
          "(and --work) for these options";
@@ -718,7 +719,7 @@ int merge(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
     std::fprintf(stderr,
                  "run_experiments: error: merge: %s. Merge with the options the jobs were run "
                  "with, or rerun them with these (run --force); nothing was written\n",
-                 staleJobText(stale, "the merge asks for").c_str());
+                 staleJobText(stale, "the merge asks for", a.plan).c_str());
     return kExitUsage;
   }
   const MergeSummary s = mergeResults(plan, config, a.results,
@@ -759,7 +760,7 @@ int check(const ExperimentPlan& plan, const ExperimentConfig& config, const Argu
   // Job results made with other options than the check's (the tables would be of those).
   if (const StaleResult stale = staleResultsOfPlan(plan, config, a.results); stale.count > 0) {
     std::fprintf(stderr, "check: %s: give check the options the jobs were run with\n",
-                 staleJobText(stale, "the check asks for").c_str());
+                 staleJobText(stale, "the check asks for", a.plan).c_str());
     std::printf("check: FAILED (%s)\n", a.results.string().c_str());
     return kExitJobsFailed;
   }

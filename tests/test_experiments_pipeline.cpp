@@ -520,6 +520,18 @@ TEST_F(ExperimentsPipeline, ResultsMadeWithOtherOptionsAreRefusedNotReused) {
             std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(results / "table1.csv"));
+  // The smoke plan's results merged without --smoke: the edge is the smoke plan's, and the
+  // message used to suggest only --edge.
+  r = runRunner("merge --allow-missing --methods heuristic" + where);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("records edge_mm 3, the merge asks for 2.5 (--edge) (--plan smoke's value: "
+                       "were they made with --plan smoke?)"),
+            std::string::npos)
+      << r.err;
+  // Its own plan's value gets no such hint.
+  EXPECT_EQ(runRunner("merge --smoke --allow-missing --max-sims 150" + where)
+                .err.find("--plan smoke's value"),
+            std::string::npos);
   r = runRunner("merge --smoke --allow-missing" + where);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string index = readText(results / "index.md");
