@@ -74,6 +74,24 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   return set;
 }
 
+std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::string& case_dir,
+                                               const std::string& tissue_file,
+                                               const std::string& cords_file) {
+  auto valve_case = loadCaseOrReport(case_dir);
+  if (!valve_case) return std::nullopt;
+  if (!tissue_file.empty()) {
+    Diagnostics diagnostics;
+    if (!loadTissueFile(tissue_file, tissue_file, *valve_case, diagnostics)) {
+      reportProblems(diagnostics);
+      return std::nullopt;
+    }
+  }
+  auto cords = resolveCords(*valve_case, cords_file);
+  if (!cords) return std::nullopt;
+  if (tissue_file.empty()) std::cerr << tissueBesideCordsNote(command, cords_file, "--tissue FILE");
+  return CaseWithCords{std::move(*valve_case), std::move(*cords)};
+}
+
 namespace {
 
 // The time step a closure of the case takes with `settings` (the cords do not change it), or

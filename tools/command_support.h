@@ -34,6 +34,18 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
 std::string tissueBesideCordsNote(const char* command, const std::string& cords_file,
                                   const std::string& option);
 
+// What simulate and sweep-cord close: the case (loadCaseOrReport) with `tissue_file` over its
+// own tissue when given, and the cords (resolveCords). Without a tissue file it prints
+// tissueBesideCordsNote, so that cords a fit closed on its own tissue are not taken for its
+// closure silently. Prints problems and returns nullopt on bad input.
+struct CaseWithCords {
+  ValveCase valve_case;
+  CordSet cords;
+};
+std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::string& case_dir,
+                                               const std::string& tissue_file,
+                                               const std::string& cords_file);
+
 // The case's simulator settings (its "simulation" block over the defaults), then the
 // command line's `overrides` ("KEY=VALUE": a key of that block and a number, true or false;
 // `--set`), which are also written into valve_case.simulation_json so that everything reading

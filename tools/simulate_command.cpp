@@ -99,35 +99,29 @@ int runSimulate(const SimulateOptions& options) {
               << "\"\n";
     return kExitBadInput;
   }
-  auto valve_case = loadCaseOrReport(options.case_dir);
-  if (!valve_case) return kExitBadInput;
-  if (!options.tissue_file.empty()) {
-    Diagnostics diagnostics;
-    if (!loadTissueFile(options.tissue_file, options.tissue_file, *valve_case, diagnostics))
-      return reportProblems(diagnostics);
-  }
-  const auto cords = resolveCords(*valve_case, options.cords_file);
-  if (!cords) return kExitBadInput;
-  if (options.tissue_file.empty())
-    std::cerr << tissueBesideCordsNote("simulate", options.cords_file, "--tissue FILE");
-  auto case_settings = caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kClose,
+  auto loaded =
+      loadCaseWithCords("simulate", options.case_dir, options.tissue_file, options.cords_file);
+  if (!loaded) return kExitBadInput;
+  ValveCase& valve_case = loaded->valve_case;
+  const CordSet& cords = loaded->cords;
+  auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
                                             "simulate", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   SimulationSettings& settings = *case_settings;
   settings.threads = options.threads;
 
   const SimulationResult closed =
-      simulateClosure(*valve_case, *cords, withProgress(settings, "close", options.quiet));
+      simulateClosure(valve_case, cords, withProgress(settings, "close", options.quiet));
   if (!closed.ok()) return reportClosureFailure(closed, options.case_dir);
   SimulationResult opened;
   if (options.phase == "open") {
     settings.phase = ClosurePhase::kOpen;
-    opened = simulateClosure(*valve_case, *cords, withProgress(settings, "open", options.quiet),
+    opened = simulateClosure(valve_case, cords, withProgress(settings, "open", options.quiet),
                              &closed.V);
     if (!opened.ok()) return reportClosureFailure(opened, options.case_dir);
   }
 
-  const ValveMetrics metrics = computeMetrics(*valve_case, closed.V);
+  const ValveMetrics metrics = computeMetrics(valve_case, closed.V);
   nlohmann::json j = metricsJson(metrics);
   j["converged"] = closed.converged;
   j["steps"] = closed.steps;
@@ -137,13 +131,13 @@ int runSimulate(const SimulateOptions& options) {
   j["sim_seconds"] = closed.seconds;
   j["threads"] = options.threads;
   j["threads_gave_up"] = closed.threads_gave_up;
-  j["cords"] = cords->cords.size();
+  j["cords"] = cords.cords.size();
   if (!options.settings_overrides.empty()) j["settings_overrides"] = options.settings_overrides;
   // How far the opening went back: the opened and the closed valve's mean distance from the
   // case's open state (the first alone has no scale).
   const double opened_distance_mm =
-      options.phase == "open" ? (opened.V - valve_case->mesh.V).rowwise().norm().mean() : 0.0;
-  const double closed_distance_mm = (closed.V - valve_case->mesh.V).rowwise().norm().mean();
+      options.phase == "open" ? (opened.V - valve_case.mesh.V).rowwise().norm().mean() : 0.0;
+  const double closed_distance_mm = (closed.V - valve_case.mesh.V).rowwise().norm().mean();
   if (options.phase == "open") {
     j["open_phase"] = {{"converged", opened.converged},
                        {"steps", opened.steps},
@@ -156,18 +150,18 @@ int runSimulate(const SimulateOptions& options) {
                       options.phase == "open" ? std::vector<std::string>{} : openedStateFiles(),
                       "simulate");
   const std::filesystem::path& out = staged.dir();
-  writeState(out, "closed", *valve_case, closed.V);
-  if (options.phase == "open") writeState(out, "opened", *valve_case, opened.V);
+  writeState(out, "closed", valve_case, closed.V);
+  if (options.phase == "open") writeState(out, "opened", valve_case, opened.V);
   writeFileAtomically(out / "metrics.json", j.dump(2) + "\n");
   std::string sections;
   if (options.sections) {
     sections = caseSectionFigureSvg(
-        *valve_case, {{"simulated closed", closed.V, "", false, 2.0}},
-        {valve_case->name + ": simulated closed valve and tracings, one panel per tracing plane"});
+        valve_case, {{"simulated closed", closed.V, "", false, 2.0}},
+        {valve_case.name + ": simulated closed valve and tracings, one panel per tracing plane"});
   }
   if (!sections.empty()) writeFileAtomically(out / "sections.svg", sections);
   writeFileAtomically(out / "enface.svg",
-                      enfaceFigureSvg(*valve_case, closed.V, valve_case->name, metrics));
+                      enfaceFigureSvg(valve_case, closed.V, valve_case.name, metrics));
   const StagedOutput::Published published = staged.publish();
 
   std::printf("closure: %s after %d steps, %.2f s%s%s\n",
@@ -185,7 +179,7 @@ int runSimulate(const SimulateOptions& options) {
         opened_distance_mm, closed_distance_mm,
         closed_distance_mm > 0.0 ? 100.0 * (1.0 - opened_distance_mm / closed_distance_mm) : 0.0);
   }
-  std::cout << table1Header() << table1Row(valve_case->name, metrics);
+  std::cout << table1Header() << table1Row(valve_case.name, metrics);
   std::cout << closedValveSummary(metrics);
   if (options.report_files) std::cout << wroteLine(options.out_dir, published) << "\n";
   return kExitOk;

@@ -173,34 +173,28 @@ int runSweepCord(const SweepCordOptions& options) {
               << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
     return kExitBadInput;
   }
-  auto valve_case = loadCaseOrReport(options.case_dir);
-  if (!valve_case) return kExitBadInput;
-  if (!options.tissue_file.empty()) {
-    Diagnostics diagnostics;
-    if (!loadTissueFile(options.tissue_file, options.tissue_file, *valve_case, diagnostics))
-      return reportProblems(diagnostics);
-  }
-  const auto cords = resolveCords(*valve_case, options.cords_file);
-  if (!cords) return kExitBadInput;
-  if (options.tissue_file.empty())
-    std::cerr << tissueBesideCordsNote("sweep-cord", options.cords_file, "--tissue FILE");
-  const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(*valve_case, *cords);
-  if (cord < 0 || cord >= static_cast<int>(cords->cords.size())) {
+  auto loaded =
+      loadCaseWithCords("sweep-cord", options.case_dir, options.tissue_file, options.cords_file);
+  if (!loaded) return kExitBadInput;
+  ValveCase& valve_case = loaded->valve_case;
+  const CordSet& cords = loaded->cords;
+  const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(valve_case, cords);
+  if (cord < 0 || cord >= static_cast<int>(cords.cords.size())) {
     std::cerr << "error: sweep-cord: --cord: no such cord (the set has "
-              << counted(cords->cords.size(), "cord")
+              << counted(cords.cords.size(), "cord")
               << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
     return kExitBadInput;
   }
-  const auto case_settings = caseSettingsOrReport(
-      *valve_case, options.case_dir, SettingsUse::kClose, "sweep-cord", options.settings_overrides);
+  const auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
+                                                  "sweep-cord", options.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
   std::vector<SweepPoint> points(count);
-  const ClosedAnnulus annulus = closedAnnulus(*valve_case);
-  const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case->tracings);
-  const double base = cords->cords[cord].rest_length;
-  const int vertex = cords->cords[cord].vertex;
+  const ClosedAnnulus annulus = closedAnnulus(valve_case);
+  const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case.tracings);
+  const double base = cords.cords[cord].rest_length;
+  const int vertex = cords.cords[cord].vertex;
   std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %s, %s\n", cord, vertex, base,
                counted(count, "scale").c_str(), counted(options.threads, "thread").c_str());
 
@@ -233,18 +227,18 @@ int runSweepCord(const SweepCordOptions& options) {
   const auto sweepPoint = [&](int i) {
     SweepPoint& p = points[i];
     p.scale = 1.0 - options.range + i * options.step;
-    CordSet scaled = *cords;
+    CordSet scaled = cords;
     scaled.cords[cord].rest_length = base * p.scale;
-    const SimulationResult r = simulateClosure(*valve_case, scaled, settings);
+    const SimulationResult r = simulateClosure(valve_case, scaled, settings);
     p.error = r.error;
     p.diverged = r.diverged;
     p.converged = r.converged;
     p.steps = r.steps;
     if (r.ok()) {
-      p.vertex = insertionPosition(cords->cords[cord], r.V);
+      p.vertex = insertionPosition(cords.cords[cord], r.V);
       p.height = annulus.frame.plane.signedDistance(p.vertex);
       if (tracing_points.rows() > 0) {
-        p.mean_deviation = pointToSurfaceDistances(r.V, valve_case->mesh.F, tracing_points).mean();
+        p.mean_deviation = pointToSurfaceDistances(r.V, valve_case.mesh.F, tracing_points).mean();
       }
     }
     {
