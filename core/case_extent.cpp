@@ -35,7 +35,7 @@ std::string farthestVertexNote(const Eigen::MatrixXd& V) {
                 "; farthest from the median of the vertices: vertex %ld at (%.3g, %.3g, %.3g), "
                 "%s away",
                 static_cast<long>(farthest), p.x(), p.y(), p.z(),
-                millimetres((p - median).norm()).c_str());
+                millimetres((p - median).stableNorm()).c_str());
   return text;
 }
 
@@ -43,7 +43,8 @@ std::string farthestVertexNote(const Eigen::MatrixXd& V) {
 
 double boundingDiagonal(const Eigen::MatrixXd& V) {
   if (V.rows() == 0) return 0.0;
-  return (V.colwise().maxCoeff() - V.colwise().minCoeff()).norm();
+  return (V.colwise().maxCoeff() - V.colwise().minCoeff())
+      .stableNorm();  // a stray 1e200 stays finite
 }
 
 bool checkValveSpan(const Eigen::MatrixXd& V, const std::string& file, Diagnostics& diagnostics) {
@@ -76,7 +77,8 @@ struct ValveReach {
   // NaN lies nowhere.
   bool check(const Eigen::RowVector3d& p, const std::string& file, const std::string& where,
              Diagnostics& diagnostics, bool report = true) const {
-    const double distance = (lo - p).cwiseMax(p - hi).cwiseMax(0.0).norm();  // from the box
+    // stableNorm: a coordinate near 1e308 would overflow norm() to inf.
+    const double distance = (lo - p).cwiseMax(p - hi).cwiseMax(0.0).stableNorm();  // from the box
     if (distance <= reach) return true;
     if (report) {
       char position[96];
