@@ -433,21 +433,28 @@ bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
   return true;
 }
 
+}  // namespace
+
+bool checkValveMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
+                    Diagnostics& diagnostics) {
+  // The span before the per-face checks, whose zero-area tolerance is relative to the bounding
+  // box: one vertex at 1e10 mm made every triangle "degenerate" and the outlier went unnamed.
+  // With the span wrong the areas are not judged; non-finite coordinates are checkMesh's to
+  // name, vertex by vertex.
+  const bool span_ok = !V.allFinite() || checkValveSpan(V, file, diagnostics);
+  return checkMesh(V, F, file, diagnostics, span_ok) && span_ok;
+}
+
+namespace {
+
 // Mesh, labels and annulus: the parts every later check depends on.
 bool readValve(const json& document, const fs::path& dir, JsonFields& fields, ValveCase& c) {
   Diagnostics& diagnostics = fields.diagnostics();
   bool ok = true;
   const auto mesh_file = sideFile(document, "", "mesh", true, dir, fields);
-  bool mesh_ok =
-      mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics, mesh_file->name);
-  // The span before the per-face checks, whose zero-area tolerance is relative to the bounding
-  // box: one vertex at 1e10 mm made every triangle "degenerate" and the outlier went unnamed.
-  // With the span wrong the areas are not judged; non-finite coordinates are checkMesh's to
-  // name, vertex by vertex.
-  const bool span_ok =
-      !mesh_ok || !c.mesh.V.allFinite() || checkValveSpan(c.mesh.V, mesh_file->name, diagnostics);
-  mesh_ok =
-      mesh_ok && checkMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics, span_ok) && span_ok;
+  const bool mesh_ok =
+      mesh_file && readMesh(mesh_file->path, c.mesh.V, c.mesh.F, diagnostics, mesh_file->name) &&
+      checkValveMesh(c.mesh.V, c.mesh.F, mesh_file->name, diagnostics);
   ok &= mesh_ok;
 
   const json* leaflets = fields.member(document, "", "leaflets", true);

@@ -24,6 +24,14 @@ std::optional<ValveCase> loadCase(const std::filesystem::path& directory, Diagno
 // with it, make-valve and import-mesh their --name before writing anything.
 std::string caseNameProblem(const std::string& name);
 
+// The checks loadCase makes of a case's open mesh as read from `file`: its span (a valve's size
+// in millimetres; first, because the zero-area tolerance is relative to it and one vertex at
+// 1e10 mm would make every triangle "degenerate"), then checkMesh (indices, finite coordinates,
+// areas, manifold edges, no stray vertex). import-mesh runs them on its mesh before deriving
+// anything from it. Returns false with the problems in `diagnostics`.
+bool checkValveMesh(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F, const std::string& file,
+                    Diagnostics& diagnostics);
+
 // Reads a tracings file on its own (the format of case.json's "tracings", docs/case-format.md),
 // e.g. to add tracings to a case being built: curve files it names are relative to its own
 // directory, leaflet names resolve against `leaflet_names`. Returns false with the problems in

@@ -398,6 +398,38 @@ TEST(ImportMeshCli, NamesTheUsersFileForAProblemOfTheStagedCase) {
   EXPECT_FALSE(fs::exists(dir / "case"));
 }
 
+// The import walked the mesh's boundary before any check of its faces: a face index past the
+// vertices (one flipped byte of a binary PLY) crashed it. The mesh is now checked as a case's
+// loader checks it first; a stray vertex is refused there too, before it becomes a case.
+TEST(ImportMeshCli, ChecksTheMeshBeforeDerivingTheCaseFromIt) {
+  TempDir dir;
+  writeImportInputs(dir.path());
+  const ValveCase& truth = valve().valve_case;
+  const auto import = [&](const char* mesh) {
+    return runChordfit("import-mesh " + quoted(dir / mesh) + " --landmarks " +
+                       quoted(dir / "landmarks.json") + " --out " + quoted(dir / "case"));
+  };
+  Eigen::MatrixXi past = truth.mesh.F;
+  past(7, 1) = 1 << 24;
+  writePly(dir / "past.ply", truth.mesh.V, past);
+  auto r = import("past.ply");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("past.ply: face 7: vertex index 16777216 out of range (mesh has " +
+                       std::to_string(truth.mesh.V.rows()) + " vertices)"),
+            std::string::npos)
+      << r.err;
+  Eigen::MatrixXd stray(truth.mesh.V.rows() + 1, 3);
+  stray << truth.mesh.V, Eigen::RowVector3d(0, 0, -5);
+  writePly(dir / "stray.ply", stray, truth.mesh.F);
+  r = import("stray.ply");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("stray.ply: vertices[" + std::to_string(truth.mesh.V.rows()) +
+                       "]: vertex in no triangle"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(dir / "case"));
+}
+
 // A name with a control character was refused only when the staged case was read back, as
 // case.json's; it is --name's, as make-valve's is (the same check).
 TEST(ImportMeshCli, RefusesANameWithAControlCharacterOrABlankOneAsItsOption) {

@@ -273,9 +273,10 @@ int runImportMesh(const ImportMeshOptions& options) {
   if (!options.tracings_file.empty()) {
     readTracingsFile(options.tracings_file, ValveMesh{}.leaflet_names, tracings, diagnostics);
   }
-  // The mesh's units first: a mesh in metres made every landmark "130 mm from the nearest
-  // boundary loop", blaming the landmarks.
-  if (diagnostics.ok()) checkValveSpan(V, options.mesh_file, diagnostics);
+  // The mesh as a case's loader checks it, before the import reads it at its face indices (an
+  // index past the vertices crashed the boundary walk) and before the landmarks are judged
+  // against it (a mesh in metres made every landmark "130 mm from the nearest boundary loop").
+  if (diagnostics.ok()) checkValveMesh(V, F, options.mesh_file, diagnostics);
   if (diagnostics.ok() && closed.points.rows() > 0)
     closedAnnulusNearValve(V, closed, options.closed_annulus_file, diagnostics);
   if (!diagnostics.ok()) return reportProblems(diagnostics);
