@@ -134,6 +134,12 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
                              const ImportLandmarks& landmarks, const Eigen::MatrixXd& closed_curve,
                              const std::string& name) {
   ImportedCase out;
+  // The caller checks the mesh (checkValveMesh); the walk below would read past V otherwise.
+  if (F.size() > 0 && (F.minCoeff() < 0 || F.maxCoeff() >= V.rows())) {
+    return failed(std::move(out), ImportInput::kMesh,
+                  "a face's vertex index is out of range (mesh has " + std::to_string(V.rows()) +
+                      " vertices)");
+  }
   const std::vector<std::vector<int>> loops = boundaryLoops(F);
   if (loops.empty()) {
     return failed(std::move(out), ImportInput::kMesh,

@@ -198,6 +198,12 @@ TEST(CaseImport, AnErrorNamesTheInputAndTheLandmarksAtFault) {
   const Eigen::MatrixXd V{{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   const Eigen::MatrixXi F{{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
   EXPECT_EQ(importValveCase(V, F, good, {}, "closed").error_input, ImportInput::kMesh);
+  // An unchecked mesh with a face index past its vertices is refused, not walked.
+  Eigen::MatrixXi past = truth.mesh.F;
+  past(3, 2) = static_cast<int>(truth.mesh.V.rows());
+  const ImportedCase refused = importValveCase(truth.mesh.V, past, good, {}, "past");
+  EXPECT_EQ(refused.error_input, ImportInput::kMesh);
+  EXPECT_NE(refused.error.find("out of range"), std::string::npos) << refused.error;
 }
 
 // The parametric valve's mesh and landmarks as a user's files in `dir`: valve.ply and
