@@ -52,6 +52,22 @@ class MeshIoTest : public ::testing::Test {
     return ok;
   }
 
+  // Reads 1000 copies of `bytes`, each with `flips` random bytes overwritten (seeded, so a
+  // failure reproduces): whatever the reader makes of a copy, it must not crash, and it must
+  // succeed exactly when it reports no problem.
+  void expectCorruptedCopiesReadConsistently(const std::string& extension, const std::string& bytes,
+                                             unsigned seed, int flips) {
+    std::mt19937 rng(seed);
+    for (int trial = 0; trial < 1000; ++trial) {
+      std::string corrupt = bytes;
+      for (int flip = 0; flip < flips; ++flip)
+        corrupt[rng() % corrupt.size()] = static_cast<char>(rng() & 0xff);
+      Diagnostics diagnostics;
+      const bool ok = readFresh(extension, corrupt, diagnostics);
+      EXPECT_EQ(ok, diagnostics.ok());
+    }
+  }
+
   // Reads and expects success; prints the diagnostics otherwise.
   void readOk(const fs::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F) const {
     Diagnostics diagnostics;
@@ -61,6 +77,10 @@ class MeshIoTest : public ::testing::Test {
     ASSERT_TRUE(ok) << messages.str();
     EXPECT_TRUE(diagnostics.ok());
   }
+
+  // Reads `path` and expects the unit quad of kQuadPositions, fan-triangulated where the
+  // format has polygons: quadVertices() in the two triangles squareFaces().
+  void expectReadsAsTheQuad(const fs::path& path) const;
 
   // Reads and expects a reported failure; returns the single problem.
   Problem readFails(const fs::path& path) const {
@@ -93,6 +113,14 @@ Eigen::MatrixXi squareFaces() { return Eigen::MatrixXi{{0, 1, 2}, {0, 2, 3}}; }
 const char* kQuadPositions = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n";
 Eigen::MatrixXd quadVertices() {
   return Eigen::MatrixXd{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+}
+
+void MeshIoTest::expectReadsAsTheQuad(const fs::path& path) const {
+  Eigen::MatrixXd V;
+  Eigen::MatrixXi F;
+  readOk(path, V, F);
+  EXPECT_EQ(V, quadVertices());
+  EXPECT_EQ(F, squareFaces());
 }
 
 // --- binary helpers ---------------------------------------------------------------------
@@ -162,11 +190,7 @@ TEST_F(MeshIoTest, AsciiPlyQuadIsFanTriangulated) {
                                     "element face 1\nproperty list uchar int vertex_indices\n"
                                     "end_header\n") +
                             "0 0 0 1\n1 0 0 2\n1 1 0 3\n0 1 0 4\n4 0 1 2 3\n");
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(path, V, F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(path);
 }
 
 TEST_F(MeshIoTest, BigEndianPlyWithVertexIndexListIsRead) {
@@ -179,11 +203,7 @@ TEST_F(MeshIoTest, BigEndianPlyWithVertexIndexListIsRead) {
     for (int k = 0; k < 3; ++k) appendBigEndian<double>(bytes, quad(i, k));
   bytes += static_cast<char>(4);
   for (std::uint32_t v : {0u, 1u, 2u, 3u}) appendBigEndian<std::uint32_t>(bytes, v);
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(write("big.ply", bytes), V, F);
-  EXPECT_EQ(V, quad);
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(write("big.ply", bytes));
 }
 
 TEST_F(MeshIoTest, UppercaseExtensionIsAccepted) {
@@ -285,15 +305,7 @@ TEST_F(MeshIoTest, TruncatedAndCorruptedBinaryPlyNeverCrash) {
     EXPECT_FALSE(readFresh(".ply", bytes.substr(0, cut), diagnostics)) << "cut at " << cut;
     EXPECT_FALSE(diagnostics.ok());
   }
-  std::mt19937 rng(12345);
-  for (int trial = 0; trial < 1000; ++trial) {
-    std::string corrupt = bytes;
-    for (int flips = 0; flips < 4; ++flips)
-      corrupt[rng() % corrupt.size()] = static_cast<char>(rng() & 0xff);
-    Diagnostics diagnostics;
-    const bool ok = readFresh(".ply", corrupt, diagnostics);
-    EXPECT_EQ(ok, diagnostics.ok());
-  }
+  expectCorruptedCopiesReadConsistently(".ply", bytes, 12345, 4);
 }
 
 // CGAL reads the counts the header declares and stops: a header counting fewer faces than
@@ -358,11 +370,7 @@ TEST_F(MeshIoTest, ObjQuadWithNormalsTexturesAndPolylinesReadsAsTwoTriangles) {
                                               "vt 0 0\nvn 0 0 1\n"
                                               "f 1/1/1 2/1/1 3/1/1 4/1/1\n"
                                               "l 1 3\n");
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(path, V, F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(path);
 }
 
 TEST_F(MeshIoTest, ObjWithoutFacesSaysSo) {
@@ -377,11 +385,7 @@ TEST_F(MeshIoTest, ObjWithTabSeparatedWordsReadsLikeSpaces) {
   const fs::path path = write("tabs.obj",
                               "v\t0\t0\t0\nv\t1 0\t0\nv 1\t1\t0\nv\t0\t1\t0\n"
                               "f\t1/1/1\t2/1/1\t3/1/1\t4/1/1\n");
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(path, V, F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(path);
 }
 
 // CGAL let an index one past the end through (its check is "max index > #points"), read 0 as
@@ -408,12 +412,8 @@ TEST_F(MeshIoTest, ObjIndexOutOfRangeIsRefusedNamingTheLineFaceAndRange) {
 }
 
 TEST_F(MeshIoTest, ObjNegativeIndicesCountBackFromTheLatestVertex) {
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(write("relative.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf -3 -2 -1\nv 0 1 0\nf 1 -2 -1\n"), V,
-         F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(
+      write("relative.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nf -3 -2 -1\nv 0 1 0\nf 1 -2 -1\n"));
 }
 
 // A face with fewer than 3 corners used to be dropped, leaving a hole in a mesh that then
@@ -461,11 +461,8 @@ TEST_F(MeshIoTest, ObjGarbageAndNanAreReported) {
 }
 
 TEST_F(MeshIoTest, OffQuadIsFanTriangulated) {
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(write("quad.off", std::string("OFF\n4 1 0\n") + kQuadPositions + "4 0 1 2 3\n"), V, F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(
+      write("quad.off", std::string("OFF\n4 1 0\n") + kQuadPositions + "4 0 1 2 3\n"));
 }
 
 TEST_F(MeshIoTest, OffDataBeyondTheHeaderCountsIsRefused) {
@@ -513,11 +510,7 @@ TEST_F(MeshIoTest, AsciiStlIsWeldedIntoSharedVertices) {
                               "   vertex 0 0 0\n   vertex 1 1 0\n   vertex 0 1 0\n"
                               "  endloop\n endfacet\n"
                               "endsolid square\n");
-  Eigen::MatrixXd V;
-  Eigen::MatrixXi F;
-  readOk(path, V, F);
-  EXPECT_EQ(V, quadVertices());
-  EXPECT_EQ(F, squareFaces());
+  expectReadsAsTheQuad(path);
 }
 
 TEST_F(MeshIoTest, BinaryStlWhoseHeaderStartsWithSolidIsReadAsBinaryAndWelded) {
@@ -731,15 +724,7 @@ TEST_F(MeshIoTest, TruncatedAndCorruptedVtkNeverCrash) {
       const bool ok = readFresh(".vtk", bytes.substr(0, cut), diagnostics);
       EXPECT_EQ(ok, diagnostics.ok()) << "cut at " << cut;
     }
-    std::mt19937 rng(777);
-    for (int trial = 0; trial < 1000; ++trial) {
-      std::string corrupt = bytes;
-      for (int flips = 0; flips < 3; ++flips)
-        corrupt[rng() % corrupt.size()] = static_cast<char>(rng() & 0xff);
-      Diagnostics diagnostics;
-      const bool ok = readFresh(".vtk", corrupt, diagnostics);
-      EXPECT_EQ(ok, diagnostics.ok());
-    }
+    expectCorruptedCopiesReadConsistently(".vtk", bytes, 777, 3);
   }
 }
 
