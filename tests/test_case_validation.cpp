@@ -52,6 +52,31 @@ class ValidateCommand : public ::testing::Test {
     writeText(dir_ / "case.json", j.dump(2));
   }
 
+  // `count` copies of one cord from the anterolateral tip at (0, 5, -20) to vertex 9, 20 mm at
+  // rest (seed and fitted): a cord set the validator accepts, for a test to spoil.
+  static CordSet cordsFromOneTip(int count) {
+    CordSet set;
+    set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+    Cord cord;
+    cord.vertex = 9;
+    cord.rest_length = cord.seed_rest_length = 20.0;
+    set.cords.assign(count, cord);
+    return set;
+  }
+
+  // Writes `set` as the case's cords.json and names it in case.json; `edit`, when given,
+  // changes the written JSON first (for what a CordSet cannot hold: an unknown key, a number
+  // out of range).
+  void useCords(const CordSet& set, const std::function<void(nlohmann::json&)>& edit = nullptr) {
+    writeCordSet(dir_ / "cords.json", set);
+    if (edit) {
+      nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
+      edit(cords);
+      writeText(dir_ / "cords.json", cords.dump());
+    }
+    editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  }
+
   TempDir dir_;
   ValveCase valve_ = tinyConeCase();
 };
@@ -281,17 +306,13 @@ TEST_F(ValidateCommand, ReportsBlankOrRepeatedLeafletNamesAndALeafletWithoutVert
 
 // A cord given twice pulls twice as hard, and two tips in one place give every cord one origin.
 TEST_F(ValidateCommand, ReportsARepeatedCordAndTwoTipsInOnePlace) {
-  CordSet set;
-  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  CordSet set = cordsFromOneTip(1);
   set.tips.push_back({"posteromedial", Eigen::Vector3d(0, -5, -20), std::nullopt});
-  Cord cord;
-  cord.vertex = 9;
-  cord.rest_length = cord.seed_rest_length = 20.0;
+  const Cord cord = set.cords[0];
   Cord other = cord;
   other.tip = 1;  // the same insertion from the other tip: a cord of its own
   set.cords = {cord, other, cord};
-  writeCordSet(dir_ / "cords.json", set);
-  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  useCords(set);
   expectError("cords\\.json",
               "cords\\[2\\]: repeats cords\\[0\\] \\(the same tip and insertion\\)");
   set.cords = {cord, other};
@@ -331,17 +352,11 @@ TEST_F(ValidateCommand, ReportsATipNameGivenTwiceInACordSetOrInPmTips) {
 // on the cord set's own tips. validate says so, and an empty tips list is an error (it read as
 // no tips).
 TEST_F(ValidateCommand, NotesWhoUsesPmTipsBesideCordsAndRefusesAnEmptyTipsList) {
-  CordSet set;
-  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
+  CordSet set = cordsFromOneTip(1);
   set.tips.push_back({"posteromedial", Eigen::Vector3d(0, -5, -20), std::nullopt});
-  Cord cord;
-  cord.vertex = 9;
-  cord.rest_length = cord.seed_rest_length = 20.0;
-  set.cords = {cord};
-  writeCordSet(dir_ / "cords.json", set);
+  useCords(set);
   writeText(dir_ / "pm_tips.json", R"({"tips": [{"name": "al", "position": [0, 4, -20]},
                                                 {"name": "pm", "position": [0, -4, -20]}]})");
-  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
   testing::CommandResult r = validate();
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("note:"), std::string::npos) << "cords alone: " << r.err;
@@ -462,14 +477,7 @@ TEST_F(ValidateCommand, SkipsAByteOrderMarkInACsvCurveAndNamesItInAMesh) {
 TEST_F(ValidateCommand, SummaryCountsOneOfAThingInTheSingular) {
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                                 "points": [[1, 0, -2], [2, 0, -2]]}]})");
-  CordSet set;
-  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
-  Cord cord;
-  cord.vertex = 9;
-  cord.rest_length = cord.seed_rest_length = 20.0;
-  set.cords = {cord};
-  writeCordSet(dir_ / "cords.json", set);
-  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  useCords(cordsFromOneTip(1));
   const testing::CommandResult r = validate();
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("tracings:  1 polyline, 2 points\n"), std::string::npos) << r.out;
@@ -631,17 +639,8 @@ TEST_F(ValidateCommand, ReportsAnUnknownCaseKeySuggestingTheNearestKnownOne) {
 }
 
 TEST_F(ValidateCommand, ReportsAnUnknownCordKeySuggestingTheNearestKnownOne) {
-  CordSet set;
-  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
-  Cord cord;
-  cord.vertex = 9;
-  cord.rest_length = cord.seed_rest_length = 20.0;
-  set.cords = {cord};
-  writeCordSet(dir_ / "cords.json", set);
-  nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
-  cords["cords"][0]["compliance_mm_per_n"] = 0.05;
-  writeText(dir_ / "cords.json", cords.dump());
-  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  useCords(cordsFromOneTip(1),
+           [](nlohmann::json& cords) { cords["cords"][0]["compliance_mm_per_n"] = 0.05; });
   expectError("cords\\.json",
               "cords\\[0\\]\\.compliance_mm_per_n: unknown key; did you mean "
               "\"compliance_mm_per_N\"\\?");
@@ -744,14 +743,9 @@ TEST_F(ValidateCommand, ReportsAnOutOfRangeSimulationOverride) {
 }
 
 TEST_F(ValidateCommand, ReportsACordOnAMissingVertex) {
-  CordSet set;
-  set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
-  Cord cord;
-  cord.vertex = 9999;
-  cord.rest_length = cord.seed_rest_length = 20.0;
-  set.cords.push_back(cord);
-  writeCordSet(dir_ / "cords.json", set);
-  editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+  CordSet set = cordsFromOneTip(1);
+  set.cords[0].vertex = 9999;
+  useCords(set);
   expectError("cords\\.json", "cords\\[0\\]\\.vertex: vertex 9999 does not exist");
 }
 
@@ -763,17 +757,8 @@ TEST_F(ValidateCommand, ReportsAnAbsurdCordRestLengthOrComplianceNamingTheCord) 
       {"compliance_mm_per_N",
        "cords\\[1\\]\\.compliance_mm_per_N: must be at most 10 mm/N .*got 1e\\+308"}};
   for (const auto& [field, message] : cases) {
-    CordSet set;
-    set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
-    Cord cord;
-    cord.vertex = 9;
-    cord.rest_length = cord.seed_rest_length = 20.0;
-    set.cords = {cord, cord};
-    writeCordSet(dir_ / "cords.json", set);
-    nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
-    cords["cords"][1][field] = 1e308;
-    writeText(dir_ / "cords.json", cords.dump());
-    editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+    useCords(cordsFromOneTip(2),
+             [field = field](nlohmann::json& cords) { cords["cords"][1][field] = 1e308; });
     expectError("cords\\.json", message);
   }
 }
@@ -784,17 +769,9 @@ TEST_F(ValidateCommand, ReportsACordRestLengthBelowOneMillimetreNamingTheCord) {
   const std::pair<const char*, double> cases[] = {
       {"seed_rest_length_mm", 1e-300}, {"rest_length_mm", 0.5}, {"rest_length_mm", -5.0}};
   for (const auto& [field, length] : cases) {
-    CordSet set;
-    set.tips.push_back({"anterolateral", Eigen::Vector3d(0, 5, -20), std::nullopt});
-    Cord cord;
-    cord.vertex = 9;
-    cord.rest_length = cord.seed_rest_length = 20.0;
-    set.cords = {cord, cord};
-    writeCordSet(dir_ / "cords.json", set);
-    nlohmann::json cords = nlohmann::json::parse(testing::readText(dir_ / "cords.json"));
-    cords["cords"][1][field] = length;
-    writeText(dir_ / "cords.json", cords.dump());
-    editCaseJson([](nlohmann::json& j) { j["cords"] = "cords.json"; });
+    useCords(cordsFromOneTip(2), [field = field, length = length](nlohmann::json& cords) {
+      cords["cords"][1][field] = length;
+    });
     std::ostringstream got;
     got << length;
     expectError("cords\\.json",
