@@ -10,6 +10,7 @@
 #include "core/closure_model.h"
 #include "core/metrics.h"
 #include "inverse/global_prefit.h"
+#include "tests/test_prefit_start.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -35,9 +36,7 @@ const KindProblem& kindProblem() {
     p.seed = *p.valve_case.cords;
     for (Cord& cord : p.seed.cords) cord.rest_length = cord.seed_rest_length;
     const CordSet truth = inverse::scaleFreeCords(p.seed, kPrimaryScale, kSecondaryScale);
-    const SimulationResult closed = simulateClosure(p.valve_case, truth, p.settings);
-    if (!closed.ok()) throw std::runtime_error(closed.error);
-    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 6);
+    p.valve_case.tracings = testing::tracingsOfTruth(p.valve_case, truth, p.settings, 6);
     return p;
   }();
   return problem;

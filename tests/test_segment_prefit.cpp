@@ -10,6 +10,7 @@
 #include "core/metrics.h"
 #include "inverse/global_prefit.h"
 #include "inverse/segment_prefit.h"
+#include "tests/test_prefit_start.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -19,27 +20,14 @@ constexpr double kBaseScale = 0.8;    // every cord taut, as the cohort's normal
 constexpr double kP2Scale = 1.3;      // on the pre-fit's default grid (0.7, 0.9, ..., 1.5)
 constexpr double kP2SlackFrom = 1.1;  // grid point from which the P2 cords are slack (measured)
 
-struct SegmentProblem {
-  ValveCase valve_case;
-  SimulationSettings settings;
-  CordSet base;  // all cords at kBaseScale: the pre-fit's start
-  int p2 = -1;   // segment id of P2
-  Eigen::VectorXi vertex_segment;
-};
+using SegmentProblem = testing::PrefitStart;  // base: all cords at kBaseScale
 
 // The bundled small case with noise-free tracings of a closure whose P2 cords are at kP2Scale;
 // cord 0 of P2 is a locked manual cord (at the base scale in truth and start), and the first
 // cord outside P2 an unlocked manual one.
 const SegmentProblem& segmentProblem() {
   static const SegmentProblem problem = [] {
-    SegmentProblem p;
-    testing::BundledCase bundled = testing::bundledCase("small-normal");
-    p.valve_case = bundled.valve_case;
-    p.settings = bundled.settings;
-    p.vertex_segment = openStateSegments(p.valve_case.mesh);
-    p.p2 = mitralSegmentId("P2");  // the bundled case's leaflets: anterior, posterior
-    p.base = *p.valve_case.cords;
-    for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kBaseScale;
+    SegmentProblem p = testing::smallNormalPrefitStart(kBaseScale);
     CordSet truth = p.base;
     bool locked_one = false, manual_one = false;
     for (std::size_t c = 0; c < truth.cords.size(); ++c) {
@@ -58,9 +46,7 @@ const SegmentProblem& segmentProblem() {
       }
     }
     if (!locked_one) throw std::runtime_error("small-normal has no P2 cord");
-    const SimulationResult closed = simulateClosure(p.valve_case, truth, p.settings);
-    if (!closed.ok()) throw std::runtime_error(closed.error);
-    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 3);
+    p.valve_case.tracings = testing::tracingsOfTruth(p.valve_case, truth, p.settings, 3);
     return p;
   }();
   return problem;

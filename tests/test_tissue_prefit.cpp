@@ -12,6 +12,7 @@
 #include "core/metrics.h"
 #include "inverse/global_prefit.h"
 #include "inverse/tissue_prefit.h"
+#include "tests/test_prefit_start.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -20,24 +21,13 @@ namespace {
 constexpr double kBaseScale = 0.8;  // every cord taut, as the cohort's normal cords
 constexpr double kSoftP2 = 0.1;     // the truth's P2 tissue factor, on the pre-fit's grid
 
-struct TissueProblem {
-  ValveCase valve_case;  // uniform tissue, tracings of the soft-P2 truth
-  SimulationSettings settings;
-  CordSet base;  // all cords at kBaseScale, one locked manual cord in P2
-  Eigen::VectorXi vertex_segment;
-  int p2 = -1;
-};
+// valve_case: uniform tissue, tracings of the soft-P2 truth; base: all cords at kBaseScale, one
+// locked manual cord in P2.
+using TissueProblem = testing::PrefitStart;
 
 const TissueProblem& tissueProblem() {
   static const TissueProblem problem = [] {
-    TissueProblem p;
-    testing::BundledCase bundled = testing::bundledCase("small-normal");
-    p.valve_case = bundled.valve_case;
-    p.settings = bundled.settings;
-    p.vertex_segment = openStateSegments(p.valve_case.mesh);
-    p.p2 = mitralSegmentId("P2");  // the bundled case's leaflets: anterior, posterior
-    p.base = *p.valve_case.cords;
-    for (Cord& cord : p.base.cords) cord.rest_length = cord.seed_rest_length * kBaseScale;
+    TissueProblem p = testing::smallNormalPrefitStart(kBaseScale);
     for (Cord& cord : p.base.cords) {
       if (p.vertex_segment(cord.vertex) == p.p2) {
         cord.locked = true;
@@ -50,9 +40,8 @@ const TissueProblem& tissueProblem() {
     for (Eigen::Index v = 0; v < truth.tissue_stiffness.size(); ++v) {
       if (p.vertex_segment(v) == p.p2) truth.tissue_stiffness(v) = kSoftP2;
     }
-    const SimulationResult closed = simulateClosure(truth, p.base, p.settings);
-    if (!closed.ok()) throw std::runtime_error(closed.error);
-    p.valve_case.tracings = testing::noiseFreeTracings(p.valve_case, closed.V, 3);
+    // The truth differs in tissue only: its tracings are drawn on the same mesh and annulus.
+    p.valve_case.tracings = testing::tracingsOfTruth(truth, p.base, p.settings, 3);
     return p;
   }();
   return problem;
