@@ -12,23 +12,13 @@
 #include "core/heuristic.h"
 #include "core/mesh_io.h"
 #include "core/parametric_valve.h"
+#include "tests/test_coarse_valve.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
 namespace {
 
-constexpr double kCoarseEdgeMm = 3.0;  // ~180 vertices: fast, but leaflets still coapt
-
-struct CoarseValve {
-  ParametricValve valve;
-  CordSet cords;
-  CoarseValve() {
-    ValveParameters parameters;
-    parameters.target_edge_mm = kCoarseEdgeMm;
-    valve = makeParametricValve(parameters);
-    cords = heuristicCordSet(valve.valve_case);
-  }
-};
+using testing::CoarseValve;
 
 // The closed state as written to closed.ply, and the raw doubles (the PLY stores floats, so
 // the doubles are the stricter comparison).

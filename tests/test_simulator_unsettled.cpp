@@ -5,28 +5,12 @@
 #include <gtest/gtest.h>
 
 #include "core/closure_model.h"
-#include "core/heuristic.h"
-#include "core/parametric_valve.h"
+#include "tests/test_coarse_valve.h"
 
 namespace chordfit {
 namespace {
 
-constexpr double kCoarseEdgeMm = 3.0;  // ~180 vertices: fast, but leaflets still coapt
-
-struct CoarseValve {
-  ParametricValve valve;
-  CordSet cords;
-  CoarseValve() {
-    ValveParameters parameters;
-    parameters.target_edge_mm = kCoarseEdgeMm;
-    valve = makeParametricValve(parameters);
-    cords = heuristicCordSet(valve.valve_case);
-  }
-  SimulationResult close(const SimulationSettings& settings,
-                         const Eigen::MatrixXd* start = nullptr) const {
-    return simulateClosure(valve.valve_case, cords, settings, start);
-  }
-};
+using testing::CoarseValve;
 
 // A cap halfway between the end of the ramp and the settled closure: still moving there.
 int unsettledCap(const CoarseValve& valve) {
