@@ -161,17 +161,25 @@ struct ValveFixture {
     frame = openAnnulusFrame(valve.valve_case.mesh);
   }
   const ValveMesh& mesh() const { return valve.valve_case.mesh; }
+  std::vector<Tracing> sample(const TracingSamplerOptions& options, SeededRandom& random) const {
+    return sampleTracings(mesh().V, mesh().F, mesh().leaflet, frame, options, random);
+  }
 };
+
+// Sampler options on `planes` planes with in-plane noise `noise_mm` and no dropout.
+TracingSamplerOptions withoutDropout(int planes, double noise_mm) {
+  TracingSamplerOptions options;
+  options.planes = planes;
+  options.noise_mm = noise_mm;
+  options.dropout_fraction = 0.0;
+  return options;
+}
 
 TEST(SampleTracings, WithoutNoiseOrDropoutTracePointsLieOnTheMeshAndTheirPlanes) {
   const ValveFixture f;
-  TracingSamplerOptions options;
-  options.planes = 4;
-  options.noise_mm = 0.0;
-  options.dropout_fraction = 0.0;
+  const TracingSamplerOptions options = withoutDropout(4, 0.0);
   SeededRandom random(1);
-  const std::vector<Tracing> tracings =
-      sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, options, random);
+  const std::vector<Tracing> tracings = f.sample(options, random);
   ASSERT_GE(tracings.size(), 8u) << "two sides of the valve per plane";
   std::set<int> leaflets;
   for (const Tracing& t : tracings) {
@@ -193,16 +201,13 @@ TEST(SampleTracings, WithoutNoiseOrDropoutTracePointsLieOnTheMeshAndTheirPlanes)
 
 TEST(SampleTracings, DropoutRemovesTheRequestedShareInContiguousGaps) {
   const ValveFixture f;
-  TracingSamplerOptions clean;
-  clean.planes = 6;
-  clean.noise_mm = 0.0;
-  clean.dropout_fraction = 0.0;
+  const TracingSamplerOptions clean = withoutDropout(6, 0.0);
   TracingSamplerOptions dropped = clean;
   dropped.dropout_fraction = 0.2;
   dropped.dropout_pieces = 3;
   SeededRandom r1(5), r2(5);
-  const auto full = sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, clean, r1);
-  const auto gappy = sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, dropped, r2);
+  const auto full = f.sample(clean, r1);
+  const auto gappy = f.sample(dropped, r2);
   const double removed = 1.0 - static_cast<double>(totalPoints(gappy)) / totalPoints(full);
   EXPECT_NEAR(removed, 0.2, 0.04);
   // Each gap splits at most one polyline into two (or removes a whole short one).
@@ -212,13 +217,9 @@ TEST(SampleTracings, DropoutRemovesTheRequestedShareInContiguousGaps) {
 
 TEST(SampleTracings, NoiseIsInPlaneWithTheRequestedSigma) {
   const ValveFixture f;
-  TracingSamplerOptions options;
-  options.planes = 6;
-  options.noise_mm = 0.3;
-  options.dropout_fraction = 0.0;
+  const TracingSamplerOptions options = withoutDropout(6, 0.3);
   SeededRandom random(9);
-  const auto tracings =
-      sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, options, random);
+  const auto tracings = f.sample(options, random);
   for (const Tracing& t : tracings) {
     for (Eigen::Index i = 0; i < t.points.rows(); ++i) {
       EXPECT_NEAR(t.plane_normal.dot(t.points.row(i).transpose() - t.plane_origin), 0.0, 1e-9);
@@ -237,9 +238,9 @@ TEST(SampleTracings, SameSeedSameTracingsOtherSeedOtherNoise) {
   TracingSamplerOptions options;
   options.planes = 3;
   SeededRandom a(11), b(11), c(12);
-  const auto ta = sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, options, a);
-  const auto tb = sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, options, b);
-  const auto tc = sampleTracings(f.mesh().V, f.mesh().F, f.mesh().leaflet, f.frame, options, c);
+  const auto ta = f.sample(options, a);
+  const auto tb = f.sample(options, b);
+  const auto tc = f.sample(options, c);
   ASSERT_EQ(ta.size(), tb.size());
   for (std::size_t i = 0; i < ta.size(); ++i) EXPECT_EQ(ta[i].points, tb[i].points);
   EXPECT_NE(stackTracingPoints(ta), stackTracingPoints(tc));
