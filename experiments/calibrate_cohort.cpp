@@ -114,15 +114,11 @@ std::string applySetting(const std::string& setting, CohortPreset& preset) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return usageError("no preset");
-  const std::string first = argv[1];
-  if (first == "--help" || first == "-h") {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  const CohortPreset* named = findCohortPreset(first);
-  if (!named) return usageError("unknown preset \"" + first + "\" (" + cohortPresetNames() + ")");
-  CohortPreset preset = *named;
+  int exit_code = kExitOk;
+  const CohortPreset* named =
+      tool_support::presetArgument(argc, argv, kUsage, usageError, exit_code);
+  if (!named) return exit_code;
+  CohortPreset preset = *named;  // a copy: KEY=VALUE arguments change it
   std::vector<std::uint64_t> seeds = {1, 2, 3};
   double edge = 3.0;
   SimulationSettings settings = truthSimulationSettings();

@@ -100,15 +100,10 @@ std::string closureCell(const SimulationResult& r, double seconds) {
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return usageError("expected a preset name");
-  const std::string first = argv[1];
-  if (first == "--help" || first == "-h") {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  if (!findCohortPreset(first)) {
-    return usageError("unknown preset \"" + first + "\" (" + cohortPresetNames() + ")");
-  }
+  int exit_code = kExitOk;
+  const CohortPreset* preset =
+      tool_support::presetArgument(argc, argv, kUsage, usageError, exit_code);
+  if (!preset) return exit_code;
   std::vector<std::uint64_t> seeds = {1, 2, 3};
   double edge = 0.8, ratio = 2.0;
   for (int i = 2; i < argc; ++i) {
@@ -142,7 +137,7 @@ int main(int argc, char** argv) {
   const SimulationSettings settings;  // the simulator defaults, what simulate and fit use
   for (const std::uint64_t seed : seeds) {
     SyntheticCaseOptions options;
-    options.preset = first;
+    options.preset = preset->name;
     options.seed = seed;
     options.edge_mm = 3.0;  // only the truth's cords and anatomy are used; keep its closure cheap
     try {
@@ -177,7 +172,7 @@ int main(int argc, char** argv) {
           tool_support::joinedNames(mc.mesh_prolapse.segments).c_str());
       std::fflush(stdout);
     } catch (const std::exception& e) {
-      std::cerr << "coarse_start: " << first << " seed " << seed << ": " << e.what() << "\n";
+      std::cerr << "coarse_start: " << preset->name << " seed " << seed << ": " << e.what() << "\n";
       return kExitFailed;
     }
   }

@@ -61,15 +61,10 @@ void printRow(std::uint64_t seed, double edge, const ValveCase& valve_case,
 }  // namespace
 
 int main(int argc, char** argv) {
-  if (argc < 2) return usageError("no preset");
-  const std::string first = argv[1];
-  if (first == "--help" || first == "-h") {
-    std::cout << kUsage;
-    return kExitOk;
-  }
-  if (!findCohortPreset(first)) {
-    return usageError("unknown preset \"" + first + "\" (" + cohortPresetNames() + ")");
-  }
+  int exit_code = kExitOk;
+  const CohortPreset* preset =
+      tool_support::presetArgument(argc, argv, kUsage, usageError, exit_code);
+  if (!preset) return exit_code;
   std::vector<std::uint64_t> seeds = {1, 2, 3};
   std::vector<double> edges = {3.0, 2.5, 2.0, 1.5, 1.25, 1.0};
   double reference_edge = 0.6;
@@ -111,7 +106,7 @@ int main(int argc, char** argv) {
       "|---|---:|---:|---|---:|---:|---|---:|---:|---:|\n");
   for (const std::uint64_t seed : seeds) {
     SyntheticCaseOptions options;
-    options.preset = first;
+    options.preset = preset->name;
     options.seed = seed;
     options.edge_mm = reference_edge;
     options.truth_edge_ratio = 1.0;  // the reference is the truth mesh itself
@@ -140,7 +135,8 @@ int main(int argc, char** argv) {
                  std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
       }
     } catch (const std::exception& e) {
-      std::cerr << "mesh_convergence: " << first << " seed " << seed << ": " << e.what() << "\n";
+      std::cerr << "mesh_convergence: " << preset->name << " seed " << seed << ": " << e.what()
+                << "\n";
       return kExitFailed;
     }
   }

@@ -6,9 +6,12 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <iostream>
 #include <sstream>
 #include <string>
 #include <vector>
+
+#include "core/cohort_presets.h"
 
 namespace chordfit::tool_support {
 
@@ -56,6 +59,28 @@ inline bool parseLengthList(const std::string& text, std::vector<double>& length
   }
   bad = text;
   return !lengths.empty();
+}
+
+// The first argument of every cohort experiment: a preset's name, or --help (-h). Returns the
+// named preset; otherwise null, with `exit_code` what the program ends with: 0 after printing
+// `usage` for --help, else `usage_error`'s code for a missing or unknown preset.
+inline const CohortPreset* presetArgument(int argc, char** argv, const char* usage,
+                                          int (*usage_error)(const std::string&), int& exit_code) {
+  if (argc < 2) {
+    exit_code = usage_error("expected a preset name");
+    return nullptr;
+  }
+  const std::string first = argv[1];
+  if (first == "--help" || first == "-h") {
+    std::cout << usage;
+    exit_code = 0;
+    return nullptr;
+  }
+  const CohortPreset* preset = findCohortPreset(first);
+  if (!preset) {
+    exit_code = usage_error("unknown preset \"" + first + "\" (" + cohortPresetNames() + ")");
+  }
+  return preset;
 }
 
 // "A2 P2", or "–" for none: a list of segment names as one table cell.
