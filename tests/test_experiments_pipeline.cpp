@@ -63,6 +63,17 @@ std::vector<std::string> markdownCells(const std::string& line) {
   return result;
 }
 
+// Runs the experiment tool `tool` with each of `cases`' arguments and expects a usage error
+// (exit 2) whose text names the problem (the paired message).
+void expectUsageErrors(const fs::path& tool,
+                       const std::vector<std::pair<std::string, std::string>>& cases) {
+  for (const auto& [arguments, message] : cases) {
+    const testing::CommandResult r = testing::runProgram(tool, arguments);
+    EXPECT_EQ(r.exit_code, 2) << arguments;
+    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
+  }
+}
+
 class ExperimentsPipeline : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -964,20 +975,16 @@ TEST(CalibrateCohort, PrintsTheSegmentHeightsAndRejectsBadSettings) {
   ASSERT_EQ(rows.size(), 3u) << r.out;
   EXPECT_EQ(rows[0].rfind("| Seed | Mesh prolapse | Tracing prolapse | A1 |", 0), 0u) << rows[0];
   EXPECT_EQ(rows[2].rfind("| 1 | – | ", 0), 0u) << "normal-1 seed 1 does not prolapse: " << rows[2];
-  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
-           {"normal-1 foo=1", "unknown key \"foo\""},
-           {"normal-1 lesion=soft", "lesion: expected a number"},
-           {"normal-1 lesion_segments=A4", "\"A4\" is not A1..P3"},
-           {"normal-3", "unknown preset \"normal-3\""},
-           {"normal-1 --edge 0", "--edge: expected a positive length"},
-           {"normal-1 --seeds 1,1.5", "--seeds: expected positive integers, got \"1.5\""},
-           {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"},
-           {"normal-1 --ramp -1", "--ramp: expected a positive duration"},
-           {"normal-1 --ramp", "--ramp: expected a positive duration"}}) {
-    r = testing::runProgram(tool, arguments);
-    EXPECT_EQ(r.exit_code, 2) << arguments;
-    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
-  }
+  expectUsageErrors(tool,
+                    {{"normal-1 foo=1", "unknown key \"foo\""},
+                     {"normal-1 lesion=soft", "lesion: expected a number"},
+                     {"normal-1 lesion_segments=A4", "\"A4\" is not A1..P3"},
+                     {"normal-3", "unknown preset \"normal-3\""},
+                     {"normal-1 --edge 0", "--edge: expected a positive length"},
+                     {"normal-1 --seeds 1,1.5", "--seeds: expected positive integers, got \"1.5\""},
+                     {"normal-1 --max-steps 0", "--max-steps: expected a positive integer"},
+                     {"normal-1 --ramp -1", "--ramp: expected a positive duration"},
+                     {"normal-1 --ramp", "--ramp: expected a positive duration"}});
 }
 
 // mesh_convergence (docs/performance.md "Mesh convergence of the closed valve"): the
@@ -999,17 +1006,13 @@ TEST(MeshConvergence, MeasuresACoarserMeshAgainstTheReferenceAndRejectsBadArgume
   EXPECT_LT(std::stoi(coarse[3]), std::stoi(reference[3])) << "fewer vertices";
   EXPECT_GT(std::stod(coarse[5]), 0.01) << "a coarser mesh closes a little differently";
   EXPECT_LT(std::stod(coarse[5]), 1.0) << "but it is the same valve";
-  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
-           {"normal-3", "unknown preset \"normal-3\""},
-           {"normal-1 --edges 3,x", "--edges: expected positive lengths in mm, got \"x\""},
-           {"normal-1 --edges 0.5", "0.5 mm is not coarser than the reference (0.6 mm)"},
-           {"normal-1 --reference -1", "--reference: expected a positive length"},
-           {"normal-1 --seeds 0", "--seeds: expected positive integers, got \"0\""},
-           {"normal-1 --foo", "unknown argument \"--foo\""}}) {
-    r = testing::runProgram(tool, arguments);
-    EXPECT_EQ(r.exit_code, 2) << arguments;
-    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
-  }
+  expectUsageErrors(
+      tool, {{"normal-3", "unknown preset \"normal-3\""},
+             {"normal-1 --edges 3,x", "--edges: expected positive lengths in mm, got \"x\""},
+             {"normal-1 --edges 0.5", "0.5 mm is not coarser than the reference (0.6 mm)"},
+             {"normal-1 --reference -1", "--reference: expected a positive length"},
+             {"normal-1 --seeds 0", "--seeds: expected positive integers, got \"0\""},
+             {"normal-1 --foo", "unknown argument \"--foo\""}});
 }
 
 // coarse_start (docs/performance.md, "Coarse-to-fine start"): the same valve closed cold and
@@ -1031,16 +1034,11 @@ TEST(CoarseStart, ClosesTheValveBothWaysAndRejectsBadArguments) {
     EXPECT_EQ(cells[column].find("cap"), std::string::npos) << "every closure settles: " << rows[2];
   const double apart_max = std::stod(cells[8].substr(cells[8].find('/') + 1));
   EXPECT_LT(apart_max, 0.05) << "both starts reach the same closed state here: " << rows[2];
-  for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
-           {"normal-3", "unknown preset \"normal-3\""},
-           {"normal-1 --ratio 1", "--ratio: expected a number in (1, 4]"},
-           {"normal-1 --edge 0.1", "--edge: expected a length in [0.3, 5] mm"},
-           {"normal-1 --seeds x", "--seeds: expected positive integers"},
-           {"normal-1 --foo", "unknown argument \"--foo\""}}) {
-    r = testing::runProgram(tool, arguments);
-    EXPECT_EQ(r.exit_code, 2) << arguments;
-    EXPECT_NE(r.err.find(message), std::string::npos) << arguments << ": " << r.err;
-  }
+  expectUsageErrors(tool, {{"normal-3", "unknown preset \"normal-3\""},
+                           {"normal-1 --ratio 1", "--ratio: expected a number in (1, 4]"},
+                           {"normal-1 --edge 0.1", "--edge: expected a length in [0.3, 5] mm"},
+                           {"normal-1 --seeds x", "--seeds: expected positive integers"},
+                           {"normal-1 --foo", "unknown argument \"--foo\""}});
 }
 
 }  // namespace
