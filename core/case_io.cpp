@@ -92,6 +92,14 @@ bool readSideArray(const SideFile& file, const std::string& key, Diagnostics& di
   return array != nullptr && read(*array, fields);
 }
 
+// ""anterior", "posterior"": the names labels and tracings' leaflets are looked up in, said
+// beside a label or name that is not there, as the names may be what changed.
+std::string quotedNames(const std::vector<std::string>& names) {
+  std::string list;
+  for (std::size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + json(names[i]).dump();
+  return list;
+}
+
 // One leaflet label per mesh vertex, each naming one of the case's leaflets.
 bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
   if (!fields.integers(labels, "labels", c.mesh.leaflet)) return false;
@@ -105,9 +113,12 @@ bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
   std::vector<int> vertices_per_leaflet(leaflet_count, 0);
   for (Eigen::Index v = 0; v < c.mesh.leaflet.size(); ++v) {
     if (c.mesh.leaflet(v) < 0 || c.mesh.leaflet(v) >= leaflet_count) {
-      fields.error(indexPath("labels", v), "label " + std::to_string(c.mesh.leaflet(v)) +
-                                               " is not a leaflet (case has " +
-                                               std::to_string(leaflet_count) + " leaflets)");
+      fields.error(indexPath("labels", v),
+                   "label " + std::to_string(c.mesh.leaflet(v)) +
+                       " is not a leaflet: labels run from 0 to " +
+                       std::to_string(leaflet_count - 1) +
+                       ", one per leaflet name in case.json (leaflets.names or its default: " +
+                       quotedNames(c.mesh.leaflet_names) + ")");
       return false;
     }
     ++vertices_per_leaflet[c.mesh.leaflet(v)];
@@ -174,12 +185,17 @@ bool readTracingLeaflet(const json& value, const std::string& where,
         return true;
       }
     }
-    fields.error(where, "\"" + name + "\" is not a leaflet name of this case");
+    fields.error(where, "\"" + name + "\" is not a leaflet name of this case: case.json names " +
+                            quotedNames(names) + " (leaflets.names or its default)");
     return false;
   }
   if (!fields.integer(value, where, leaflet)) return false;
   if (leaflet < 0 || leaflet >= static_cast<int>(names.size())) {
-    fields.error(where, "leaflet " + std::to_string(leaflet) + " does not exist");
+    fields.error(where, "leaflet " + std::to_string(leaflet) +
+                            " does not exist: leaflets run from 0 to " +
+                            std::to_string(names.size() - 1) +
+                            ", one per leaflet name in case.json (leaflets.names or its default: " +
+                            quotedNames(names) + ")");
     return false;
   }
   return true;

@@ -304,6 +304,26 @@ TEST_F(ValidateCommand, ReportsBlankOrRepeatedLeafletNamesAndALeafletWithoutVert
   expectError("leaflets\\.json", "labels: no vertex is labelled 2 \\(septal\\)");
 }
 
+// A leaflet renamed or dropped in case.json shows up in the files that use the names (labels,
+// tracings): their errors say which names case.json gives, so the user looks there too.
+TEST_F(ValidateCommand, AnUnknownLeafletLabelOrNameIsReportedWithTheNamesCaseJsonGives) {
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": "posterior", "points": [[1, 0, -2], [2, 0, -3]]},
+                             {"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": 2, "points": [[1, 0, -2], [2, 0, -3]]}]})");
+  expectError("tracings\\.json",
+              "tracings\\[1\\]\\.leaflet: leaflet 2 does not exist: leaflets run from 0 to 1, one "
+              "per leaflet name in case\\.json \\(leaflets\\.names or its default: \"anterior\", "
+              "\"posterior\"\\)");
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"anterior"}; });
+  expectError("leaflets\\.json",
+              "labels\\[2\\]: label 1 is not a leaflet: labels run from 0 to 0, one per leaflet "
+              "name in case\\.json \\(leaflets\\.names or its default: \"anterior\"\\)");
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.leaflet: \"posterior\" is not a leaflet name of this case: "
+              "case\\.json names \"anterior\" \\(leaflets\\.names or its default\\)");
+}
+
 // A cord given twice pulls twice as hard, and two tips in one place give every cord one origin.
 TEST_F(ValidateCommand, ReportsARepeatedCordAndTwoTipsInOnePlace) {
   CordSet set = cordsFromOneTip(1);
