@@ -496,15 +496,18 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
   Curve closed_curve;
   if (closed && readCurve(closed->path, closed_curve, diagnostics, closed->name)) {
     c.annulus_closed = closed_curve.points;
-    if (mesh_ok)
-      ok &= checkPointsNearValve(c.mesh.V, c.annulus_closed, closed->name, "points", diagnostics);
+    // A point far from the valve is the problem to report: the ring's length and shape measured
+    // through it would only repeat it ("the closed annulus is inf mm around" for 1e308).
+    const bool near_valve = !mesh_ok || checkPointsNearValve(c.mesh.V, c.annulus_closed,
+                                                             closed->name, "points", diagnostics);
+    ok &= near_valve;
     if (ring_ok && c.annulus_closed.rows() != c.mesh.annulus.size()) {
       diagnostics.error(closed->name, "points",
                         std::to_string(c.annulus_closed.rows()) +
                             " closed-state annulus positions for an annulus ring of " +
                             std::to_string(c.mesh.annulus.size()) + " vertices");
       ok = false;
-    } else if (ring_ok && mesh_ok) {
+    } else if (ring_ok && mesh_ok && near_valve) {
       Eigen::MatrixXd open_ring(c.mesh.annulus.size(), 3);
       for (Eigen::Index k = 0; k < c.mesh.annulus.size(); ++k)
         open_ring.row(k) = c.mesh.V.row(c.mesh.annulus(k));

@@ -252,6 +252,23 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusRunningTheOtherWayOrCollapsed) {
   expectError("annulus_closed\\.json", "points: the closed annulus is 0 mm around");
 }
 
+// A closed-annulus point at 1e308 was reported twice: as far from the valve, and as a ring
+// "inf mm around" (its length overflowed). The far point is the problem; the ring's length and
+// shape are not measured through it.
+TEST_F(ValidateCommand, ReportsAClosedAnnulusPointFarFromTheValveOnce) {
+  nlohmann::json points = nlohmann::json::array();
+  for (Eigen::Index k = 0; k < valve_.annulus_closed.rows(); ++k) {
+    const Eigen::RowVector3d p = valve_.annulus_closed.row(k);
+    points.push_back({k == 3 ? 1e308 : p.x(), p.y(), p.z()});
+  }
+  writeText(dir_ / "annulus_closed.json", nlohmann::json{{"points", points}}.dump());
+  expectError("annulus_closed\\.json",
+              "points\\[3\\]: \\(1e\\+308, .* lies 1e\\+308 mm from the valve");
+  const testing::CommandResult r = validate();
+  EXPECT_NE(r.err.find("1 problem(s)"), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("around"), std::string::npos) << r.err;
+}
+
 // From a bad-input sweep: a closed annulus listed from another start (a shifted list, or half
 // a turn: RAS points read as LPS) or with a repeated point passed every check; the shifted or
 // turned one pulled the ring across the orifice, the repeated one diverged (exit 3).
