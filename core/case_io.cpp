@@ -10,6 +10,7 @@
 #include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/curve_io.h"
+#include "core/joined.h"
 #include "core/json_fields.h"
 #include "core/mesh_checks.h"
 #include "core/mesh_io.h"
@@ -92,12 +93,20 @@ bool readSideArray(const SideFile& file, const std::string& key, Diagnostics& di
   return array != nullptr && read(*array, fields);
 }
 
-// ""anterior", "posterior"": the names labels and tracings' leaflets are looked up in, said
-// beside a label or name that is not there, as the names may be what changed.
+// "\"anterior\", \"posterior\"": the case's leaflet names as JSON strings.
 std::string quotedNames(const std::vector<std::string>& names) {
-  std::string list;
-  for (std::size_t i = 0; i < names.size(); ++i) list += (i ? ", " : "") + json(names[i]).dump();
-  return list;
+  std::vector<std::string> quoted;
+  for (const std::string& name : names) quoted.push_back(json(name).dump());
+  return joined(quoted, ", ");
+}
+
+// ": labels run from 0 to 1, one per leaflet name in case.json (leaflets.names or its default:
+// "anterior", "posterior")": said beside a label or tracing leaflet that is not a leaflet, as
+// the names may be what changed.
+std::string leafletNumbersNote(const std::string& what, const std::vector<std::string>& names) {
+  return ": " + what + " run from 0 to " + std::to_string(names.size() - 1) +
+         ", one per leaflet name in case.json (leaflets.names or its default: " +
+         quotedNames(names) + ")";
 }
 
 // One leaflet label per mesh vertex, each naming one of the case's leaflets.
@@ -113,12 +122,9 @@ bool readLabelArray(const json& labels, JsonFields& fields, ValveCase& c) {
   std::vector<int> vertices_per_leaflet(leaflet_count, 0);
   for (Eigen::Index v = 0; v < c.mesh.leaflet.size(); ++v) {
     if (c.mesh.leaflet(v) < 0 || c.mesh.leaflet(v) >= leaflet_count) {
-      fields.error(indexPath("labels", v),
-                   "label " + std::to_string(c.mesh.leaflet(v)) +
-                       " is not a leaflet: labels run from 0 to " +
-                       std::to_string(leaflet_count - 1) +
-                       ", one per leaflet name in case.json (leaflets.names or its default: " +
-                       quotedNames(c.mesh.leaflet_names) + ")");
+      fields.error(indexPath("labels", v), "label " + std::to_string(c.mesh.leaflet(v)) +
+                                               " is not a leaflet" +
+                                               leafletNumbersNote("labels", c.mesh.leaflet_names));
       return false;
     }
     ++vertices_per_leaflet[c.mesh.leaflet(v)];
@@ -191,11 +197,8 @@ bool readTracingLeaflet(const json& value, const std::string& where,
   }
   if (!fields.integer(value, where, leaflet)) return false;
   if (leaflet < 0 || leaflet >= static_cast<int>(names.size())) {
-    fields.error(where, "leaflet " + std::to_string(leaflet) +
-                            " does not exist: leaflets run from 0 to " +
-                            std::to_string(names.size() - 1) +
-                            ", one per leaflet name in case.json (leaflets.names or its default: " +
-                            quotedNames(names) + ")");
+    fields.error(where, "leaflet " + std::to_string(leaflet) + " does not exist" +
+                            leafletNumbersNote("leaflets", names));
     return false;
   }
   return true;

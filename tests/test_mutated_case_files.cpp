@@ -6,7 +6,7 @@
 // "inf mm" away; this keeps the whole family from coming back.
 #include <filesystem>
 #include <random>
-#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -38,8 +38,12 @@ void collectLeaves(const json& value, const json::json_pointer& at,
   }
 }
 
-std::string escaped(const std::string& file) {
-  return std::regex_replace(file, std::regex("\\."), "\\.");
+// True when a line of `err` starting "error: " mentions `file`.
+bool anErrorMentions(const std::string& err, const std::string& file) {
+  std::istringstream lines(err);
+  for (std::string line; std::getline(lines, line);)
+    if (line.rfind("error: ", 0) == 0 && line.find(file) != std::string::npos) return true;
+  return false;
 }
 
 // Removes the value at `at` from its object or array.
@@ -75,14 +79,14 @@ TEST(MutatedCaseFiles, AreAcceptedOrRefusedNamingTheSpoiltFileNeverACrash) {
     std::vector<json::json_pointer> leaves;
     collectLeaves(document, json::json_pointer(), leaves);
     const json::json_pointer at = leaves[rng() % leaves.size()];
-    const std::size_t how = rng() % (spoilers.size() + 1);
+    const std::size_t how = rng() % (spoilers.size() + 1);  // the last: remove it
     std::string change;
-    if (how == spoilers.size() && !at.empty()) {
+    if (how == spoilers.size()) {
       eraseAt(document, at);
       change = at.to_string() + " removed";
     } else {
-      document[at] = spoilers[how % spoilers.size()];
-      change = at.to_string() + " = " + spoilers[how % spoilers.size()].dump();
+      document[at] = spoilers[how];
+      change = at.to_string() + " = " + spoilers[how].dump();
     }
     writeText(case_dir / file, document.dump(1));
 
@@ -95,9 +99,7 @@ TEST(MutatedCaseFiles, AreAcceptedOrRefusedNamingTheSpoiltFileNeverACrash) {
       // "error: <file>: <where>: <problem>" (under "case <dir>: N problem(s)"): an error names
       // the spoilt file, as its own or, for a change that makes another file wrong (a leaflet
       // renamed in case.json, which tracings.json names), in its text.
-      EXPECT_TRUE(std::regex_search(r.err, std::regex("(^|\n)error: [^\n]*" + escaped(file))))
-          << what << "\n"
-          << r.err;
+      EXPECT_TRUE(anErrorMentions(r.err, file)) << what << "\n" << r.err;
       // A distance or length that overflowed reads as "inf mm", one of NaN as "nan mm".
       EXPECT_EQ(r.err.find("inf mm"), std::string::npos) << what << "\n" << r.err;
       EXPECT_EQ(r.err.find("nan mm"), std::string::npos) << what << "\n" << r.err;
