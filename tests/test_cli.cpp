@@ -402,6 +402,30 @@ TEST(ChordfitCli, MakeValveNamesTheDiametersThatBoundTheSaddleHeights) {
   EXPECT_FALSE(std::filesystem::exists(dir / "case" / "case.json"));
 }
 
+// A leaflet height within its range (positive, finite) but far below the mesh's edge made
+// zero-area triangles: make-valve wrote a case that validate, simulate and fit then refused.
+// The case is read back before it is published; an existing directory is left as it was.
+TEST(ChordfitCli, MakeValveWritesNoCaseThatWouldNotValidate) {
+  TempDir dir;
+  auto r = runChordfit("make-valve --out " + quoted(dir / "flat") + " --anterior-height 1e-300");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: make-valve: the case these options make would not validate, so "
+                       "it was not written"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("error: open.ply: face "), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("degenerate triangle (zero area)"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "flat")) << "created for nothing";
+  // Over an earlier case: that case stays, file for file.
+  ASSERT_EQ(runChordfit("make-valve --edge 3 --out " + quoted(dir / "kept")).exit_code, 0);
+  const std::string before = testing::readText(dir / "kept" / "open.ply");
+  r = runChordfit("make-valve --out " + quoted(dir / "kept") + " --posterior-height 1e-300");
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_EQ(testing::readText(dir / "kept" / "open.ply"), before);
+  Diagnostics diagnostics;
+  EXPECT_TRUE(loadCase(dir / "kept", diagnostics).has_value());
+}
+
 TEST(ChordfitCli, RejectsAMeshWhoseTopologyDiffersFromTheCase) {
   TempDir dir;
   writeCase(dir / "case", testing::tinyConeCase());
