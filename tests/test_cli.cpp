@@ -597,6 +597,22 @@ TEST(ChordfitCli, HeuristicSaysWhenItsPlacementOptionsPlaceNothing) {
                   quoted(dir / "deep.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.err.find("note: heuristic: no secondary cord placed"), std::string::npos) << r.err;
+  // Spacings wider than the posterior free edge: two cords, both anterior and on one side; the
+  // other tip used to be printed at the annulus centre without a word.
+  ASSERT_EQ(runChordfit("make-valve --out " + quoted(dir / "valve2") + " --edge 2").exit_code, 0);
+  r = runChordfit("heuristic " + quoted(dir / "valve2") +
+                  " --primary-spacing 60 --secondary-spacing 60 --out " +
+                  quoted(dir / "wide.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("note: heuristic: the posterior leaflet gets no cord at --primary-spacing "
+                       "60 mm and --secondary-spacing 60 mm: nothing holds it down in systole"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("note: heuristic: tip posteromedial carries no cord (none of the cords "
+                       "lies on its side), so its position"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("anterior leaflet gets no cord"), std::string::npos) << r.err;
   r = runChordfit("heuristic " + quoted(dir / "valve") + " --out " + quoted(dir / "plain.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("note:"), std::string::npos) << r.err;

@@ -38,6 +38,36 @@ void printCordSummary(const CordSet& set, const ValveMesh& mesh) {
   }
 }
 
+// Notes for what a coarse placement leaves without a cord (--primary-spacing 60 on the
+// parametric valve placed two cords, both on the anterior leaflet, and printed the
+// posteromedial tip at the annulus centre without a word). A leaflet without a cord billows
+// into the atrium in systole; a tip without a cord pulls nothing, and the paper's formula,
+// a centroid of its insertions, has none to place it by.
+void noteWhatNoCordHolds(const CordSet& set, const ValveMesh& mesh, bool placed, bool tips_given,
+                         const HeuristicCommandOptions& options) {
+  if (placed) {
+    for (std::size_t leaflet = 0; leaflet < mesh.leaflet_names.size(); ++leaflet) {
+      const bool held = std::any_of(set.cords.begin(), set.cords.end(), [&](const Cord& c) {
+        return mesh.leaflet(c.vertex) == static_cast<int>(leaflet);
+      });
+      if (!held)
+        std::fprintf(stderr,
+                     "note: heuristic: the %s leaflet gets no cord at --primary-spacing %g mm "
+                     "and --secondary-spacing %g mm: nothing holds it down in systole\n",
+                     mesh.leaflet_names[leaflet].c_str(), options.primary_spacing_mm,
+                     options.secondary_spacing_mm);
+    }
+  }
+  for (std::size_t t = 0; t < set.tips.size(); ++t) {
+    const bool used = std::any_of(set.cords.begin(), set.cords.end(),
+                                  [&](const Cord& c) { return c.tip == static_cast<int>(t); });
+    if (!used)
+      std::fprintf(stderr, "note: heuristic: tip %s carries no cord%s\n", set.tips[t].name.c_str(),
+                   tips_given ? ""
+                              : " (none of the cords lies on its side), so its position, the "
+                                "paper's centroid of its insertions, is a placeholder");
+  }
+}
 }  // namespace
 
 int runHeuristic(const HeuristicCommandOptions& options) {
@@ -112,6 +142,8 @@ int runHeuristic(const HeuristicCommandOptions& options) {
                  "--secondary-depth %g mm (along mesh edges) in from the free edge and %g mm or "
                  "more from the annulus\n",
                  options.secondary_depth_mm, HeuristicOptions{}.min_annulus_distance_mm);
+  noteWhatNoCordHolds(set, valve_case->mesh, !case_cords,
+                      valve_case->tips && valve_case->tips->size() == set.tips.size(), options);
   writeCordSet(options.out_file, set, &valve_case->mesh);
   forgetPublished(options.out_file);  // now the user's file (staged_output.h)
   std::cout << "heuristic cord set: " << counted(set.cords.size(), "cord") << " on "
