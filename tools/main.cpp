@@ -1,7 +1,9 @@
 // chordfit: command-line entry. The only translation unit that includes CLI11 (slow headers);
 // it fills the option structs of commands.h and dispatches.
 #include <algorithm>
+#include <cerrno>
 #include <csignal>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
@@ -155,11 +157,18 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_option("--preset", o.preset, "Cohort preset (see --list); required unless --list");
   cmd->add_option("--out", o.out_dir, "Output case directory; required unless --list");
   cmd->add_option("--seed", o.seed, "Patient seed (same seed => identical files)")
-      ->check(CLI::Validator(  // the unsigned option would wrap "-1" silently
+      ->check(CLI::Validator(
+          // The unsigned option would wrap "-1" and saturate past 2^64 - 1 silently (seed
+          // 99999999999999999999 made the case of seed 18446744073709551615).
           [](std::string& value) {
-            return value.find('-') == std::string::npos
-                       ? std::string()
-                       : "must be a non-negative integer, got " + value;
+            const bool digits =
+                !value.empty() && std::all_of(value.begin(), value.end(),
+                                              [](char c) { return c >= '0' && c <= '9'; });
+            if (!digits) return "must be a non-negative integer, got " + value;
+            errno = 0;
+            std::strtoull(value.c_str(), nullptr, 10);
+            return errno == ERANGE ? "must be at most 18446744073709551615 (2^64 - 1), got " + value
+                                   : std::string();
           },
           "UINT"))
       ->capture_default_str();
