@@ -163,9 +163,29 @@ TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
 
 TEST(FitCommand, RejectsANegativeTipWeightWithExitCode2) {
   const std::string err = refusedFitMessage("--params scales+tips --tip-weight -1");
-  EXPECT_NE(err.find("error: fit: --tip-weight: must be a finite number >= 0, got -1"),
-            std::string::npos)
+  EXPECT_NE(err.find("error: fit: --tip-weight: must be in [0, 1000], got -1"), std::string::npos)
       << err;
+}
+
+// Values each option's positivity let through that made a fit meaningless with exit 0: a
+// weight of 1e308 overflowed the cost (the fit returned its seed), a step of 1e-300 gave
+// Jacobian columns of 0, a tip step of 1e308 mm diverged every difference closure.
+TEST(FitCommand, RefusesWeightsAndStepsThatMakeTheCostOrTheJacobianMeaningless) {
+  const std::pair<std::string, std::string> cases[] = {
+      {"--section-weight 1e308", "error: fit: --section-weight: must be in [0, 1000], got 1e+308"},
+      {"--params scales+tips --tip-weight 1001",
+       "error: fit: --tip-weight: must be in [0, 1000], got 1001"},
+      {"--fd-step 1e-300",
+       "error: fit: --fd-step: 1e-300 is below 1e-06, where a central "
+       "difference measures the closure's stopping tolerance"},
+      {"--params scales+tips --fd-tip-step 1e308",
+       "error: fit: --fd-tip-step: must be in [0.0001, 5] mm, got 1e+308"},
+      {"--params scales+tips --fd-tip-step 1e-5",
+       "error: fit: --fd-tip-step: must be in [0.0001, 5] mm, got 1e-05"}};
+  for (const auto& [options, message] : cases) {
+    const std::string err = refusedFitMessage(options);
+    EXPECT_NE(err.find(message), std::string::npos) << options << ": " << err;
+  }
 }
 
 // The tip prior (--tip-weight) is recorded where a reader of the results looks for it.

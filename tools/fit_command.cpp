@@ -68,15 +68,17 @@ int runFit(const FitCommandOptions& o) {
     std::cerr << "error: fit: --scale-bounds: need two numbers 0 < lower < upper\n";
     return kExitBadInput;
   }
-  if (!(o.section_weight >= 0.0) || !std::isfinite(o.section_weight)) {
-    std::cerr << "error: fit: --section-weight: must be a finite number >= 0, got "
-              << o.section_weight << "\n";
-    return kExitBadInput;
-  }
-  if (!(o.tip_weight >= 0.0) || !std::isfinite(o.tip_weight)) {
-    std::cerr << "error: fit: --tip-weight: must be a finite number >= 0, got " << o.tip_weight
-              << "\n";
-    return kExitBadInput;
+  // A weight's upper bound: beyond it the other residuals are round-off beside its own, and
+  // near 1e154 its squares overflow (--section-weight 1e308 made the cost infinite, and the
+  // fit returned its seed with exit 0). The documented weights are 0.01-1.
+  constexpr double kMaxWeight = 1000.0;
+  for (const auto& [option, weight] :
+       {std::pair{"--section-weight", o.section_weight}, std::pair{"--tip-weight", o.tip_weight}}) {
+    if (!(weight >= 0.0 && weight <= kMaxWeight)) {
+      std::cerr << "error: fit: " << option << ": must be in [0, " << kMaxWeight << "], got "
+                << weight << "\n";
+      return kExitBadInput;
+    }
   }
   if (!optionsArePositive("fit",
                           {{"--max-sims", o.max_sims},
@@ -91,6 +93,26 @@ int runFit(const FitCommandOptions& o) {
     std::cerr << "error: fit: --fd-step: " << o.fd_scale_step
               << " is not below the lower scale bound " << o.scale_bounds[0]
               << " (a central difference there would close a scale <= 0)\n";
+    return kExitBadInput;
+  }
+  // Below these a difference measures where the closure stopped, not the map: a 20 mm cord
+  // times 1e-6 moves its vertex less than the closure's 1e-4 mm tolerance per step (1e-300
+  // gave Jacobian columns of 0 and "0 of 32 cords determined"). Above kMaxTipStepMm a tip's
+  // difference is a secant across the ventricle (1e308 mm moved the tips out of the valve and
+  // every difference closure diverged).
+  constexpr double kMinScaleStep = 1e-6, kMinTipStepMm = 1e-4, kMaxTipStepMm = 5.0;
+  if (o.fd_scale_step < kMinScaleStep) {
+    std::cerr << "error: fit: --fd-step: " << o.fd_scale_step << " is below " << kMinScaleStep
+              << ", where a central difference measures the closure's stopping tolerance, not "
+                 "the forward map (the default 0.01 was chosen from the map's noise: "
+                 "docs/fitting.md)\n";
+    return kExitBadInput;
+  }
+  if (!(o.fd_tip_step_mm >= kMinTipStepMm && o.fd_tip_step_mm <= kMaxTipStepMm)) {
+    std::cerr << "error: fit: --fd-tip-step: must be in [" << kMinTipStepMm << ", " << kMaxTipStepMm
+              << "] mm, got " << o.fd_tip_step_mm
+              << " (smaller measures the closure's stopping tolerance, larger is a secant, not "
+                 "a slope; the default is 0.1 mm)\n";
     return kExitBadInput;
   }
   if (o.fd_scale_step > 0.1)
