@@ -128,6 +128,24 @@ TEST_F(SimulateCommand, SetOverridesASettingAsTheCasesSimulationBlockWould) {
   EXPECT_EQ(metrics, edited_metrics);
 }
 
+// A load faster than the calibrated 10 mmHg/ms gets a note with its rate: a 1e-300 ms ramp
+// printed that rate with 300 digits, and ramp_ms 0 (the whole load at once) went without one.
+TEST_F(SimulateCommand, NotesALoadFasterThanCalibratedWithItsRate) {
+  const auto noteOf = [&](const std::string& ramp) {
+    const auto r = runChordfit("simulate " + quoted(case_dir_) + " --set ramp_ms=" + ramp +
+                               " --quiet --out " + quoted(dir_ / ("ramp" + ramp)));
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const std::size_t at = r.err.find("note: simulate: 100 mmHg ");
+    return at == std::string::npos ? std::string() : r.err.substr(at, r.err.find('\n', at) - at);
+  };
+  EXPECT_NE(noteOf("1e-300").find("over a 1e-300 ms ramp loads the valve at 1e+302 mmHg/ms, "
+                                  "faster than calibrated"),
+            std::string::npos);
+  EXPECT_NE(noteOf("0").find("at once (ramp_ms 0) loads the valve, faster than calibrated"),
+            std::string::npos);
+  EXPECT_EQ(noteOf("10"), "");
+}
+
 TEST_F(SimulateCommand, RejectsABadSetBeforeSimulatingNamingTheSetting) {
   const std::pair<const char*, const char*> cases[] = {
       {"--set youngs_modulus_mpa=-1", "simulate: --set: simulation.youngs_modulus_mpa: -1 is out"},
