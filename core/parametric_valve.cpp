@@ -556,8 +556,9 @@ void checkFreeEdgeRadius(const RingFrame& frame, const Column& column, int index
         std::to_string(index) + " (" + (column.leaflet == 0 ? "anterior" : "posterior") +
         ", height " + formatNumber(column.height) +
         " mm) would reach the valve axis (annulus radius " + formatNumber(radius) +
-        " mm); reduce " + (column.leaflet == 0 ? "anterior_height_mm" : "posterior_height_mm") +
-        " or enlarge the annulus");
+        " mm); reduce the leaflet height there (anterior_height_mm, posterior_height_mm, "
+        "posterior_side_height_mm and commissural_height_mm set it along the annulus) or "
+        "enlarge the annulus");
   }
 }
 

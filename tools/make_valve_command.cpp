@@ -20,11 +20,12 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// "<field> must be ..." from makeParametricValve as "<option>: must be ..." when an option sets
-// the field, with the other fields it names (a bound derived from them) as options too; empty
-// when no option sets the field.
+// makeParametricValve's message with the fields options set named as the options:
+// "<field> must be ..." as "<option>: must be ..." (with the other fields it names, a bound
+// derived from them, as options too), and a field named inside another message as its option.
 std::string optionMessage(const std::string& message) {
-  // closed_saddle_height_mm before saddle_height_mm, which it contains (the replacements).
+  // closed_saddle_height_mm before saddle_height_mm, which it contains (the replacements);
+  // posterior_side_height_mm before posterior_height_mm likewise.
   static const std::pair<const char*, const char*> kOptions[] = {
       {"target_edge_mm", "--edge"},
       {"ap_diameter_mm", "--ap"},
@@ -36,19 +37,42 @@ std::string optionMessage(const std::string& message) {
       {"posterior_height_mm", "--posterior-height"},
       {"commissural_height_mm", "--commissural-height"},
       {"indentation_depth", "--indentation"}};
+  std::string text = message;
   for (const auto& [field, option] : kOptions) {
     const std::string prefix = std::string(field) + " ";
-    if (message.rfind(prefix, 0) != 0) continue;
-    std::string text = option + (": " + message.substr(prefix.size()));
-    for (const auto& [other, other_option] : kOptions) {
-      for (std::size_t at = text.find(other); at != std::string::npos; at = text.find(other))
-        text.replace(at, std::string(other).size(), other_option);
-    }
-    return text;
+    if (message.rfind(prefix, 0) == 0) text = option + (": " + message.substr(prefix.size()));
   }
-  return "";
+  for (const auto& [field, option] : kOptions) {
+    for (std::size_t at = text.find(field); at != std::string::npos; at = text.find(field))
+      text.replace(at, std::string(field).size(), option);
+  }
+  return text;
 }
 
+// The anatomy options given other than their defaults ("--anterior-height 1e-300"), for a
+// message about the valve they make together.
+std::string changedOptions(const ValveParameters& p, const std::string& annulus_file) {
+  const ValveParameters d;
+  const std::pair<const char*, std::pair<double, double>> options[] = {
+      {"--edge", {p.target_edge_mm, d.target_edge_mm}},
+      {"--ap", {p.ap_diameter_mm, d.ap_diameter_mm}},
+      {"--cc", {p.cc_diameter_mm, d.cc_diameter_mm}},
+      {"--saddle", {p.saddle_height_mm, d.saddle_height_mm}},
+      {"--closed-saddle", {p.closed_saddle_height_mm, d.closed_saddle_height_mm}},
+      {"--anterior-height", {p.anterior_height_mm, d.anterior_height_mm}},
+      {"--posterior-height", {p.posterior_height_mm, d.posterior_height_mm}},
+      {"--posterior-side-height", {p.posterior_side_height_mm, d.posterior_side_height_mm}},
+      {"--commissural-height", {p.commissural_height_mm, d.commissural_height_mm}},
+      {"--indentation", {p.indentation_depth, d.indentation_depth}}};
+  std::string text = annulus_file.empty() ? "" : "--annulus " + annulus_file;
+  for (const auto& [option, values] : options) {
+    if (values.first == values.second) continue;
+    char value[32];
+    std::snprintf(value, sizeof value, "%g", values.first);
+    text += (text.empty() ? "" : ", ") + std::string(option) + " " + value;
+  }
+  return text.empty() ? "the defaults" : text;
+}
 }  // namespace
 
 int runMakeValve(const MakeValveOptions& options) {
@@ -72,7 +96,7 @@ int runMakeValve(const MakeValveOptions& options) {
     valve = makeParametricValve(parameters);
   } catch (const std::invalid_argument& e) {
     const std::string by_option = optionMessage(e.what());
-    if (!by_option.empty()) {
+    if (by_option != e.what()) {
       std::cerr << "error: make-valve: " << by_option << "\n";
     } else {
       std::cerr << "error: " << (options.annulus_file.empty() ? "make-valve" : options.annulus_file)
@@ -113,8 +137,10 @@ int runMakeValve(const MakeValveOptions& options) {
       std::cout << wroteLine(options.out_dir, published) << "\n" << caseSummary(valve.valve_case);
       return kExitOk;
     }
-    std::cerr << "error: make-valve: the case these options make would not validate, so it "
-                 "was not written (a parameter too small or too large for the others?):\n";
+    std::cerr << "error: make-valve: the case these options make (" +
+                     changedOptions(parameters, options.annulus_file) +
+                     ") would not validate, so it was not written (a value too small or too "
+                     "large for the others?):\n";
     check.print(std::cerr);
   }
   if (!out_existed) fs::remove(options.out_dir, ec);  // empty again without the staging dir
