@@ -4,7 +4,6 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
-#include <utility>
 #include <vector>
 
 #include "core/case_io.h"
@@ -20,31 +19,39 @@ namespace fs = std::filesystem;
 
 namespace {
 
+// The anatomy options and the ValveParameters fields they set. closed_saddle_height_mm comes
+// before saddle_height_mm, which it contains, and posterior_side_height_mm before
+// posterior_height_mm likewise, for the replacements of optionMessage.
+struct AnatomyOption {
+  const char* field;
+  const char* option;
+  double ValveParameters::*member;
+};
+constexpr AnatomyOption kAnatomyOptions[] = {
+    {"target_edge_mm", "--edge", &ValveParameters::target_edge_mm},
+    {"ap_diameter_mm", "--ap", &ValveParameters::ap_diameter_mm},
+    {"cc_diameter_mm", "--cc", &ValveParameters::cc_diameter_mm},
+    {"closed_saddle_height_mm", "--closed-saddle", &ValveParameters::closed_saddle_height_mm},
+    {"saddle_height_mm", "--saddle", &ValveParameters::saddle_height_mm},
+    {"anterior_height_mm", "--anterior-height", &ValveParameters::anterior_height_mm},
+    {"posterior_side_height_mm", "--posterior-side-height",
+     &ValveParameters::posterior_side_height_mm},
+    {"posterior_height_mm", "--posterior-height", &ValveParameters::posterior_height_mm},
+    {"commissural_height_mm", "--commissural-height", &ValveParameters::commissural_height_mm},
+    {"indentation_depth", "--indentation", &ValveParameters::indentation_depth}};
+
 // makeParametricValve's message with the fields options set named as the options:
 // "<field> must be ..." as "<option>: must be ..." (with the other fields it names, a bound
 // derived from them, as options too), and a field named inside another message as its option.
 std::string optionMessage(const std::string& message) {
-  // closed_saddle_height_mm before saddle_height_mm, which it contains (the replacements);
-  // posterior_side_height_mm before posterior_height_mm likewise.
-  static const std::pair<const char*, const char*> kOptions[] = {
-      {"target_edge_mm", "--edge"},
-      {"ap_diameter_mm", "--ap"},
-      {"cc_diameter_mm", "--cc"},
-      {"closed_saddle_height_mm", "--closed-saddle"},
-      {"saddle_height_mm", "--saddle"},
-      {"anterior_height_mm", "--anterior-height"},
-      {"posterior_side_height_mm", "--posterior-side-height"},
-      {"posterior_height_mm", "--posterior-height"},
-      {"commissural_height_mm", "--commissural-height"},
-      {"indentation_depth", "--indentation"}};
   std::string text = message;
-  for (const auto& [field, option] : kOptions) {
-    const std::string prefix = std::string(field) + " ";
-    if (message.rfind(prefix, 0) == 0) text = option + (": " + message.substr(prefix.size()));
+  for (const AnatomyOption& o : kAnatomyOptions) {
+    const std::string prefix = std::string(o.field) + " ";
+    if (message.rfind(prefix, 0) == 0) text = o.option + (": " + message.substr(prefix.size()));
   }
-  for (const auto& [field, option] : kOptions) {
-    for (std::size_t at = text.find(field); at != std::string::npos; at = text.find(field))
-      text.replace(at, std::string(field).size(), option);
+  for (const AnatomyOption& o : kAnatomyOptions) {
+    for (std::size_t at = text.find(o.field); at != std::string::npos; at = text.find(o.field))
+      text.replace(at, std::string(o.field).size(), o.option);
   }
   return text;
 }
@@ -52,27 +59,17 @@ std::string optionMessage(const std::string& message) {
 // The anatomy options given other than their defaults ("--anterior-height 1e-300"), for a
 // message about the valve they make together.
 std::string changedOptions(const ValveParameters& p, const std::string& annulus_file) {
-  const ValveParameters d;
-  const std::pair<const char*, std::pair<double, double>> options[] = {
-      {"--edge", {p.target_edge_mm, d.target_edge_mm}},
-      {"--ap", {p.ap_diameter_mm, d.ap_diameter_mm}},
-      {"--cc", {p.cc_diameter_mm, d.cc_diameter_mm}},
-      {"--saddle", {p.saddle_height_mm, d.saddle_height_mm}},
-      {"--closed-saddle", {p.closed_saddle_height_mm, d.closed_saddle_height_mm}},
-      {"--anterior-height", {p.anterior_height_mm, d.anterior_height_mm}},
-      {"--posterior-height", {p.posterior_height_mm, d.posterior_height_mm}},
-      {"--posterior-side-height", {p.posterior_side_height_mm, d.posterior_side_height_mm}},
-      {"--commissural-height", {p.commissural_height_mm, d.commissural_height_mm}},
-      {"--indentation", {p.indentation_depth, d.indentation_depth}}};
+  const ValveParameters defaults;
   std::string text = annulus_file.empty() ? "" : "--annulus " + annulus_file;
-  for (const auto& [option, values] : options) {
-    if (values.first == values.second) continue;
+  for (const AnatomyOption& o : kAnatomyOptions) {
+    if (p.*o.member == defaults.*o.member) continue;
     char value[32];
-    std::snprintf(value, sizeof value, "%g", values.first);
-    text += (text.empty() ? "" : ", ") + std::string(option) + " " + value;
+    std::snprintf(value, sizeof value, "%g", p.*o.member);
+    text += (text.empty() ? "" : ", ") + std::string(o.option) + " " + value;
   }
   return text.empty() ? "the defaults" : text;
 }
+
 }  // namespace
 
 int runMakeValve(const MakeValveOptions& options) {
