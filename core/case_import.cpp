@@ -38,7 +38,8 @@ int nearestInLoop(const Eigen::MatrixXd& V, const std::vector<int>& loop, const 
   int best = 0;
   distance = std::numeric_limits<double>::infinity();
   for (std::size_t k = 0; k < loop.size(); ++k) {
-    const double d = (V.row(loop[k]).transpose() - p).norm();
+    // stableNorm: norm() overflows to inf for a landmark near 1e308 ("is inf mm from ...").
+    const double d = (V.row(loop[k]).transpose() - p).stableNorm();
     if (d < distance) {
       distance = d;
       best = static_cast<int>(k);
@@ -195,13 +196,10 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
   double d_anterior = 0.0;
   const int anterior_step = (nearestInLoop(V, ring, landmarks.anterior, d_anterior) - al + n) % n;
   if (!(d_anterior <= kMaxAnteriorLandmarkDistanceMm)) {
-    // norm() overflows for a landmark near 1e308; at that distance any ring vertex will do.
-    const double shown = std::isfinite(d_anterior)
-                             ? d_anterior
-                             : (V.row(ring[0]).transpose() - landmarks.anterior).stableNorm();
     return failed(std::move(out), ImportInput::kLandmarks,
-                  "the anterior landmark is " + mm(shown) + " from the annulus ring (at most " +
-                      mm(kMaxAnteriorLandmarkDistanceMm) + "): is it on the anterior annulus?",
+                  "the anterior landmark is " + mm(d_anterior) +
+                      " from the annulus ring (at most " + mm(kMaxAnteriorLandmarkDistanceMm) +
+                      "): is it on the anterior annulus?",
                   {2});
   }
   if (anterior_step == 0 || anterior_step == pm_step) {

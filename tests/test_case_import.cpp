@@ -163,6 +163,17 @@ TEST(CaseImport, AnAnteriorLandmarkOffTheAnnulusOrANonFiniteLandmarkIsRefused) {
     EXPECT_NE(error(far).find(" mm from the annulus ring (at most 10.00 mm)"), std::string::npos)
         << error(far);
   }
+  // A commissure there read "is inf mm from the nearest boundary loop" (the distance's square
+  // overflowed; found by spoiling the import's JSON inputs value by value).
+  for (const double z : {1e308, -1e308}) {
+    ImportLandmarks far = good;
+    far.anterolateral.z() = z;
+    EXPECT_EQ(error(far).find("inf mm"), std::string::npos) << error(far);
+    EXPECT_NE(error(far).find("the anterolateral commissure landmark is 1e+308 mm from the "
+                              "nearest boundary loop"),
+              std::string::npos)
+        << error(far);
+  }
   ImportLandmarks not_finite = good;
   not_finite.posteromedial.y() = NAN;
   EXPECT_EQ(error(not_finite), "the posteromedial commissure landmark is not a finite point");
