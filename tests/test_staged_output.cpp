@@ -109,7 +109,22 @@ TEST(StagedOutput, AnUndeclaredFileIsRefusedAndNothingIsPublished) {
       EXPECT_NE(std::string(e.what()).find("stray.txt"), std::string::npos) << e.what();
     }
   }
-  EXPECT_TRUE(fs::is_empty(out));  // the staging directory is gone, nothing was moved
+  // The staging directory is gone, nothing was moved, and the directory this run created
+  // is gone with them.
+  EXPECT_FALSE(fs::exists(out));
+}
+
+// A run that publishes nothing (refused after staging, or failed) leaves an output directory
+// that was there as it was, and removes one it created: make-valve and import-mesh each did
+// this on their own before.
+TEST(StagedOutput, ARunThatPublishesNothingLeavesNoDirectoryItCreated) {
+  TempDir tmp;
+  { StagedOutput staged(tmp.path() / "new", {"a.txt"}); }
+  EXPECT_FALSE(fs::exists(tmp.path() / "new"));
+  fs::create_directories(tmp.path() / "old");
+  { StagedOutput staged(tmp.path() / "old", {"a.txt"}); }
+  EXPECT_TRUE(fs::is_directory(tmp.path() / "old"));
+  EXPECT_TRUE(fs::is_empty(tmp.path() / "old"));
 }
 
 TEST(StagedOutput, ADirectoryInTheWayRefusesTheWholeSet) {

@@ -205,39 +205,35 @@ std::optional<fs::path> userFileInTheWay(const fs::path& staging, const fs::path
 
 // Writes the case into a staging directory in `out`, loads it back with every check of
 // `validate`, and publishes it unless it would replace a file of the user's. On a problem
-// prints it and returns nullopt, leaving `out` as it was (removed again when this created it).
+// prints it and returns nullopt, leaving `out` as it was (StagedOutput removes it again when
+// it created it).
 std::optional<StagedOutput::Published> writeValidatedCase(const fs::path& out,
                                                           const ValveCase& valve_case,
                                                           const ImportMeshOptions& options,
                                                           ValveCase& loaded) {
-  std::error_code ec;
-  const bool out_existed = fs::exists(out, ec);
-  {
-    const std::vector<std::string> files = importMeshOutputFiles();
-    StagedOutput staged(out, files, caseDirectoryFilesBesides(files), kCaseWriter);
-    writeCase(staged.dir(), valve_case);
-    Diagnostics check;
-    std::optional<ValveCase> read_back = loadCase(staged.dir(), check);
-    const std::optional<fs::path> in_the_way = userFileInTheWay(staged.dir(), out);
-    if (!read_back) {
-      std::cerr << "error: import-mesh: the imported case does not validate:\n";
-      Diagnostics named;
-      for (const Problem& problem : check.problems()) {
-        const Problem p = asTheUsersInput(problem, options);
-        named.error(p.file, p.where, p.what);
-      }
-      named.print(std::cerr);
-    } else if (in_the_way) {
-      std::cerr << "error: import-mesh: --out: " << in_the_way->string()
-                << ": exists and was not written by chordfit; import-mesh does not replace it "
-                   "(give a new directory for the case, or move the file)\n";
-    } else {
-      loaded = std::move(*read_back);
-      return staged.publish();
+  const std::vector<std::string> files = importMeshOutputFiles();
+  StagedOutput staged(out, files, caseDirectoryFilesBesides(files), kCaseWriter);
+  writeCase(staged.dir(), valve_case);
+  Diagnostics check;
+  std::optional<ValveCase> read_back = loadCase(staged.dir(), check);
+  if (!read_back) {
+    std::cerr << "error: import-mesh: the imported case does not validate:\n";
+    Diagnostics named;
+    for (const Problem& problem : check.problems()) {
+      const Problem p = asTheUsersInput(problem, options);
+      named.error(p.file, p.where, p.what);
     }
+    named.print(std::cerr);
+    return std::nullopt;
   }
-  if (!out_existed) fs::remove(out, ec);  // empty again once the staging directory is gone
-  return std::nullopt;
+  if (const std::optional<fs::path> in_the_way = userFileInTheWay(staged.dir(), out)) {
+    std::cerr << "error: import-mesh: --out: " << in_the_way->string()
+              << ": exists and was not written by chordfit; import-mesh does not replace it "
+                 "(give a new directory for the case, or move the file)\n";
+    return std::nullopt;
+  }
+  loaded = std::move(*read_back);
+  return staged.publish();
 }
 
 }  // namespace

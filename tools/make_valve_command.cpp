@@ -1,9 +1,7 @@
 #include <cstdio>
-#include <filesystem>
 #include <iostream>
 #include <stdexcept>
 #include <string>
-#include <system_error>
 #include <vector>
 
 #include "core/case_io.h"
@@ -14,8 +12,6 @@
 #include "tools/staged_output.h"
 
 namespace chordfit::cli {
-
-namespace fs = std::filesystem;
 
 namespace {
 
@@ -120,28 +116,23 @@ int runMakeValve(const MakeValveOptions& options) {
   // An earlier case there (make-valve's, import-mesh's, make-case's) has files this one does
   // not, its tracings, cords, truth: they go, so that none describes another valve beside it.
   const std::vector<std::string> files = makeValveOutputFiles();
-  std::error_code ec;
-  const bool out_existed = fs::exists(options.out_dir, ec);
-  {
-    StagedOutput staged(options.out_dir, files, caseDirectoryFilesBesides(files), kCaseWriter);
-    writeCase(staged.dir(), valve.valve_case);
-    // Read back with every check of validate: parameters within their ranges can still make
-    // a mesh validate refuses (--anterior-height 1e-300 gave zero-area triangles), and a
-    // case written is a case the other commands take.
-    Diagnostics check;
-    if (loadCase(staged.dir(), check)) {
-      const StagedOutput::Published published = staged.publish();
-      std::cout << wroteLine(options.out_dir, published) << "\n" << caseSummary(valve.valve_case);
-      return kExitOk;
-    }
+  StagedOutput staged(options.out_dir, files, caseDirectoryFilesBesides(files), kCaseWriter);
+  writeCase(staged.dir(), valve.valve_case);
+  // Read back with every check of validate: parameters within their ranges can still make
+  // a mesh validate refuses (--anterior-height 1e-300 gave zero-area triangles), and a
+  // case written is a case the other commands take.
+  Diagnostics check;
+  if (!loadCase(staged.dir(), check)) {
     std::cerr << "error: make-valve: the case these options make (" +
                      changedOptions(parameters, options.annulus_file) +
                      ") would not validate, so it was not written (a value too small or too "
                      "large for the others?):\n";
     check.print(std::cerr);
+    return kExitBadInput;
   }
-  if (!out_existed) fs::remove(options.out_dir, ec);  // empty again without the staging dir
-  return kExitBadInput;
+  const StagedOutput::Published published = staged.publish();
+  std::cout << wroteLine(options.out_dir, published) << "\n" << caseSummary(valve.valve_case);
+  return kExitOk;
 }
 
 std::vector<std::string> makeValveOutputFiles() { return caseFileNames(); }

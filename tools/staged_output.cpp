@@ -21,6 +21,8 @@ StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> dec
       declared_(std::move(declared)),
       superseded_(std::move(superseded)),
       command_(std::move(command)) {
+  std::error_code ec;
+  created_out_ = !fs::exists(out_, ec);
   fs::create_directories(out_);
   fs::remove_all(staging_);
   fs::create_directories(staging_);
@@ -29,6 +31,7 @@ StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> dec
 StagedOutput::~StagedOutput() {
   std::error_code ignored;
   fs::remove_all(staging_, ignored);
+  if (created_out_ && !published_) fs::remove(out_, ignored);  // only when empty
 }
 
 namespace {
@@ -216,6 +219,7 @@ StagedOutput::Published StagedOutput::publish() {
         written_here.push_back(fs::path(name).filename().string());
     updateRecord(out_, dir, written_here, command_);
   }
+  published_ = true;
   return published;
 }
 

@@ -35,7 +35,9 @@ class StagedOutput {
   // another command that replaces one says so.
   StagedOutput(const std::filesystem::path& out_dir, std::vector<std::string> declared,
                std::vector<std::string> superseded = {}, std::string command = "");
-  // Removes the staging directory and whatever is still in it.
+  // Removes the staging directory and whatever is still in it, and out_dir too when this
+  // created it and nothing was published (so a refused or failed run leaves no empty
+  // directory behind).
   ~StagedOutput();
   StagedOutput(const StagedOutput&) = delete;
   StagedOutput& operator=(const StagedOutput&) = delete;
@@ -59,6 +61,7 @@ class StagedOutput {
   std::filesystem::path out_, staging_;
   std::vector<std::string> declared_, superseded_;
   std::string command_;
+  bool created_out_ = false, published_ = false;
 };
 
 // The command name make-valve, make-case and import-mesh record: each writes a whole case
