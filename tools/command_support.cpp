@@ -11,6 +11,7 @@
 #include <filesystem>
 #include <functional>
 #include <iostream>
+#include <limits>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -193,21 +194,22 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   // cords at 200 mmHg closed with P2 under the anterior leaflet with the 10 ms ramp and with a
   // P2 flap with 20 or 40 ms (175 mmHg too; 150 mmHg the same with 10 and 40 ms).
   constexpr double kFastestCalibratedMmHgPerMs = 15.0;
-  if (use == SettingsUse::kClose && settings.pressure_mmhg > 0.0) {
-    // %.3g: a 1e-300 ms ramp printed the rate with 300 digits; ramp_ms 0 (the load at once)
-    // is the fastest of all and went without the note.
+  // ramp_ms 0 (the load at once) is the fastest of all.
+  const double rate = settings.ramp_ms > 0.0 ? settings.pressure_mmhg / settings.ramp_ms
+                                             : std::numeric_limits<double>::infinity();
+  if (use == SettingsUse::kClose && settings.pressure_mmhg > 0.0 &&
+      rate > kFastestCalibratedMmHgPerMs) {
+    // %.3g: a 1e-300 ms ramp printed the rate with 300 digits.
     char how_fast[96] = "at once (ramp_ms 0) loads the valve";
     if (settings.ramp_ms > 0.0)
       std::snprintf(how_fast, sizeof how_fast, "over a %g ms ramp loads the valve at %.3g mmHg/ms",
-                    settings.ramp_ms, settings.pressure_mmhg / settings.ramp_ms);
-    if (settings.ramp_ms <= 0.0 ||
-        settings.pressure_mmhg / settings.ramp_ms > kFastestCalibratedMmHgPerMs)
-      std::fprintf(stderr,
-                   "note: %s: %g mmHg %s, faster than calibrated (10 mmHg/ms at the defaults): a "
-                   "prolapsing flap may land in another equilibrium; --set ramp_ms=%g keeps 10 "
-                   "mmHg/ms (docs/model.md)\n",
-                   command, settings.pressure_mmhg, how_fast,
-                   std::ceil(settings.pressure_mmhg / 10.0));
+                    settings.ramp_ms, rate);
+    std::fprintf(stderr,
+                 "note: %s: %g mmHg %s, faster than calibrated (10 mmHg/ms at the defaults): a "
+                 "prolapsing flap may land in another equilibrium; --set ramp_ms=%g keeps 10 "
+                 "mmHg/ms (docs/model.md)\n",
+                 command, settings.pressure_mmhg, how_fast,
+                 std::ceil(settings.pressure_mmhg / 10.0));
   }
   return settings;
 }
