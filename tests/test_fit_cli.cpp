@@ -262,6 +262,24 @@ TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
   }
 }
 
+// A tip box wider than the case's reach (50 mm for the small case) would let a tip go where
+// no case file may put one: 1e308 gave crs2 an infinite domain. The reach itself is accepted.
+TEST(FitCommand, RefusesATipBoxBeyondTheCasesReach) {
+  for (const std::string box : {"50.5", "1e308"}) {
+    const std::string err = refusedFitMessage("--params scales+tips --tip-box " + box);
+    EXPECT_NE(err.find("error: fit: --tip-box: " + (box == "1e308" ? std::string("1e+308") : box) +
+                       " mm reaches beyond this case: at most 50 mm"),
+              std::string::npos)
+        << err;
+  }
+  TempDir dir;
+  const auto r = runChordfit("fit " + quoted(smallCase()) +
+                             " --params scales+tips --tip-box 50 --max-sims 1 --no-prefit "
+                             "--no-uncertainty --quiet --out " +
+                             quoted(dir / "fit"));
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 // The section residuals (--section-weight) reach the fit: recorded in metrics.json and
 // report.md, and the data cost of the start changes (the seed's sections stray from the
 // tracings), while AvgD, the tracing points' mean, does not.

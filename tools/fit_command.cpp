@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/case_extent.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/counted.h"
@@ -132,6 +133,15 @@ int runFit(const FitCommandOptions& o) {
     return kExitBadInput;
   }
   std::cerr << duplicateTracingsNote(*valve_case);
+  // A tip offset beyond the case's reach puts the tip where no case file may put it (the
+  // readers refuse tips farther from the mesh); 1e308 gave crs2 an infinite domain and sent
+  // bobyqa's first steps out of the ventricle.
+  if (const double reach = valveReachMm(valve_case->mesh.V); o.tip_box_mm > reach) {
+    std::cerr << "error: fit: --tip-box: " << o.tip_box_mm << " mm reaches beyond this case: "
+              << "at most " << reach << " mm (the larger of 50 mm and the valve mesh's span; "
+              << "the default is 8 mm)\n";
+    return kExitBadInput;
+  }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
   if (seed->cords.empty()) {
