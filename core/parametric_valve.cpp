@@ -149,6 +149,16 @@ void validatePolyline(const Eigen::MatrixXd& P) {
   if (!P.allFinite()) {
     throw std::invalid_argument("annulus_polyline has non-finite values");
   }
+  // Checked before meshing: an annulus in micrometres was meshed at the target edge first
+  // (10^5 times the vertices, until memory ran out), then refused.
+  const double span = (P.colwise().maxCoeff() - P.colwise().minCoeff()).norm();
+  if (!(span >= kMinAnnulusSpanMm && span <= kMaxAnnulusSpanMm)) {
+    throw std::invalid_argument(
+        "annulus_polyline spans " + formatNumber(span) +
+        " mm (bounding-box diagonal); a mitral annulus spans about 35-50 mm and coordinates "
+        "must be in millimetres (accepted: " +
+        formatNumber(kMinAnnulusSpanMm) + " to " + formatNumber(kMaxAnnulusSpanMm) + " mm)");
+  }
 }
 
 void validateParameters(const ValveParameters& p) {

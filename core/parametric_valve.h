@@ -38,9 +38,16 @@ struct ValveParameters {
   double target_edge_mm = 1.5;  // mesh resolution
   // Optional user annulus (#P by 3, ordered, closed loop implied) replacing the parametric
   // ellipse/saddle for the open state. The closed annulus is derived from it by contraction
-  // about its centroid and saddle deepening.
+  // about its centroid and saddle deepening. Its bounding-box diagonal must lie within the
+  // limits below.
   std::optional<Eigen::MatrixXd> annulus_polyline;
 };
+
+// A user annulus's span (bounding-box diagonal), mm: the ellipse's limits (ap and cc up to
+// 100 mm, a saddle up to half of that: sqrt(100^2 + 100^2 + 50^2) = 150) and the smallest
+// valve mesh a case may hold (2 mm); metres (~0.05) and micrometres (~4e4) fall outside.
+constexpr double kMinAnnulusSpanMm = 2.0;
+constexpr double kMaxAnnulusSpanMm = 150.0;
 
 struct ParametricValve {
   ValveCase valve_case;       // mesh (open), labels, annulus ring, closed annulus; no tracings

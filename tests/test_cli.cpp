@@ -231,6 +231,31 @@ TEST(ChordfitCli, MakeValveAcceptsAUserAnnulusPolyline) {
   }
 }
 
+// An annulus in micrometres or metres is refused at once, naming the file's points and its
+// span: it was meshed first (10^5 times the vertices in micrometres, until memory ran out).
+TEST(ChordfitCli, MakeValveRefusesAUserAnnulusInOtherUnitsBeforeMeshing) {
+  TempDir dir;
+  for (const double unit : {1000.0, 0.001}) {
+    Eigen::MatrixXd ring(40, 3);
+    for (int i = 0; i < 40; ++i) {
+      const double phi = 2.0 * M_PI * i / 40;
+      ring.row(i) << 14.0 * std::cos(phi), 17.5 * std::sin(phi), 2.5 * std::cos(2 * phi);
+    }
+    ring *= unit;
+    writePointList(dir / "annulus.json", ring, true);
+    const auto r = runChordfit("make-valve --out " + quoted(dir / "case") + " --annulus " +
+                               quoted(dir / "annulus.json"));
+    EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+    const std::string file = (dir / "annulus.json").string();
+    EXPECT_NE(r.err.find("error: " + file + ": points: the annulus spans "), std::string::npos)
+        << r.err;
+    EXPECT_NE(r.err.find("coordinates must be in millimetres (accepted: 2 to 150 mm)"),
+              std::string::npos)
+        << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "case"));
+  }
+}
+
 // A make-case case (normal-1, coarse, two planes) in `case_dir`: a directory holding an earlier
 // chordfit case, its truth included.
 void makeCoarseCase(const std::filesystem::path& case_dir) {

@@ -35,7 +35,7 @@ void addMakeValve(CLI::App& app, MakeValveOptions& o) {
   cmd->add_option("--edge", p.target_edge_mm, "Target edge length, mm")->capture_default_str();
   cmd->add_option("--annulus", o.annulus_file,
                   "Annulus polyline (plain JSON point list or Slicer .mrk.json) to use instead "
-                  "of the parametric saddle; frame: anterior at +x, atrium at +z");
+                  "of the parametric saddle; mm (spanning 2-150 mm), anterior at +x, atrium at +z");
   cmd->add_option("--name", o.name, "Case name (printable characters, not blank)")
       ->capture_default_str();
   cmd->add_option("--ap", p.ap_diameter_mm, "Anteroposterior annulus diameter (open), mm")

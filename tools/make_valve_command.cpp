@@ -89,7 +89,12 @@ int runMakeValve(const MakeValveOptions& options) {
     valve = makeParametricValve(parameters);
   } catch (const std::invalid_argument& e) {
     const std::string by_option = optionMessage(e.what());
-    if (by_option != e.what()) {
+    const std::string polyline = "annulus_polyline ";
+    if (!options.annulus_file.empty() && by_option.rfind(polyline, 0) == 0) {
+      // The file's own field: its points are the polyline.
+      std::cerr << "error: " << options.annulus_file << ": points: the annulus "
+                << by_option.substr(polyline.size()) << "\n";
+    } else if (by_option != e.what()) {
       std::cerr << "error: make-valve: " << by_option << "\n";
     } else {
       std::cerr << "error: " << (options.annulus_file.empty() ? "make-valve" : options.annulus_file)
