@@ -23,6 +23,7 @@
 #include "core/cordset_io.h"
 #include "core/counted.h"
 #include "core/heuristic.h"
+#include "core/leaflet_agreement.h"
 #include "core/metrics.h"
 #include "core/synthetic_case.h"
 #include "tools/commands.h"
@@ -37,6 +38,15 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
     // Problems inside the case name files relative to it; say which case they belong to.
     std::cerr << "case " << case_dir << ": " << diagnostics.problems().size() << " problem(s)\n";
     diagnostics.print(std::cerr);
+  } else if (const double agreement = tracingLeafletAgreement(loaded->mesh, loaded->tracings);
+             agreement < kLeafletAgreementLow) {
+    // Not an error: a valve traced in an unusual frame may still be right, and the user
+    // decides; but every later number depends on it, so say it first.
+    std::cerr << "warning: case " << case_dir << ": only " << std::lround(100.0 * agreement)
+              << " % of the tracing points lie nearest an open-state vertex of their own leaflet "
+                 "(65-80 % on correctly labelled valves): are the leaflet labels (case.json "
+                 "leaflets.labels) or the tracings' leaflets swapped? Each point is measured to "
+                 "its own leaflet, so swapped labels make every distance, and a fit, wrong\n";
   }
   return loaded;
 }

@@ -16,6 +16,7 @@
 #include "core/case_import.h"
 #include "core/case_io.h"
 #include "core/curve_io.h"
+#include "core/leaflet_agreement.h"
 #include "core/mesh_io.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -30,10 +31,6 @@ namespace {
 // The anterior annulus is about a third of the circumference (Ranganathan et al. 1970);
 // outside this range the landmarks are probably swapped or misplaced.
 constexpr double kAnteriorFractionLow = 0.2, kAnteriorFractionHigh = 0.5;
-// Below this share of labelled tracing points nearest to their own leaflet, the landmarks'
-// labels and the tracings disagree (tracingLeafletAgreement).
-constexpr double kLeafletAgreementLow = 0.5;
-
 bool plausibleAnteriorFraction(double fraction) {
   return fraction >= kAnteriorFractionLow && fraction <= kAnteriorFractionHigh;
 }
@@ -86,24 +83,6 @@ std::string pmTipOrderProblem(const ValveMesh& mesh, const std::vector<PmTip>& t
                 "anterolateral, posteromedial",
                 pm - al);
   return text;
-}
-
-// The share of the leaflet-labelled tracing points whose nearest open-state vertex has their
-// leaflet's label, or NaN without such points. Far below one half, the labels the landmarks
-// gave and the tracings disagree: the landmarks (or the tracings) are in another frame, e.g.
-// RAS read as LPS on a valve centred at the origin, where every distance check passes.
-double tracingLeafletAgreement(const ValveMesh& mesh, const std::vector<Tracing>& tracings) {
-  int agree = 0, labelled = 0;
-  for (const Tracing& t : tracings) {
-    if (t.leaflet < 0) continue;
-    for (Eigen::Index i = 0; i < t.points.rows(); ++i) {
-      Eigen::Index nearest = 0;
-      (mesh.V.rowwise() - t.points.row(i)).rowwise().squaredNorm().minCoeff(&nearest);
-      agree += mesh.leaflet(nearest) == t.leaflet ? 1 : 0;
-      ++labelled;
-    }
-  }
-  return labelled > 0 ? static_cast<double>(agree) / labelled : NAN;
 }
 
 // For a file whose points fit once x and y are negated: the question to ask.
