@@ -1,5 +1,7 @@
 #include "core/atomic_file.h"
 
+#include <cerrno>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
@@ -82,6 +84,14 @@ bool readWholeFile(const std::filesystem::path& path, std::string& bytes) {
   ss << in.rdbuf();
   bytes = ss.str();
   return true;
+}
+
+std::string cannotBeRead(const std::filesystem::path& path) {
+  std::FILE* file = std::fopen(path.c_str(), "rb");
+  if (file == nullptr)
+    return "cannot be read (" + std::error_code(errno, std::generic_category()).message() + ")";
+  std::fclose(file);
+  return "cannot be read";
 }
 
 }  // namespace chordfit

@@ -34,4 +34,8 @@ bool startsWithByteOrderMark(const std::filesystem::path& path);
 // inputFileProblem refuses it; callers that report why check inputFileProblem first.
 bool readWholeFile(const std::filesystem::path& path, std::string& bytes);
 
+// "cannot be read (Permission denied)": why a file that inputFileProblem passed did not open
+// (the operating system's reason, found by opening it once more).
+std::string cannotBeRead(const std::filesystem::path& path);
+
 }  // namespace chordfit

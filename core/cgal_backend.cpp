@@ -709,7 +709,7 @@ bool readTriangleSoupImpl(const std::filesystem::path& path, Eigen::MatrixXd& V,
   }
   std::string bytes;
   if (!readWholeFile(path, bytes)) {
-    error = "cannot open file";
+    error = cannotBeRead(path);
     return false;
   }
   if (extension == ".ply") error = checkPly(bytes);
@@ -826,6 +826,24 @@ int countMeshSelfIntersections(const std::vector<EpickPoint>& points,
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
+
+int weldCoincidentVertices(Eigen::MatrixXd& V, Eigen::MatrixXi& F) {
+  std::vector<DoublePoint> points;
+  points.reserve(V.rows());
+  for (Eigen::Index v = 0; v < V.rows(); ++v) points.emplace_back(V(v, 0), V(v, 1), V(v, 2));
+  std::vector<Polygon> polygons(F.rows());
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (Eigen::Index k = 0; k < F.cols(); ++k) polygons[f].push_back(F(f, k));
+  const int merged =
+      static_cast<int>(PMP::merge_duplicate_points_in_polygon_soup(points, polygons));
+  if (merged == 0) return 0;
+  V.resize(static_cast<Eigen::Index>(points.size()), 3);
+  for (std::size_t v = 0; v < points.size(); ++v)
+    V.row(v) << points[v].x(), points[v].y(), points[v].z();
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (Eigen::Index k = 0; k < F.cols(); ++k) F(f, k) = static_cast<int>(polygons[f][k]);
+  return merged;
+}
 
 bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
                           std::string& error) {

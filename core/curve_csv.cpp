@@ -213,7 +213,7 @@ bool readDelimitedCurve(const std::filesystem::path& path, const std::string& fi
     }
     std::ifstream in(path);
     if (!in) {
-      diagnostics.error(file, "", "cannot be read");
+      diagnostics.error(file, "", cannotBeRead(path));
       return false;
     }
     CurveTextReader reader(file, diagnostics, lowerCase(path.extension().string()) == ".fcsv");

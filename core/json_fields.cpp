@@ -150,7 +150,7 @@ std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
     return std::nullopt;
   }
   if (!readWholeFile(path, text)) {
-    diagnostics.error(file, "", "cannot be read");
+    diagnostics.error(file, "", cannotBeRead(path));
     return std::nullopt;
   }
   return parseJson(text, file, diagnostics);

@@ -463,7 +463,7 @@ bool readVtk(const fs::path& path, const std::string& file, Eigen::MatrixXd& V, 
              Diagnostics& diagnostics) {
   std::string bytes;
   if (!readWholeFile(path, bytes)) {
-    diagnostics.error(file, "", "cannot be read");
+    diagnostics.error(file, "", cannotBeRead(path));
     return false;
   }
   try {

@@ -13,6 +13,14 @@ namespace {
 namespace fs = std::filesystem;
 using testing::TempDir;
 
+// The reason the operating system gives (the CLI test of a mode-000 file skips under root).
+TEST(AtomicFile, CannotBeReadSaysWhy) {
+  TempDir dir;
+  EXPECT_EQ(cannotBeRead(dir / "absent.json"), "cannot be read (No such file or directory)");
+  testing::writeText(dir / "present.json", "{}");
+  EXPECT_EQ(cannotBeRead(dir / "present.json"), "cannot be read") << "no reason to give";
+}
+
 TEST(AtomicFile, WritesTheWholeFileAndLeavesNoTemporary) {
   TempDir dir;
   writeFileAtomically(dir / "a" / "out.json", "first");

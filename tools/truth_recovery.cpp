@@ -28,7 +28,7 @@ std::optional<CaseTruth> readCaseTruth(const std::filesystem::path& case_dir) {
   std::error_code ec;
   if (!std::filesystem::exists(file, ec)) return std::nullopt;
   std::string text;
-  if (!readWholeFile(file, text)) return ignoreTruth(file, "cannot be read");
+  if (!readWholeFile(file, text)) return ignoreTruth(file, cannotBeRead(file));
   Diagnostics diagnostics;  // the first problem (a syntax error, a duplicate key) is named
   const std::optional<nlohmann::json> parsed = parseJson(text, file.string(), diagnostics);
   if (!parsed) {
