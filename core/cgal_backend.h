@@ -16,6 +16,12 @@ namespace chordfit {
 bool cgalReadTriangleSoup(const std::filesystem::path& path, Eigen::MatrixXd& V, Eigen::MatrixXi& F,
                           std::string& error);
 
+// Merges vertices at exactly the same position (CGAL Polygon_mesh_processing::
+// merge_duplicate_points_in_polygon_soup), as exporters that write each triangle with its own
+// three corners leave them; the faces are renumbered. Returns the number of vertices merged
+// away (0: V and F unchanged). V must be finite and F's indices within V.
+int weldCoincidentVertices(Eigen::MatrixXd& V, Eigen::MatrixXi& F);
+
 // Exact point-to-triangle-mesh distances with a CGAL AABB tree.
 class SurfaceDistance {
  public:

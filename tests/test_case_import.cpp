@@ -281,6 +281,40 @@ TEST(ImportMeshCli, WritesALoadableCaseOrNothing) {
   EXPECT_FALSE(fs::exists(dir / "other"));
 }
 
+// A mesh written with each triangle's own three corners (as many exporters write it) is
+// welded and imported as the same valve; its landmarks were blamed before ("24 mm from the
+// nearest boundary loop").
+TEST(ImportMeshCli, WeldsAMeshThatRepeatsEveryTrianglesCorners) {
+  TempDir dir;
+  const ValveCase& truth = valve().valve_case;
+  writeImportInputs(dir.path());
+  Eigen::MatrixXd V(3 * truth.mesh.F.rows(), 3);
+  Eigen::MatrixXi F(truth.mesh.F.rows(), 3);
+  for (Eigen::Index f = 0; f < F.rows(); ++f)
+    for (int k = 0; k < 3; ++k) {
+      V.row(3 * f + k) = truth.mesh.V.row(truth.mesh.F(f, k));
+      F(f, k) = static_cast<int>(3 * f + k);
+    }
+  writePly(dir / "soup.ply", V, F);
+  const auto r = runChordfit("import-mesh " + quoted(dir / "soup.ply") + " --landmarks " +
+                             quoted(dir / "landmarks.json") + " --out " + quoted(dir / "case"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const long welded = V.rows() - truth.mesh.V.rows();
+  EXPECT_NE(r.out.find(std::to_string(welded) +
+                       " vertices merged into the others at the same "
+                       "position (the file repeats each triangle's "
+                       "corners), " +
+                       std::to_string(truth.mesh.V.rows()) + " vertices left"),
+            std::string::npos)
+      << r.out;
+  Diagnostics diagnostics;
+  const auto loaded = loadCase(dir / "case", diagnostics);
+  ASSERT_TRUE(loaded);
+  EXPECT_EQ(loaded->mesh.V.rows(), truth.mesh.V.rows());
+  EXPECT_EQ(loaded->mesh.F.rows(), truth.mesh.F.rows());
+  EXPECT_EQ(loaded->mesh.annulus.size(), truth.mesh.annulus.size());
+}
+
 // import-mesh used to refuse any directory that was not empty, its own earlier output too.
 // Now it publishes as every command does: an earlier run's files it no longer writes go, a
 // file the user put there stays, and one of the user's that the case would replace (the

@@ -15,6 +15,8 @@
 #include "core/case_extent.h"
 #include "core/case_import.h"
 #include "core/case_io.h"
+#include "core/cgal_backend.h"
+#include "core/counted.h"
 #include "core/curve_io.h"
 #include "core/leaflet_agreement.h"
 #include "core/mesh_io.h"
@@ -251,6 +253,18 @@ int runImportMesh(const ImportMeshOptions& options) {
   // The mesh as a case's loader checks it, before the import reads it at its face indices (an
   // index past the vertices crashed the boundary walk) and before the landmarks are judged
   // against it (a mesh in metres made every landmark "130 mm from the nearest boundary loop").
+  // Exporters that write each triangle with its own corners leave a mesh of separate
+  // triangles, whose boundary loops are every triangle's rim: the landmarks were then blamed
+  // ("24 mm from the nearest boundary loop"). A segmentation's surface is one sheet: weld it.
+  if (diagnostics.ok() && V.allFinite() &&
+      (F.size() == 0 || (F.minCoeff() >= 0 && F.maxCoeff() < V.rows()))) {
+    if (const int merged = weldCoincidentVertices(V, F); merged > 0)
+      std::printf(
+          "note: import-mesh: %s: %s merged into the others at the same position (the "
+          "file repeats each triangle's corners), %s left\n",
+          options.mesh_file.c_str(), counted(merged, "vertex", "vertices").c_str(),
+          counted(V.rows(), "vertex", "vertices").c_str());
+  }
   if (diagnostics.ok()) checkValveMesh(V, F, options.mesh_file, diagnostics);
   if (diagnostics.ok() && closed.points.rows() > 0)
     closedAnnulusNearValve(V, closed, options.closed_annulus_file, diagnostics);
