@@ -5,11 +5,14 @@
 namespace chordfit {
 
 void Diagnostics::error(std::string file, std::string where, std::string what) {
+  // Readers that look at one bad value for several fields report it once per field asked
+  // ("tracings[0]: expected an object, got number" four times): one line says it.
+  if (!reported_.emplace(file, where, what).second) return;
   problems_.push_back({std::move(file), std::move(where), std::move(what)});
 }
 
 void Diagnostics::merge(const Diagnostics& other) {
-  problems_.insert(problems_.end(), other.problems_.begin(), other.problems_.end());
+  for (const Problem& p : other.problems_) error(p.file, p.where, p.what);
 }
 
 void Diagnostics::print(std::ostream& out) const {

@@ -4,7 +4,9 @@
 #pragma once
 
 #include <iosfwd>
+#include <set>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace chordfit {
@@ -17,6 +19,7 @@ struct Problem {
 
 class Diagnostics {
  public:
+  // Adds a problem; one already collected word for word is not added again.
   void error(std::string file, std::string where, std::string what);
   bool ok() const { return problems_.empty(); }
   const std::vector<Problem>& problems() const { return problems_; }
@@ -27,6 +30,7 @@ class Diagnostics {
 
  private:
   std::vector<Problem> problems_;
+  std::set<std::tuple<std::string, std::string, std::string>> reported_;  // file, where, what
 };
 
 // Thrown by the command-line layer for a fatal input problem already described in words.

@@ -5,7 +5,10 @@
 #include <functional>
 #include <regex>
 #include <sstream>
+#include <string>
 #include <utility>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -491,6 +494,43 @@ TEST_F(ValidateCommand, SaysWhyACaseFileThatIsALoopOfLinksCannotBeRead) {
   EXPECT_NE(r.err.find("case.json: cannot be read (Too many levels of symbolic links)"),
             std::string::npos)
       << r.err;
+}
+
+// A file the user may not read says why, as the case directory does ("cannot be read" alone
+// left permissions, a lock or a broken disk to guess). Root reads anything: as root the
+// command runs as nobody (setpriv), or the test is skipped.
+TEST_F(ValidateCommand, SaysWhyAFileInTheCaseCannotBeRead) {
+  namespace fs = std::filesystem;
+  const bool root = ::geteuid() == 0;
+  const fs::path setpriv = "/usr/bin/setpriv";
+  if (root && !fs::exists(setpriv)) GTEST_SKIP() << "root reads a file of mode 000";
+  // The case stays readable to others (nobody reaches it), but for its mesh.
+  fs::permissions(dir_.path(), fs::perms::others_read | fs::perms::others_exec,
+                  fs::perm_options::add);
+  for (const auto& entry : fs::directory_iterator(dir_.path()))
+    fs::permissions(entry.path(), fs::perms::others_read, fs::perm_options::add);
+  fs::permissions(dir_ / "open.ply", fs::perms::none);
+  const std::string validate_args = "validate '" + dir_.path().string() + "'";
+  const testing::CommandResult r =
+      root ? testing::runProgram(setpriv, "--reuid=65534 --regid=65534 --clear-groups '" +
+                                              std::string(CHORDFIT_EXE) + "' " + validate_args)
+           : runChordfit(validate_args);
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("open.ply: cannot be read (Permission denied)"), std::string::npos) << r.err;
+}
+
+// One bad value looked at for several fields is one problem, reported once (a number where a
+// tracing belongs read "expected an object, got number" four times, "4 problem(s)").
+TEST_F(ValidateCommand, ReportsOneBadValueOnce) {
+  useTracings(R"({"tracings": [5]})");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_EQ(testing::occurrences(r.err, "tracings[0]: expected an object, got number"), 1u)
+      << r.err;
+  editCaseJson([](nlohmann::json& j) { j["leaflets"] = "x"; });
+  const testing::CommandResult leaflets = validate();
+  EXPECT_EQ(testing::occurrences(leaflets.err, "leaflets: expected an object, got string"), 1u)
+      << leaflets.err;
 }
 
 // A UTF-8 byte-order mark, as spreadsheet exports write it: skipped in a CSV curve; named in a
