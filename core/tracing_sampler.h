@@ -36,7 +36,7 @@ struct ImagePlane {
 // K planes about the frame (step 1). K >= 1.
 std::vector<ImagePlane> longAxisPlanes(const AnnulusFrame& frame, int count);
 
-// The distinct image planes of `tracings` (same plane to 1e-6 mm, normals of either sign), in
+// The distinct image planes of `tracings` (tracedOnPlane; normals of either sign), in
 // order of first appearance, with in-plane axes w = the component of the closed annulus normal
 // `frame.plane.normal` within the plane (up, toward the atrium) and u = normal x w, and
 // `angle` = the angle of u from the anteroposterior axis frame.a about the annulus normal, in
@@ -46,8 +46,8 @@ std::vector<ImagePlane> longAxisPlanes(const AnnulusFrame& frame, int count);
 std::vector<ImagePlane> tracingPlanes(const std::vector<Tracing>& tracings,
                                       const AnnulusFrame& frame);
 
-// Whether tracing t was drawn on `plane` (parallel unit normals, either sign, and the origin
-// in the plane, to 1e-6 mm).
+// Whether tracing t was drawn on `plane`: unit normals of either sign within 1e-3 rad, and
+// t's origin within 0.01 mm of the plane (one plane written by different tools).
 bool tracedOnPlane(const Tracing& t, const ImagePlane& plane);
 
 // A polyline cut out of a mesh, with the leaflet of the triangles it crosses.

@@ -85,6 +85,25 @@ TEST(TracingPlanes, OneImagePlaneHoldsPolylinesWithDifferentOriginsInIt) {
   EXPECT_NEAR(planes[2].w.norm(), 1.0, kTight);
 }
 
+// Normals rounded to 6 decimals by another tool (1e-6 apart) and origins a micrometre off the
+// plane are the same plane; 0.1 degrees or 0.05 mm apart are not (tolerances 1e-3 rad, 0.01 mm).
+TEST(TracingPlanes, APlaneWrittenWithRoundedNormalsIsStillOnePlane) {
+  AnnulusFrame frame;
+  const Eigen::Vector3d normal = Eigen::Vector3d::UnitY();
+  Eigen::MatrixXd P(2, 3);
+  P << 0, 0, 0, 1, 0, 0;
+  const std::vector<Tracing> tracings = {
+      tracingOn({0, 0, 0}, normal, P, 0),
+      tracingOn({0, 0.001, 0}, Eigen::Vector3d(0, 1, 1e-6).normalized(), P, 1),
+      tracingOn({0, 0, 0}, Eigen::Vector3d(0, 1, std::tan(0.1 * M_PI / 180)).normalized(), P, 1),
+      tracingOn({0, 0.05, 0}, normal, P, 0)};
+  const std::vector<ImagePlane> planes = tracingPlanes(tracings, frame);
+  ASSERT_EQ(planes.size(), 3u);
+  EXPECT_TRUE(tracedOnPlane(tracings[1], planes[0]));
+  EXPECT_FALSE(tracedOnPlane(tracings[2], planes[0]));
+  EXPECT_FALSE(tracedOnPlane(tracings[3], planes[0]));
+}
+
 TEST(RingCrossings, FindTheTwoHingesOfALongAxisPlane) {
   const ValveCase cone = testing::tinyConeCase();
   ImagePlane plane;  // the xz-plane: normal y, u = x, w = z
