@@ -1,8 +1,10 @@
 // `chordfit simulate` and `chordfit sweep-cord` end to end on a coarse parametric valve and the
 // bundled small case.
 #include <algorithm>
+#include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -407,6 +409,27 @@ TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   EXPECT_NE(one.out.find(height["smooth"].get<bool>() ? "| smooth" : "| NOT smooth"),
             std::string::npos)
       << one.out;
+}
+
+// A step that does not divide the range: the scales 1 + k step stay within [1 - range,
+// 1 + range] and include 1, the cord as given (they ran 0.99, 0.994, ..., 1.010 here).
+TEST(SweepCordCommand, AStepThatDoesNotDivideTheRangeGivesScalesCentredOnOne) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  const auto r = runChordfit("sweep-cord " + quoted(small) +
+                             " --range 0.01 --step 0.004 --window 2 --out " + quoted(dir / "s"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("the scales run from 0.992 to 1.008, centred on 1"), std::string::npos)
+      << r.err;
+  std::istringstream csv(testing::readText(dir / "s" / "sweep.csv"));
+  std::string line;
+  std::getline(csv, line);  // header
+  std::vector<double> scales;
+  while (std::getline(csv, line)) scales.push_back(std::stod(line.substr(0, line.find(','))));
+  const std::vector<double> expected = {0.992, 0.996, 1.0, 1.004, 1.008};
+  ASSERT_EQ(scales.size(), expected.size());
+  for (std::size_t k = 0; k < scales.size(); ++k) EXPECT_NEAR(scales[k], expected[k], 1e-12);
+  EXPECT_EQ(scales[2], 1.0) << "the cord as given, exactly";
 }
 
 // A cord slack over the whole range moves nothing: "flat", not a signal/noise read as noisy.

@@ -138,7 +138,7 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
                                                     : std::string();
           },
           "INDEX"));
-  cmd->add_option("--range", o.range, "Scan scales over [1 - range, 1 + range]")
+  cmd->add_option("--range", o.range, "Scan scales 1 + k step over [1 - range, 1 + range]")
       ->capture_default_str();
   cmd->add_option("--step", o.step, "Scale step")->capture_default_str();
   cmd->add_option("--window", o.window, "Half-width of the local quadratic fit, points")

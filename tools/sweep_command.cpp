@@ -153,8 +153,11 @@ int runSweepCord(const SweepCordOptions& options) {
                 << ", got " << count.value << "\n";
       return kExitBadInput;
     }
+  // The scales 1 + k step, |k| <= half, centred on the cord as given (a grid from 1 - range
+  // by step missed 1 itself and ran past 1 + range when the step did not divide the range).
   // In double: a tiny step would overflow an int (and then allocate or loop on garbage).
-  const double scales = std::round(2.0 * options.range / options.step) + 1.0;
+  const double half_steps = std::floor(options.range / options.step * (1.0 + 1e-9));
+  const double scales = 2.0 * half_steps + 1.0;
   if (scales > kMaxScales) {
     std::cerr << "error: sweep-cord: --range/--step: " << options.range << "/" << options.step
               << " give " << scales << " scales, one closure each; at most " << kMaxScales
@@ -162,12 +165,12 @@ int runSweepCord(const SweepCordOptions& options) {
     return kExitBadInput;
   }
   const int count = static_cast<int>(scales);
-  if (std::abs((count - 1) * options.step - 2.0 * options.range) > 1e-9 * options.range)
+  const int half = static_cast<int>(half_steps);
+  if (std::abs(half * options.step - options.range) > 1e-9 * options.range)
     std::fprintf(stderr,
-                 "note: sweep-cord: --step %g does not divide 2 x --range %g: the scales run from "
-                 "%g to %g\n",
-                 options.step, options.range, 1.0 - options.range,
-                 1.0 - options.range + (count - 1) * options.step);
+                 "note: sweep-cord: --step %g does not divide --range %g: the scales run from %g "
+                 "to %g, centred on 1\n",
+                 options.step, options.range, 1.0 - half * options.step, 1.0 + half * options.step);
   if (count < 2 * options.window + 1) {  // no full window: no noise to report
     std::cerr << "error: sweep-cord: --window " << options.window << " needs at least "
               << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
@@ -226,7 +229,7 @@ int runSweepCord(const SweepCordOptions& options) {
   struct ScaleFailed {};
   const auto sweepPoint = [&](int i) {
     SweepPoint& p = points[i];
-    p.scale = 1.0 - options.range + i * options.step;
+    p.scale = 1.0 + (i - half) * options.step;
     CordSet scaled = cords;
     scaled.cords[cord].rest_length = base * p.scale;
     const SimulationResult r = simulateClosure(valve_case, scaled, settings);
