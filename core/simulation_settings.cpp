@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <vector>
 
 #include <nlohmann/json.hpp>
@@ -51,8 +52,10 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
       {"contact_impulse_carry", s.contact_impulse_carry, 0.0, false, 1.0},
       {"dt_ms", s.dt_ms, 0.0, false, 10.0},  // 0 = automatic
       {"stiffness_ratio", s.stiffness_ratio, 0.0, true, 1000.0},
-      {"max_stiffness_ratio", s.max_stiffness_ratio, -1e300, false, 1e4},  // <= 0: off
-      {"max_step_mm", s.max_step_mm, 0.0, false, 100.0},                   // 0: automatic
+      // Any finite value <= 0 turns it off (-1e308 was refused as "at most 1e4").
+      {"max_stiffness_ratio", s.max_stiffness_ratio, std::numeric_limits<double>::lowest(), false,
+       1e4},
+      {"max_step_mm", s.max_step_mm, 0.0, false, 100.0},  // 0: automatic
       {"tolerance_mm", s.tolerance_mm, 0.0, true, 10.0},
       {"contact_thickness_mm", s.contact_thickness_mm, 0.0, false, 10.0},  // 0: automatic
       {"contact_margin_mm", s.contact_margin_mm, 0.0, false, 10.0},
