@@ -12,6 +12,7 @@
 #include <functional>
 #include <iostream>
 #include <limits>
+#include <set>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -32,6 +33,7 @@
 namespace chordfit::cli {
 
 std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
+  static std::set<std::string> warned_cases;
   Diagnostics diagnostics;
   std::optional<ValveCase> loaded = loadCase(case_dir, diagnostics);
   if (!loaded) {
@@ -39,9 +41,10 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
     std::cerr << "case " << case_dir << ": " << diagnostics.problems().size() << " problem(s)\n";
     diagnostics.print(std::cerr);
   } else if (const double agreement = tracingLeafletAgreement(loaded->mesh, loaded->tracings);
-             agreement < kLeafletAgreementLow) {
+             agreement < kLeafletAgreementLow && warned_cases.insert(case_dir).second) {
     // Not an error: a valve traced in an unusual frame may still be right, and the user
-    // decides; but every later number depends on it, so say it first.
+    // decides; but every later number depends on it, so say it first (once per run: fit
+    // reads the case again for its fitted closure).
     std::cerr << "warning: case " << case_dir << ": only " << std::lround(100.0 * agreement)
               << " % of the tracing points lie nearest an open-state vertex of their own leaflet "
                  "(65-80 % on correctly labelled valves): are the leaflet labels (case.json "
