@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "core/atomic_file.h"
+#include "core/decimal_number.h"
 
 namespace chordfit {
 namespace {
@@ -45,12 +46,6 @@ std::vector<std::string> splitFields(const std::string& line) {
     for (std::string field; in >> field;) fields.push_back(field);
   }
   return fields;
-}
-
-bool parseFinite(const std::string& text, double& value) {
-  char* end = nullptr;
-  value = std::strtod(text.c_str(), &end);
-  return !text.empty() && *end == '\0' && std::isfinite(value);
 }
 
 // The value of a "# key = value" header line of an .fcsv file, or "" when `line` is not it.
@@ -106,7 +101,7 @@ class CurveTextReader {
     const std::vector<std::string> fields = splitFields(text);
     if (!fcsv_ && !seen_data_ && !seen_header_) {
       double probe = 0.0;
-      if (!fields.empty() && !parseFinite(fields[0], probe)) {
+      if (!fields.empty() && !parseDecimal(fields[0], probe)) {
         seen_header_ = true;
         if (!columnsFromNames(fields, columns_)) {
           return bad(number,
@@ -127,8 +122,8 @@ class CurveTextReader {
     static const char* kAxis[] = {"x", "y", "z"};
     for (int k = 0; k < 3; ++k) {
       const std::string& field = fields[columns_.index[k]];
-      if (!parseFinite(field, p[k])) {
-        return bad(number, std::string(kAxis[k]) + " is not a finite number: \"" + field + "\"");
+      if (!parseDecimal(field, p[k])) {
+        return bad(number, std::string(kAxis[k]) + " is not a finite decimal number: \"" + field + "\"");
       }
     }
     points_.push_back(p);

@@ -242,12 +242,16 @@ TEST_F(CurveIoTest, PlainCsvWithOrWithoutAHeaderAndAnySeparator) {
 TEST_F(CurveIoTest, DelimitedTextProblemsNameTheFileAndLine) {
   Problem p = readFails(write("bad.csv", "1,2,3\n4,five,6\n"), "tracing.csv");
   EXPECT_EQ(p.where, "line 2");
-  EXPECT_EQ(p.what, "y is not a finite number: \"five\"");
+  EXPECT_EQ(p.what, "y is not a finite decimal number: \"five\"");
   p = readFails(write("short.csv", "1,2,3\n4,5\n"), "tracing.csv");
   EXPECT_EQ(p.where, "line 2");
   EXPECT_EQ(p.what, "expected at least 3 fields, got 2");
   p = readFails(write("nan.txt", "1 2 nan\n"), "tracing.txt");
-  EXPECT_EQ(p.what, "z is not a finite number: \"nan\"");
+  EXPECT_EQ(p.what, "z is not a finite decimal number: \"nan\"");
+  // strtod read hexadecimal: "0x10" was 16.
+  p = readFails(write("hex.csv", "1,2,3\n4,0x10,6\n"), "tracing.csv");
+  EXPECT_EQ(p.what, "y is not a finite decimal number: \"0x10\"");
+  EXPECT_EQ(readOk(write("signs.csv", "+1,-2,3e0\n4,5,6\n")).points(0, 0), 1.0);
   p = readFails(write("header.csv", "u,v,w\n1,2,3\n"), "tracing.csv");
   EXPECT_EQ(p.where, "line 1");
   EXPECT_NE(p.what.find("expected x,y,z, l,p,s or r,a,s"), std::string::npos) << p.what;

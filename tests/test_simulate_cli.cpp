@@ -432,6 +432,23 @@ TEST(SweepCordCommand, AStepThatDoesNotDivideTheRangeGivesScalesCentredOnOne) {
   EXPECT_EQ(scales[2], 1.0) << "the cord as given, exactly";
 }
 
+// Without --cord the sweep takes the P2 primary nearest the posterior midline; a set without
+// one asks for --cord (it blamed "--cord: no such cord", an option the user never gave).
+TEST(SweepCordCommand, ASetWithoutAP2PrimaryAsksForTheCord) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  auto cords = nlohmann::json::parse(testing::readText(small / "cords.json"));
+  for (auto& cord : cords["cords"]) cord["kind"] = "secondary";
+  testing::writeText(dir / "secondaries.json", cords.dump());
+  const auto r = runChordfit("sweep-cord " + quoted(small) + " --cords " +
+                             quoted(dir / "secondaries.json") + " --out " + quoted(dir / "s"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: sweep-cord: the cord set has no P2 primary cord to sweep by "
+                       "default (32 cords): give --cord K"),
+            std::string::npos)
+      << r.err;
+}
+
 // A cord slack over the whole range moves nothing: "flat", not a signal/noise read as noisy.
 TEST(SweepCordCommand, CallsTheMapOfACordSlackThroughoutFlat) {
   TempDir dir;

@@ -16,6 +16,7 @@
 #include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/counted.h"
+#include "core/decimal_number.h"
 #include "core/metrics.h"
 #include "core/text_case.h"
 #include "inverse/fit_parameters.h"
@@ -41,9 +42,7 @@ int usage(const std::string& message) {
 }
 
 bool parseScale(const std::string& text, double& scale) {
-  char* end = nullptr;
-  scale = std::strtod(text.c_str(), &end);
-  return !text.empty() && *end == '\0' && std::isfinite(scale) && scale > 0.0 && scale <= kMaxScale;
+  return parseDecimal(text, scale) && scale > 0.0 && scale <= kMaxScale;
 }
 
 // "NAME=S" -> name, scale; false with `problem` set otherwise.
@@ -102,9 +101,7 @@ bool parseOffset(const std::string& text, Eigen::Vector3d& offset) {
   for (std::string field; std::getline(in, field, ',');) fields.push_back(field);
   if (fields.size() != 3) return false;
   for (int k = 0; k < 3; ++k) {
-    char* end = nullptr;
-    offset(k) = std::strtod(fields[k].c_str(), &end);
-    if (fields[k].empty() || *end != '\0' || !std::isfinite(offset(k))) return false;
+    if (!parseDecimal(fields[k], offset(k))) return false;
   }
   return true;
 }

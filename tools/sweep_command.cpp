@@ -182,10 +182,14 @@ int runSweepCord(const SweepCordOptions& options) {
   ValveCase& valve_case = loaded->valve_case;
   const CordSet& cords = loaded->cords;
   const int cord = options.cord >= 0 ? options.cord : defaultP2PrimaryCord(valve_case, cords);
-  if (cord < 0 || cord >= static_cast<int>(cords.cords.size())) {
+  if (options.cord < 0 && cord < 0) {  // the default, not the user's --cord, found nothing
+    std::cerr << "error: sweep-cord: the cord set has no P2 primary cord to sweep by default ("
+              << counted(cords.cords.size(), "cord") << "): give --cord K\n";
+    return kExitBadInput;
+  }
+  if (cord >= static_cast<int>(cords.cords.size())) {
     std::cerr << "error: sweep-cord: --cord: no such cord (the set has "
-              << counted(cords.cords.size(), "cord")
-              << (options.cord < 0 ? ", none of them a P2 primary" : "") << ")\n";
+              << counted(cords.cords.size(), "cord") << ")\n";
     return kExitBadInput;
   }
   const auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
