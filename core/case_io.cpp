@@ -527,7 +527,10 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
   Diagnostics& diagnostics = fields.diagnostics();
   bool ok = true;
   if (const auto tracings = sideFile(document, "", "tracings", false, dir, fields)) {
-    const bool read = readTracings(*tracings, dir, c, diagnostics);
+    // A tracing's curve file is relative to the file that names it, as every relative name
+    // is (case.json's to the case; import-mesh --tracings the same): the tracings file's
+    // directory, the case's own when it lies at the top.
+    const bool read = readTracings(*tracings, tracings->path.parent_path(), c, diagnostics);
     ok &= read;
     for (std::size_t t = 0; read && mesh_ok && t < c.tracings.size(); ++t) {
       ok &= checkPointsNearValve(c.mesh.V, c.tracings[t].points, tracings->name,

@@ -519,6 +519,23 @@ TEST_F(ValidateCommand, SaysWhyAFileInTheCaseCannotBeRead) {
   EXPECT_NE(r.err.find("open.ply: cannot be read (Permission denied)"), std::string::npos) << r.err;
 }
 
+// A tracing's curve file is relative to the tracings file naming it, as import-mesh --tracings
+// reads it (it was relative to the case directory, so the same tracings file worked in one
+// command and failed in the other).
+TEST_F(ValidateCommand, ReadsATracingsCurveFileBesideTheTracingsFile) {
+  std::filesystem::create_directories(dir_ / "echo");
+  writeText(dir_ / "echo" / "t.csv", "x,y,z\n8,0,-4\n7,0,-6\n");
+  writeText(dir_ / "echo" / "tracings.json",
+            R"({"tracings": [{"plane": {"origin": [0, 0, 0], "normal": [0, 1, 0]},
+                              "file": "t.csv"}]})");
+  editCaseJson([](nlohmann::json& j) { j["tracings"] = "echo/tracings.json"; });
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::filesystem::rename(dir_ / "echo" / "t.csv", dir_ / "t.csv");
+  expectError("echo/tracings\\.json",
+              "tracings\\[0\\]\\.file: \"t\\.csv\": file not found in .*echo");
+}
+
 // One bad value looked at for several fields is one problem, reported once (a number where a
 // tracing belongs read "expected an object, got number" four times, "4 problem(s)").
 TEST_F(ValidateCommand, ReportsOneBadValueOnce) {
