@@ -1,5 +1,6 @@
 #include "core/curve_io.h"
 
+#include <cctype>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -165,6 +166,14 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
   if (isDelimitedCurveFile(path)) return readDelimitedCurve(path, file, curve, diagnostics);
   try {
     const auto document = loadJsonFile(path, file, diagnostics);
+    std::string extension = path.extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (!document && extension != ".json" && inputFileProblem(path).empty()) {
+      // A ".dat" or ".xyz" file of numbers read as JSON says only "malformed JSON".
+      diagnostics.error(file, "",
+                        "read as JSON, its extension \"" + path.extension().string() +
+                            "\" being none of the text curve formats' (.csv, .txt, .fcsv)");
+    }
     if (!document) return false;
     JsonFields fields(file, diagnostics);
     Curve result;

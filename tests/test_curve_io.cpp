@@ -239,6 +239,20 @@ TEST_F(CurveIoTest, PlainCsvWithOrWithoutAHeaderAndAnySeparator) {
             threePointsLps());
 }
 
+// A file of another extension is read as JSON; when it is not JSON, the error says so (it read
+// "malformed JSON" alone for a .dat file of numbers).
+TEST_F(CurveIoTest, AFileOfAnUnknownExtensionThatIsNotJsonSaysItWasReadAsJson) {
+  Diagnostics diagnostics;
+  Curve curve;
+  EXPECT_FALSE(readCurve(write("t.dat", "1 2 3\n4 5 6\n"), curve, diagnostics, "t.dat"));
+  ASSERT_EQ(diagnostics.problems().size(), 2u);
+  EXPECT_NE(diagnostics.problems()[1].what.find(
+                "read as JSON, its extension \".dat\" being none of the text curve formats' "
+                "(.csv, .txt, .fcsv)"),
+            std::string::npos);
+  EXPECT_EQ(readOk(write("t.points", R"({"points": [[1, 2, 3], [4, 5, 6]]})")).points.rows(), 2);
+}
+
 TEST_F(CurveIoTest, DelimitedTextProblemsNameTheFileAndLine) {
   Problem p = readFails(write("bad.csv", "1,2,3\n4,five,6\n"), "tracing.csv");
   EXPECT_EQ(p.where, "line 2");
