@@ -403,7 +403,14 @@ float readFloatLittleEndian(const char* data) {
 std::string prepareStl(std::string& bytes) {
   if (bytes.size() < 84) return "";
   const std::uint64_t facets = readUnsigned(bytes.data() + 80, 4, false);
-  if (bytes.size() != 84 + 50 * facets) return "";  // ASCII (or a corrupt binary file)
+  if (bytes.size() != 84 + 50 * facets) {
+    // ASCII, unless it does not start as ASCII STL does or holds a NUL byte: then a binary
+    // file cut short or padded (it was reported as a bad ASCII 'vertex' line).
+    if (bytes.compare(0, 5, "solid") == 0 && bytes.find('\0') == std::string::npos) return "";
+    return "a binary STL of " + std::to_string(facets) + " facets (the count at byte 80) has " +
+           std::to_string(84 + 50 * facets) + " bytes, this file " + std::to_string(bytes.size()) +
+           ": cut short or corrupt";
+  }
   for (std::uint64_t f = 0; f < facets; ++f) {
     const char* vertices = bytes.data() + 84 + 50 * f + 12;  // skip the facet normal
     for (int k = 0; k < 9; ++k) {

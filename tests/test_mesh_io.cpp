@@ -541,6 +541,19 @@ TEST_F(MeshIoTest, TinyOrGarbageStlIsReported) {
   readFails(write("tiny.stl", "abc"));
   readFails(write("garbage.stl", std::string(200, '\x7f')));
   readFails(write("unfinished.stl", "solid x\n facet normal 0 0 1\n outer loop\n vertex 0 0"));
+  // A binary file cut short, its header starting "solid" or not: said as binary (it read as a
+  // bad ASCII 'vertex' line).
+  Eigen::Matrix3f a;
+  a << 0, 0, 0, 1, 0, 0, 1, 1, 0;
+  for (const std::string header : {"solid exported", "binary"}) {
+    std::string bytes = binaryStl(header, {a, a});
+    bytes.resize(bytes.size() - 20);
+    const Problem p = readFails(write("cut.stl", bytes));
+    EXPECT_NE(p.what.find("a binary STL of 2 facets (the count at byte 80) has 184 bytes, this "
+                          "file 164: cut short or corrupt"),
+              std::string::npos)
+        << header << ": " << p.what;
+  }
 }
 
 // --- legacy VTK -------------------------------------------------------------------------

@@ -373,8 +373,12 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
 bool outputFileUsable(const char* command, const std::string& file) {
   if (reportEmptyOutput(command, file)) return false;
   std::error_code ec;
-  if (std::filesystem::is_directory(file, ec) || std::filesystem::path(file).filename().empty())
+  if (std::filesystem::is_directory(file, ec))
     return reportOutputProblem(command, file, "is a directory; give the file to write");
+  if (std::filesystem::path(file).filename().empty())  // "new/": not there yet
+    return reportOutputProblem(command, file,
+                               "ends in a separator, which names a directory (none is there); "
+                               "give the file to write");
   if (!reportOutputProblem(command, file, danglingLinkProblem(file))) return false;
   if (!reportOutputProblem(command, file, specialFileProblem(file))) return false;
   return reportOutputProblem(
