@@ -680,6 +680,29 @@ TEST(FitCommand, ReportsAKindStageWithOneFreeKindAsNotRun) {
       std::string::npos);
 }
 
+// Finite-difference options given to an NLopt fit, which takes no derivatives: a note saying
+// what they still reach (the uncertainty's Jacobian, or nothing without it).
+TEST(FitCommand, NotesFiniteDifferenceOptionsAnNloptFitDoesNotUse) {
+  TempDir dir;
+  for (const bool uncertainty : {true, false}) {
+    const auto r = runChordfit("fit " + quoted(smallCase()) +
+                               " --optimizer bobyqa --fd-step 0.02 --fd-warm --max-sims 3 "
+                               "--no-prefit --quiet" +
+                               (uncertainty ? "" : " --no-uncertainty") + " --out " +
+                               quoted(dir / (uncertainty ? "u" : "n")));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string reach = uncertainty
+                                  ? "the uncertainty's Jacobian after the fit"
+                                  : "Ceres' Jacobians, so on nothing here (--no-uncertainty)";
+    for (const std::string option : {"--fd-step", "--fd-warm"})
+      EXPECT_NE(r.out.find("note: fit: " + option + " acts only on " + reach +
+                           " with --optimizer bobyqa"),
+                std::string::npos)
+          << r.out;
+    EXPECT_EQ(r.out.find("--fd-slack-closures acts"), std::string::npos) << "not given";
+  }
+}
+
 // Options that only move PM tips, given to a fit that does not: a note, and the fit runs; the
 // report says why a pre-fit did not run (it said "segment pre-fit: no change").
 TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {

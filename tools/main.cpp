@@ -474,6 +474,19 @@ int main(int argc, char** argv) {
         std::printf("note: fit: %s acts only with --params scales+tips (this fit: --params %s)\n",
                     option, fit.params.c_str());
   }
+  // The finite differences serve Ceres' Jacobians; NLopt's methods take none, so with them
+  // these options reach only the uncertainty's Jacobian, and nothing without it.
+  if (app.got_subcommand("fit") && fit.optimizer != "ceres") {
+    for (const char* option : {"--fd-step", "--fd-tip-step", "--fd-warm", "--fd-slack-closures"})
+      if (app.get_subcommand("fit")->count(option) > 0)
+        std::printf(
+            "note: fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
+            "derivatives)\n",
+            option,
+            fit.uncertainty ? "the uncertainty's Jacobian after the fit"
+                            : "Ceres' Jacobians, so on nothing here (--no-uncertainty)",
+            fit.optimizer.c_str());
+  }
   try {
     if (app.got_subcommand("validate")) return runValidate(validate);
     if (app.got_subcommand("make-valve")) return runMakeValve(make_valve);
