@@ -85,7 +85,11 @@ bool parseCordList(const std::string& option, const std::string& text, int count
                 (allow_edited ? ", \"edited\" or \"all\"" : " or \"all\"");
       return false;
     }
-    out.insert(static_cast<int>(index));
+    if (!out.insert(static_cast<int>(index)).second) {
+      // As across options ("--cord 1=0.8 --cord 1=1.2" is refused): one cord, one request.
+      problem = option + ": cord " + item + " appears twice in the list";
+      return false;
+    }
   }
   if (out.empty()) {
     problem = option + ": expected cord indices";
