@@ -24,6 +24,12 @@ std::filesystem::path writeTarget(const std::filesystem::path& path) {
   return ec ? path : target;
 }
 
+// " (No space left on device)" for the errno a failed open or write left, or "" without one.
+std::string systemReason() {
+  const int error = errno;
+  return error == 0 ? "" : " (" + std::error_code(error, std::generic_category()).message() + ")";
+}
+
 }  // namespace
 
 void writeFileAtomically(const std::filesystem::path& requested, const std::string& bytes) {
@@ -35,13 +41,16 @@ void writeFileAtomically(const std::filesystem::path& requested, const std::stri
   fs::path tmp = path;
   tmp += ".tmp." + std::to_string(::getpid());
   {
+    errno = 0;
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(requested.string() + ": cannot open for writing");
+    if (!out)
+      throw std::runtime_error(requested.string() + ": cannot open for writing" + systemReason());
     out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     out.flush();
     if (!out) {
+      const std::string reason = systemReason();
       fs::remove(tmp, ec);
-      throw std::runtime_error(requested.string() + ": write failed");
+      throw std::runtime_error(requested.string() + ": write failed" + reason);
     }
   }
   fs::rename(tmp, path, ec);

@@ -22,6 +22,16 @@ std::string readText(const fs::path& file) {
   return std::string(std::istreambuf_iterator<char>(in), {});
 }
 
+// A failed write names the file as the user will find it (a full disk read "full/f/
+// .staging-24775/.staging-24775/closed.ply: write failed"); other dot-directories stay.
+TEST(StagedOutput, ErrorsNameFilesWithoutTheStagingDirectories) {
+  EXPECT_EQ(withoutStagingDirectories(
+                "full/f/.staging-24775/.staging-24775/closed.ply: write failed (No space left)"),
+            "full/f/closed.ply: write failed (No space left)");
+  EXPECT_EQ(withoutStagingDirectories("/a/.staging-1/b.json and /c/.staging-x/d"),
+            "/a/b.json and /c/.staging-x/d");
+}
+
 TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndRecordsThem) {
   TempDir tmp;
   const fs::path out = tmp.path() / "out";

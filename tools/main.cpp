@@ -17,6 +17,7 @@
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/revision.h"
+#include "tools/staged_output.h"
 
 namespace {
 
@@ -500,7 +501,7 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("compare")) return runCompare(compare);
     if (app.got_subcommand("edit-cords")) return runEditCords(edit_cords);
   } catch (const std::exception& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    std::cerr << "error: " << chordfit::cli::withoutStagingDirectories(e.what()) << "\n";
     return kExitFailure;
   }
   return kExitBadInput;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
@@ -13,6 +14,11 @@
 namespace chordfit::cli {
 
 namespace fs = std::filesystem;
+
+std::string withoutStagingDirectories(const std::string& text) {
+  static const std::regex staging(R"(/\.staging-[0-9]+(?=/))");
+  return std::regex_replace(text, staging, "");
+}
 
 StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> declared,
                            std::vector<std::string> superseded, std::string command)

@@ -25,6 +25,11 @@
 
 namespace chordfit::cli {
 
+// `text` (an error message) with the staging directories taken out of the paths it names,
+// so that a failed write names the file as the user asked for it ("out/closed.ply", not
+// "out/.staging-24775/.staging-24775/closed.ply").
+std::string withoutStagingDirectories(const std::string& text);
+
 class StagedOutput {
  public:
   // Creates out_dir if missing and a fresh staging directory inside it. `declared`: every
