@@ -240,12 +240,13 @@ SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& set
   }
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
-    return {{"budget of " + std::to_string(objective.maxSims()) + " forward runs reached" +
+    // With closures left but too few for the next Jacobian, the budget is not "reached".
+    return {{"budget of " + std::to_string(objective.maxSims()) + " forward runs " +
                  (refused > 0
-                      ? " (the Jacobian at the last accepted step needs " +
+                      ? "too small for the Jacobian at the last accepted step (it needs " +
                             std::to_string(refused) + " runs, " +
                             std::to_string(objective.maxSims() - objective.forwardSims()) + " left)"
-                      : std::string()),
+                      : std::string("reached")),
              true}};
   }
   if (callback.warm_distrusted) {

@@ -680,6 +680,31 @@ TEST(FitCommand, ReportsAKindStageWithOneFreeKindAsNotRun) {
       std::string::npos);
 }
 
+// A budget the pre-fits use up: the optimiser took no step, and the terminal, report.md and
+// the missed-prolapse advice say so (they read "ceres after 23 forward runs" and blamed the
+// cords and the tissue, where more --max-sims reconstructs the flap).
+TEST(FitCommand, SaysWhenThePreFitsLeftTheOptimiserNoStep) {
+  TempDir dir;
+  const auto prolapse = std::filesystem::path(CHORDFIT_CASES_DIR) / "prolapse-P2";
+  const auto r =
+      runChordfit("fit " + quoted(prolapse) + " --max-sims 30 --no-uncertainty --quiet --out " +
+                  quoted(dir / "fit"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("forward runs, all in the pre-fits: ceres took no step"), std::string::npos)
+      << r.out;
+  EXPECT_EQ(r.out.find("fit: ceres after"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("the fitted closure does not: ceres took no step, the pre-fits having "
+                       "used the budget"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
+                .find("; ceres took no step, the result is the pre-fits'"),
+            std::string::npos);
+  EXPECT_NE(
+      testing::readText(dir / "fit" / "convergence.svg").find("pre-fits only; ceres took no step"),
+      std::string::npos);
+}
+
 // Finite-difference options given to an NLopt fit, which takes no derivatives: a note saying
 // what they still reach (the uncertainty's Jacobian, or nothing without it).
 TEST(FitCommand, NotesFiniteDifferenceOptionsAnNloptFitDoesNotUse) {
@@ -816,7 +841,8 @@ TEST(FitCommand, WarmDifferencesThatMispredictGiveWayToFullClosures) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto small = nlohmann::json::parse(testing::readText(dir / "small" / "metrics.json"));
   EXPECT_FALSE(small["fd_switched_to_full_closures"].get<bool>()) << small["termination"];
-  EXPECT_NE(small["termination"].get<std::string>().find("budget of 99 forward runs reached"),
+  EXPECT_NE(small["termination"].get<std::string>().find(
+                "budget of 99 forward runs too small for the Jacobian at the last accepted step"),
             std::string::npos)
       << small["termination"];
 }

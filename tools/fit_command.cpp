@@ -353,7 +353,11 @@ int runFit(const FitCommandOptions& o) {
   writeFileAtomically(out / "metrics.json", metrics.dump(2) + "\n");
   writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
   if (fit.uncertainty.ok()) writeFileAtomically(out / "uncertainty.csv", uncertaintyCsv(fit));
-  writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, o.optimizer));
+  // Figures name the method that made the result: the pre-fits' when the optimiser took no step.
+  const std::string method = optimiserRan(fit, o.optimizer)
+                                 ? o.optimizer
+                                 : "pre-fits only; " + o.optimizer + " took no step";
+  writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, method));
   writeFileAtomically(out / "report.md", fitReport(*valve_case, o, fit, seed_metrics, fit_metrics));
   writeFileAtomically(
       out / "sections.svg",
@@ -361,12 +365,17 @@ int runFit(const FitCommandOptions& o) {
                            {{"seed closure", fit.seed_evaluation.closed_V, kSeedColour, true, 1.4},
                             {"fitted closure", fit.final_evaluation.closed_V, "", false, 2.0}},
                            {valve_case->name + ": seed and fitted closures against the tracings (" +
-                            o.optimizer + ", " + o.params + ")"}));
+                            method + ", " + o.params + ")"}));
   const StagedOutput::Published published = staged.publish();
 
-  std::printf("fit: %s after %s, %.1f s (%s)\n", o.optimizer.c_str(),
-              counted(fit.forward_sims, "forward run").c_str(), fit.seconds,
-              fit.termination.c_str());
+  if (optimiserRan(fit, o.optimizer))
+    std::printf("fit: %s after %s, %.1f s (%s)\n", o.optimizer.c_str(),
+                counted(fit.forward_sims, "forward run").c_str(), fit.seconds,
+                fit.termination.c_str());
+  else  // "ceres after 57 forward runs" credited it with the pre-fits' work
+    std::printf("fit: %s, all in the pre-fits: %s took no step, %.1f s (%s)\n",
+                counted(fit.forward_sims, "forward run").c_str(), o.optimizer.c_str(), fit.seconds,
+                fit.termination.c_str());
   // NLopt's local methods stop on a relative cost change between evaluations, which a
   // simulator's map can meet far from a minimum (bobyqa on the quick start's case: AvgD
   // 0.73 mm after 137 of 400 closures, where ceres reaches 0.40; after 137 of 150 too, two

@@ -336,6 +336,12 @@ std::string worseThanSeedNote(const inverse::FitOutcome& fit) {
   return line + ": no point the fit reached inside the bounds was better; give more --max-sims\n";
 }
 
+bool optimiserRan(const inverse::FitOutcome& fit, const std::string& optimizer) {
+  return std::any_of(fit.history.begin(), fit.history.end(), [&](const auto& r) {
+    return r.stage == optimizer && r.iteration >= 1;  // Ceres' iteration 0 is its start
+  });
+}
+
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics) {
   if (!fit_metrics.has_tracings || fit_metrics.prolapse_reconstructed) return "";
@@ -372,6 +378,10 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
             " free cords there end at the upper scale bound " + formatWeight(o.scale_bounds[1]) +
             "; a higher one (--scale-bounds " + formatWeight(o.scale_bounds[0]) +
             ",HI) lets them lengthen further";
+  } else if (!optimiserRan(fit, o.optimizer)) {
+    // The cords are where the pre-fits left them: the budget, not the cords, is the limit.
+    hint += o.optimizer + " took no step, the pre-fits having used the budget (" + fit.termination +
+            "): raise --max-sims";
   } else if (fit.tissue_prefit_ran) {
     hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
   } else if (retry.ran && !retry.error.empty()) {
@@ -504,7 +514,10 @@ PlotSeries stageSeries(const std::string& stage, const std::string& optimizer) {
     series.marker = PlotMarker::kSquare;
     series.marker_radius = 4.5;
   } else {
-    series.label = stage + (stage == optimizer ? " iterations" : "");
+    // Ceres records its iterations; NLopt's methods, each evaluation.
+    series.label = stage + (stage != optimizer     ? ""
+                            : optimizer == "ceres" ? " iterations"
+                                                   : " evaluations");
     series.colour = stage == optimizer ? "#0072B2" : "#56B4E9";
     series.marker_radius = 3.5;
   }
@@ -752,7 +765,11 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   if (fit.final_evaluation.ok() && !fit.final_evaluation.converged)
     md << "- **the fit's best closure did not settle**: it reached the step cap and is the "
           "mean of its last steps; its numbers are less certain than a settled closure's\n";
-  md << "- termination: " << fit.termination << "\n";
+  md << "- termination: " << fit.termination
+     << (optimiserRan(fit, o.optimizer)
+             ? std::string()
+             : "; " + o.optimizer + " took no step, the result is the pre-fits'")
+     << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n";
   if (const std::string note = worseThanSeedNote(fit); !note.empty())

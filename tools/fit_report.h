@@ -54,6 +54,10 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
 // bound, a higher bound; otherwise, without --tissue-prefit, softer tissue (the benchmark's
 // prolapse-P3 seeds 2-3 are reconstructed only with it: docs/fitting.md, "Tissue pre-fit").
 // One line, ending in a newline, for report.md and (after "note: ") the terminal.
+// Whether the optimiser evaluated any point of its own (a Ceres iteration or an NLopt
+// evaluation in the main fit's history); false when the pre-fits left it too little budget.
+bool optimiserRan(const inverse::FitOutcome& fit, const std::string& optimizer);
+
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics);
 // When the fit ends at a higher cost than the seed as given, why, or "": the fit starts from
