@@ -24,6 +24,7 @@
 #include "core/atomic_file.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
+#include "core/counted.h"
 #include "core/mesh_io.h"
 #include "core/synthetic_case.h"
 #include "experiments/result_fields.h"
@@ -634,6 +635,10 @@ StepOutcome runJobSteps(const ExperimentPlan& plan, const ExperimentConfig& conf
                                   {"kept", retry.value("kept", false)},
                                   {"tissue", retry.value("tissue", json::array())}};
       }
+      // --tissue-prefit asked (`tissue_prefit`) and whether it ran: a small budget skips it,
+      // and its Table 1 row is then the per-cord fit's (the smoke run's 80 closures).
+      if (job.tissue_prefit)
+        result["tissue_prefit_ran"] = requireKey(metrics, "tissue_prefit_ran", metrics_file);
       result["convergence"] = convergenceTrace(run_dir / "convergence.csv");
     } else {
       result["forward_sims"] = 1;
@@ -650,11 +655,12 @@ StepOutcome runJobSteps(const ExperimentPlan& plan, const ExperimentConfig& conf
   }
   writeFileAtomically(result_path, result.dump(1) + "\n");
   char numbers[96];
-  std::snprintf(numbers, sizeof numbers, "AvgD %.2f mm, %d sims, %.1f s",
+  const int sims = result["forward_sims"].get<int>();
+  std::snprintf(numbers, sizeof numbers, "AvgD %.2f mm, %d %s, %.1f s",
                 result["metrics"]["mean_mm"].is_number()
                     ? result["metrics"]["mean_mm"].get<double>()
                     : std::nan(""),
-                result["forward_sims"].get<int>(), result["wall_seconds"].get<double>());
+                sims, nounFor(sims, "sim").c_str(), result["wall_seconds"].get<double>());
   return {true, false, "",
           (unusable.empty() ? "" : "the result there " + unusable + ", so ran again: ") + numbers};
 }

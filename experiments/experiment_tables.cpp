@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/atomic_file.h"
+#include "core/counted.h"
 #include "core/joined.h"
 #include "core/svg_line_plot.h"
 #include "experiments/acceptance_table.h"
@@ -484,8 +485,8 @@ class Merger {
     std::string md = "# Benchmark experiment results\n\nMade by `run_experiments merge` from " +
                      std::to_string(summary_.jobs_found) + " of " +
                      std::to_string(plan_.jobs.size()) + " job results (`jobs/*.json`), " +
-                     std::to_string(plan_.cases.size()) +
-                     " cases. See experiments/README.md, "
+                     counted(plan_.cases.size(), "case") +
+                     ". See experiments/README.md, "
                      "\"Benchmark experiments\".\n\n";
     if (!plan_options_.empty())
       md += kPlanOptionsLine + ("`" + plan_options_ + "`") + kPlanIdMark + plan_id_ + "`\n\n";

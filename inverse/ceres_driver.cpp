@@ -9,6 +9,8 @@
 #include <ceres/ceres.h>
 #include <glog/logging.h>
 
+#include "core/counted.h"
+
 namespace chordfit::inverse {
 
 namespace {
@@ -169,10 +171,10 @@ SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& set
     if (closed_here)
       objective.recordIteration("ceres", 0, closed_here->ok() ? closed_here->cost : NAN,
                                 closed_here->ok() ? closed_here->mean_deviation_mm : NAN);
-    return {{"budget of " + std::to_string(objective.maxSims()) +
-                 " forward runs is below one Jacobian and a step (" +
-                 std::to_string(first_step_sims) + " runs, " +
-                 std::to_string(objective.maxSims() - objective.forwardSims()) + " left)",
+    return {{"budget of " + counted(objective.maxSims(), "forward run") +
+                 " is below one Jacobian and a step (" + std::to_string(first_step_sims) +
+                 " runs, " + std::to_string(objective.maxSims() - objective.forwardSims()) +
+                 " left)",
              true}};
   }
 
@@ -241,7 +243,7 @@ SolveResult solveFromStart(FitObjective& objective, const OptimizerSettings& set
   if (callback.budget_reached || objective.budgetRefused()) {
     const int refused = objective.refusedJacobianSims();
     // With closures left but too few for the next Jacobian, the budget is not "reached".
-    return {{"budget of " + std::to_string(objective.maxSims()) + " forward runs " +
+    return {{"budget of " + counted(objective.maxSims(), "forward run") + " " +
                  (refused > 0
                       ? "too small for the Jacobian at the last accepted step (it needs " +
                             std::to_string(refused) + " runs, " +

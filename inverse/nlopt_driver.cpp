@@ -113,7 +113,7 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
         message = "nlopt result " + std::to_string(static_cast<int>(result));
     }
   } catch (const nlopt::forced_stop&) {
-    message = "budget of " + std::to_string(objective.maxSims()) + " forward runs reached";
+    message = "budget of " + counted(objective.maxSims(), "forward run") + " reached";
   } catch (const nlopt::roundoff_limited&) {
     message = "stopped: roundoff limited (the cost is flat at the closure's precision)";
   } catch (const std::bad_alloc&) {
@@ -122,7 +122,7 @@ Termination NloptDriver::minimize(FitObjective& objective, const OptimizerSettin
     message = std::string("stopped: nlopt failure: ") + e.what();
   }
   if (budget_spent || state.budget_reached || objective.budgetRefused()) {
-    return {"budget of " + std::to_string(objective.maxSims()) + " forward runs reached", true};
+    return {"budget of " + counted(objective.maxSims(), "forward run") + " reached", true};
   }
   return {message};
 }

@@ -407,6 +407,9 @@ int runFit(const FitCommandOptions& o) {
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
     std::printf("note: %s\n", fit.uncertainty.error.c_str());
   }
+  if (const std::string why = tissuePrefitNotRun(fit, o); !why.empty())
+    std::cout << "note: --tissue-prefit " << why << " (the cords were fitted on the case's "
+              << "tissue)\n";  // report.md said so; the terminal did not
   std::cout << tipOffsetsLine(fit);
   if (fit.tissue_retry.ran || !fit.tissue_retry.skipped.empty())
     std::cout << "tissue retry: " << tissueRetryLine(fit, o) << "\n";

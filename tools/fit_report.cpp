@@ -113,7 +113,7 @@ std::string slackReleaseLine(const inverse::FitOutcome& fit, bool enabled,
                               ", secondaries " + reference(p.secondary_reference);
   if (p.empty()) return "no slack cord below its kind's typical scale (" + typical + ")";
   std::string line =
-      std::to_string(p.cords.size()) + " slack cord(s) raised to their kind's " + typical + "; ";
+      counted(p.cords.size(), "slack cord") + " raised to their kind's " + typical + "; ";
   const std::string costs = "data cost " + formatFixed(release.optimiser_data_cost, 3) + " -> " +
                             formatFixed(release.data_cost, 3);
   if (release.kept)
@@ -223,10 +223,16 @@ std::string lockedCordSection(const ValveCase& c, const inverse::FitOutcome& fit
 
 }  // namespace
 
+std::string tissuePrefitNotRun(const inverse::FitOutcome& fit, const FitCommandOptions& o) {
+  if (!o.tissue_prefit || fit.tissue_prefit_ran) return "";
+  if (fit.x.size() == 0) return "not run: no free cord";
+  return "not run: --max-sims " + std::to_string(o.max_sims) + " leaves too few closures";
+}
+
 std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o) {
   const inverse::TissueRetry& r = fit.tissue_retry;
   if (!o.tissue_retry) return "off (--no-tissue-retry)";
-  if (fit.tissue_prefit_ran) return "not needed: the tissue pre-fit ran (--tissue-prefit)";
+  if (fit.tissue_prefit_ran) return "not run: the tissue pre-fit ran (--tissue-prefit)";
   if (r.missing.empty()) return "not needed: the fit makes every prolapse the tracings show";
   std::string line = "the tracings show prolapse in " + joinSegments(r.missing) +
                      ", the fit did not (data cost " + formatFixed(r.data_cost_without, 3) +
@@ -381,7 +387,12 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
   } else if (!optimiserRan(fit, o.optimizer)) {
     // The cords are where the pre-fits left them: the budget, not the cords, is the limit.
     hint += o.optimizer + " took no step, the pre-fits having used the budget (" + fit.termination +
-            "): raise --max-sims";
+            ")" +
+            (o.tissue_retry && !retry.ran && !retry.skipped.empty()
+                 ? ", and softer tissue was not tried: the tissue retry did not run (" +
+                       retry.skipped + ")"
+                 : std::string()) +
+            ": raise --max-sims";
   } else if (fit.tissue_prefit_ran) {
     hint += "neither the cords within the scale bounds nor the tissue pre-fit made the flap";
   } else if (retry.ran && !retry.error.empty()) {
@@ -717,11 +728,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
                                               : joinSegments(fit.segment_prefit_changes))
      << "\n";
   if (o.tissue_prefit) {
-    const std::string tissue_not_run =
-        fit.tissue_prefit_ran ? ""
-        : fit.x.size() == 0
-            ? "not run: no free cord"
-            : "not run: --max-sims " + std::to_string(o.max_sims) + " leaves too few closures";
+    const std::string tissue_not_run = tissuePrefitNotRun(fit, o);
     md << "- tissue pre-fit (stiffness factor per segment): "
        << (!tissue_not_run.empty() ? tissue_not_run
            : fit.tissue_prefit_changes.empty()

@@ -67,6 +67,9 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
 std::string worseThanSeedNote(const inverse::FitOutcome& fit);
 // What the tissue retry did (FitOptions::tissue_retry), for report.md and the terminal; and
 // metrics.json's "tissue_retry" (docs/outputs.md).
+// Why --tissue-prefit, asked for, did not run ("not run: --max-sims 80 leaves too few
+// closures"), or "" when it ran or was not asked for.
+std::string tissuePrefitNotRun(const inverse::FitOutcome& fit, const FitCommandOptions& o);
 std::string tissueRetryLine(const inverse::FitOutcome& fit, const FitCommandOptions& o);
 nlohmann::json tissueRetryJson(const inverse::FitOutcome& fit);
 // metrics.json's "locked_cord_probe" (docs/outputs.md).

@@ -61,8 +61,8 @@ int runMetrics(const MetricsOptions& options) {
   std::cout << table1Header() << table1Row(valve_case->name, metrics);
   char highest[64];
   std::snprintf(highest, sizeof highest, "%.2f", metrics.mesh_prolapse.max_height_mm);
-  std::cout << closedValveSummary(metrics) << "highest point above the annulus: " << highest
-            << " mm\n";
+  std::cout << closedValveSummary(metrics)
+            << "highest point above the annular hinge line: " << highest << " mm\n";
   if (!options.out_file.empty()) {
     writeFileAtomically(options.out_file, metricsJson(metrics).dump(2) + "\n");
     forgetPublished(options.out_file);  // now the user's file (staged_output.h)

@@ -221,9 +221,12 @@ int runSweepCord(const SweepCordOptions& options) {
         printed = count;  // the sweep stops at its lowest failing scale
         return;
       }
-      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm, mean deviation %.4f mm%s\n",
-                   printed + 1, count, p.scale, p.height, p.mean_deviation,
-                   p.converged ? "" : " (not converged)");
+      // Without tracings there is no deviation to print ("nan mm").
+      char deviation[48] = "";
+      if (!std::isnan(p.mean_deviation))
+        std::snprintf(deviation, sizeof deviation, ", mean deviation %.4f mm", p.mean_deviation);
+      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm%s%s\n", printed + 1, count,
+                   p.scale, p.height, deviation, p.converged ? "" : " (not converged)");
     }
   };
   // The sweep fails at its lowest failing scale: a failed point throws, and parallelFor then
@@ -282,6 +285,7 @@ int runSweepCord(const SweepCordOptions& options) {
       {"base_rest_length_mm", base},
       {"range", options.range},
       {"step", options.step},
+      {"window", options.window},  // the noise figures' local quadratic: 2 window + 1 points
       {"all_converged",
        std::all_of(points.begin(), points.end(), [](const SweepPoint& p) { return p.converged; })},
       {"vertex_height", noiseJson(mapNoise(s, height, options.window), s, height)},
