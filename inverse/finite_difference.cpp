@@ -1,6 +1,11 @@
 #include "inverse/finite_difference.h"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace chordfit::inverse {
@@ -55,6 +60,60 @@ std::vector<bool> slackParameters(const FitParameterization& parameters,
   return slack;
 }
 
+namespace {
+
+// The shared part of the heartbeats: a line through `say` at most every `every_s` seconds,
+// `line` making it from the seconds since the start (under the lock).
+std::function<void(int, int)> heartbeat(
+    std::function<void(const std::string&)> say, double every_s,
+    std::function<std::string(int done, int total, int calls, double seconds)> line) {
+  if (!say) return nullptr;
+  struct State {
+    std::mutex mutex;
+    std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+    double said_at_s = 0.0;  // seconds after start of the last line (0: none yet)
+    int calls = 0;
+  };
+  auto state = std::make_shared<State>();
+  return [state, say = std::move(say), every_s, line = std::move(line)](int done, int total) {
+    const std::lock_guard<std::mutex> lock(state->mutex);
+    ++state->calls;
+    const double now_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - state->start).count();
+    if (now_s - state->said_at_s < every_s) return;
+    const std::string text = line(done, total, state->calls, now_s);
+    if (text.empty()) return;
+    state->said_at_s = now_s;
+    say(text);
+  };
+}
+
+}  // namespace
+
+std::function<void(int, int)> closureHeartbeat(std::function<void(const std::string&)> say,
+                                               std::string what, double every_s) {
+  return heartbeat(std::move(say), every_s,
+                   [what = std::move(what)](int done, int total, int, double seconds) {
+                     // Not for the last: the stage's own line follows at once.
+                     if (done == total) return std::string();
+                     char text[160];
+                     std::snprintf(text, sizeof text, "%s: %d of %d closures, %.0f s", what.c_str(),
+                                   done, total, seconds);
+                     return std::string(text);
+                   });
+}
+
+std::function<void(int, int)> stageHeartbeat(std::function<void(const std::string&)> say,
+                                             std::string what, double every_s) {
+  return heartbeat(std::move(say), every_s,
+                   [what = std::move(what)](int, int, int calls, double seconds) {
+                     char text[160];
+                     std::snprintf(text, sizeof text, "%s: %d closures so far, %.0f s",
+                                   what.c_str(), calls, seconds);
+                     return std::string(text);
+                   });
+}
+
 JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const Eigen::VectorXd& x,
                                          const Eigen::MatrixXd& base_closed,
                                          const FiniteDifferenceOptions& options) {
@@ -70,11 +129,13 @@ JacobianResult centralDifferenceJacobian(const ForwardResidual& residual, const 
   std::vector<std::string> errors(2 * m);
   const Eigen::MatrixXd* start = options.warm_start ? &base_closed : nullptr;
   auto step = [&](int p) { return stepOf(parameters, p, options); };
+  std::atomic<int> done{0};
   parallelFor(2 * m, options.threads, [&](int task) {
     const int p = simulated[task / 2];
     Eigen::VectorXd xp = x;
     xp(p) += (task % 2 == 0 ? 1.0 : -1.0) * step(p);
     ForwardEvaluation e = residual.evaluate(xp, start);
+    if (options.on_closure) options.on_closure(++done, 2 * m);
     if (!e.ok()) {
       errors[task] = parameters.names()[p] + ": " + e.error;
       return;

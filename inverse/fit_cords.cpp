@@ -81,6 +81,7 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
       residual, options.finite_difference, options.max_sims - (release_slack ? 1 : 0),
       run->forward_sims, clock_start, options.on_iteration);
   FitObjective& objective = *run->objective;
+  objective.setProgress(options.on_stage);
   if (!parameters.startClamped()) {
     // The start's closure is already known (the same cords): reuse it, with this
     // parameterisation's x and regularisation (zero at the start).
@@ -257,6 +258,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
       budget_allows(common_sims)) {
     PrefitOptions prefit = options.prefit;
     prefit.threads = options.finite_difference.threads;
+    prefit.on_closure = stageHeartbeat(options.on_stage, "pre-fit");
     // The kind stage only when it fits as well (a small budget keeps the common factor).
     if (!budget_allows(common_sims + 2 * prefit.kind_points)) prefit.kind_points = 0;
     const PrefitResult result = globalScalePrefit(valve_case, start_set, start_evaluation,
@@ -275,6 +277,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
       options.mode != ParameterMode::kGroups && budget_allows(6 * options.segment_prefit.points)) {
     SegmentPrefitOptions segment = options.segment_prefit;
     segment.threads = options.finite_difference.threads;
+    segment.on_closure = stageHeartbeat(options.on_stage, "segment pre-fit");
     const SegmentPrefitResult result = segmentScalePrefit(valve_case, start_set, start_evaluation,
                                                           options.bounds, seed_residual, segment);
     outcome.forward_sims += result.forward_sims;
@@ -457,8 +460,9 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
                               : " parameters)"));
       }
       // The objective's differences: full closures when the driver gave up warm-started ones.
-      JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V,
-                                                        objective.finiteDifferences());
+      FiniteDifferenceOptions fd = objective.finiteDifferences();
+      fd.on_closure = closureHeartbeat(options.on_stage, "uncertainty");
+      JacobianResult result = centralDifferenceJacobian(residual, best->x, best->closed_V, fd);
       jacobian_sims = result.forward_sims;
       jacobian_error = result.error;
       if (result.ok()) J = std::make_shared<const Eigen::MatrixXd>(std::move(result.J));

@@ -65,7 +65,9 @@ std::shared_ptr<const Eigen::MatrixXd> FitObjective::jacobian(const Eigen::Vecto
     error = "forward-run budget exhausted";
     return nullptr;
   }
-  JacobianResult result = centralDifferenceJacobian(residual_, x, base->closed_V, fd_);
+  FiniteDifferenceOptions fd = fd_;
+  fd.on_closure = closureHeartbeat(progress_, "jacobian");
+  JacobianResult result = centralDifferenceJacobian(residual_, x, base->closed_V, fd);
   sims_ += result.forward_sims;
   if (!result.ok()) {
     error = result.error;

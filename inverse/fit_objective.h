@@ -57,6 +57,8 @@ class FitObjective {
   // The finite differences in use now (after useFullClosureDifferences, without warm start):
   // what a Jacobian computed after the solve must use too.
   const FiniteDifferenceOptions& finiteDifferences() const { return fd_; }
+  // Where a long Jacobian says it is still running (closureHeartbeat); none by default.
+  void setProgress(std::function<void(const std::string&)> say) { progress_ = std::move(say); }
   // The stage name history records carry instead of the driver's own (empty: the driver's).
   void setStageLabel(std::string label) { stage_label_ = std::move(label); }
 
@@ -115,6 +117,7 @@ class FitObjective {
   int refused_jacobian_sims_ = 0;
   Clock::time_point start_;
   std::function<void(const IterationRecord&)> on_iteration_;
+  std::function<void(const std::string&)> progress_;
   std::deque<Entry> cache_;  // most recent last; a few entries suffice (LM: current + trial)
   std::shared_ptr<const ForwardEvaluation> best_;
   std::vector<IterationRecord> history_;

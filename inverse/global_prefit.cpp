@@ -1,6 +1,7 @@
 #include "inverse/global_prefit.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 
 #include "core/closure_model.h"
@@ -63,10 +64,15 @@ int cheapestBelow(const std::vector<ForwardEvaluation>& evaluations, double cost
 
 std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
                                              const std::vector<CordSet>& sets,
-                                             const ForwardResidual& residual, int threads) {
+                                             const ForwardResidual& residual, int threads,
+                                             const std::function<void(int, int)>& on_closure) {
   std::vector<ForwardEvaluation> out(sets.size());
-  parallelFor(static_cast<int>(sets.size()), threads,
-              [&](int i) { out[i] = closeForData(valve_case, sets[i], residual); });
+  std::atomic<int> done{0};
+  const int total = static_cast<int>(sets.size());
+  parallelFor(total, threads, [&](int i) {
+    out[i] = closeForData(valve_case, sets[i], residual);
+    if (on_closure) on_closure(++done, total);
+  });
   return out;
 }
 
@@ -115,7 +121,7 @@ PrefitResult globalScalePrefit(const ValveCase& valve_case, const CordSet& seed,
     std::vector<CordSet> sets;
     for (const auto& [p, s] : pairs) sets.push_back(scaleFreeCords(seed, p, s, bounds));
     std::vector<ForwardEvaluation> evaluations =
-        closeCordSets(valve_case, sets, residual, options.threads);
+        closeCordSets(valve_case, sets, residual, options.threads, options.on_closure);
     result.forward_sims += static_cast<int>(pairs.size());
     for (std::size_t i = 0; i < pairs.size(); ++i) {
       evaluations[i].x = Eigen::Vector2d(pairs[i].first, pairs[i].second);

@@ -39,6 +39,8 @@ struct PrefitOptions {
   int refine_points = 4;  // then evenly inside the best point's two grid intervals
   int kind_points = 4;    // then per cord kind around the common factor (0: no kind stage)
   int threads = 2;
+  // Progress of the stage's closures (FiniteDifferenceOptions::on_closure); optional.
+  std::function<void(int, int)> on_closure;
 };
 
 // Whether the kind stage ran: not asked for (kind_points 0, e.g. a budget too small for it),
@@ -78,10 +80,10 @@ int cheapestBelow(const std::vector<ForwardEvaluation>& evaluations, double cost
 
 // Full closures of `sets` from the open state, run on `threads` threads (one result slot per
 // set: independent of the thread count); data residuals and the data-only cost. A failed
-// closure has error set. Shared by the pre-fit stages.
-std::vector<ForwardEvaluation> closeCordSets(const ValveCase& valve_case,
-                                             const std::vector<CordSet>& sets,
-                                             const ForwardResidual& residual, int threads);
+// closure has error set. Shared by the pre-fit stages. `on_closure`: as the options'.
+std::vector<ForwardEvaluation> closeCordSets(
+    const ValveCase& valve_case, const std::vector<CordSet>& sets, const ForwardResidual& residual,
+    int threads, const std::function<void(int, int)>& on_closure = nullptr);
 
 // The cords every pre-fit stage may change: neither locked nor set by the user (manual).
 inline bool isFreeNonManual(const Cord& cord) {

@@ -52,7 +52,7 @@ SegmentPrefitResult segmentScalePrefit(const ValveCase& valve_case, const CordSe
       sets.push_back(withSegmentScale(result.start, vertex_segment, segment, t));
     }
     std::vector<ForwardEvaluation> evaluations =
-        closeCordSets(valve_case, sets, residual, options.threads);
+        closeCordSets(valve_case, sets, residual, options.threads, options.on_closure);
     result.forward_sims += static_cast<int>(sets.size());
     const int best = cheapestBelow(evaluations, result.best.cost);
     if (best < 0) continue;

@@ -17,6 +17,7 @@
 // coordinate descent. Manual and locked cords keep their values.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -31,6 +32,8 @@ struct SegmentPrefitOptions {
   bool enabled = true;
   int points = 5;  // scales tried per segment: a grid over [scale_lower, scale_upper]
   int threads = 2;
+  // Progress of the stage's closures (FiniteDifferenceOptions::on_closure); optional.
+  std::function<void(int, int)> on_closure;
 };
 
 struct SegmentPrefitResult {
