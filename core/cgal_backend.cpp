@@ -553,7 +553,13 @@ std::string checkObjIndices(const std::string& bytes) {
     if (keyword == "v") ++vertices;
     if (keyword == "v" || keyword == "f") lines.emplace_back(number, std::move(text));
   }
-  const std::string range = "1 to " + std::to_string(vertices) + ", or -1 to -";
+  // The indices valid on a line after `before` vertices ("-1 to -0" read as a range when no
+  // vertex came before the face).
+  auto range = [&](long long before) {
+    return "1 to " + std::to_string(vertices) +
+           (before == 0 ? ", and none counting back: no vertex precedes this line"
+                        : ", or -1 to -" + std::to_string(before) + " counting back");
+  };
   long long before = 0;  // vertices defined before the line
   long long face = 0;
   for (const auto& [number, text] : lines) {
@@ -572,15 +578,13 @@ std::string checkObjIndices(const std::string& bytes) {
       const long long index = std::strtoll(word.c_str(), &end, 10);
       if (end == word.c_str() || errno != 0 || index < INT_MIN || index > INT_MAX) break;
       const std::string shown = word.substr(0, static_cast<std::size_t>(end - word.c_str()));
-      if (index == 0)
-        return where + "0: OBJ numbers vertices from 1 (here " + range + std::to_string(before) +
-               " counting back)";
+      if (index == 0) return where + "0: OBJ numbers vertices from 1 (here " + range(before) + ")";
       if (index > vertices)
         return where + shown + " is out of range: the file has " + std::to_string(vertices) +
-               " vertices (" + range + std::to_string(before) + " counting back)";
+               " vertices (" + range(before) + ")";
       if (-index > before)
         return where + shown + " counts back past the first vertex: " + std::to_string(before) +
-               " vertices precede this line (" + range + std::to_string(before) + ")";
+               " vertices precede this line (" + range(before) + ")";
     }
   }
   // CGAL refuses a file without faces with its bare "could not parse"; the other formats say

@@ -408,7 +408,11 @@ TEST_F(MeshIoTest, ObjIndexOutOfRangeIsRefusedNamingTheLineFaceAndRange) {
   EXPECT_EQ(back.where, "line 3");
   EXPECT_EQ(back.what,
             "face 0: vertex index -3 counts back past the first vertex: 2 vertices precede this "
-            "line (1 to 3, or -1 to -2)");
+            "line (1 to 3, or -1 to -2 counting back)");
+  // A face before any vertex: no range counting back (it read "-1 to -0").
+  EXPECT_EQ(readFails(write("first.obj", "f -1 -2 -3\nv 0 0 0\nv 1 0 0\nv 0 1 0\n")).what,
+            "face 0: vertex index -1 counts back past the first vertex: 0 vertices precede this "
+            "line (1 to 3, and none counting back: no vertex precedes this line)");
 }
 
 TEST_F(MeshIoTest, ObjNegativeIndicesCountBackFromTheLatestVertex) {
