@@ -177,6 +177,8 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--group anterior/nowhere=1", "no cord in group \"anterior/nowhere\""},
            {"--cord 9999=1", "--cord 9999=1: \"9999\" is not a cord index"},
            {"--cord 1,1=1.1", "--cord 1,1=1.1: cord 1 appears twice in the list"},
+           {"--lock ''", "--lock: empty; expected cord indices"},
+           {"--all 1 --unlock ''", "--unlock: empty; expected cord indices"},
            {"--all 1 --lock 1,z", "--lock 1,z: \"z\" is not a cord index"},
            {"--all nan", "--all nan: the scale must be a number"},
            // 0.001 of a 16 mm seed: a cord set the readers refuse (at least 1 mm).

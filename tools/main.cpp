@@ -467,6 +467,18 @@ int main(int argc, char** argv) {
                       : outputDirectoryUsable(place.command, place.path, place.files, place.inputs);
     if (!usable) return kExitBadInput;
   }
+  // An empty list is one the user gave, not an option left out ("--lock ''" read "nothing to
+  // do" when alone and was ignored beside others).
+  if (app.got_subcommand("edit-cords")) {
+    for (const auto& [option, list] :
+         {std::pair{"--lock", &edit_cords.lock}, std::pair{"--unlock", &edit_cords.unlock}})
+      if (app.get_subcommand("edit-cords")->count(option) > 0 && list->empty()) {
+        std::cerr << "error: edit-cords: " << option
+                  << ": empty; expected cord indices K,K,..., \"all\""
+                  << (std::string(option) == "--lock" ? " or \"edited\"" : "") << "\n";
+        return kExitBadInput;
+      }
+  }
   // Options that only act on PM tips, given to a fit that does not move them: say so (the run
   // goes on; the user may have meant --params scales+tips).
   if (app.got_subcommand("fit") && fit.params != "scales+tips") {
