@@ -123,7 +123,8 @@ class CurveTextReader {
     for (int k = 0; k < 3; ++k) {
       const std::string& field = fields[columns_.index[k]];
       if (!parseDecimal(field, p[k])) {
-        return bad(number, std::string(kAxis[k]) + " is not a finite decimal number: \"" + field + "\"");
+        return bad(number,
+                   std::string(kAxis[k]) + " is not a finite decimal number: \"" + field + "\"");
       }
     }
     points_.push_back(p);
