@@ -316,7 +316,7 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
   return "note: locked cords hold the fit back: " + what + " (" + trialChange(fit, *best) +
          " %): data cost -" + formatFixed(100.0 * drop, 0) + " %, AvgD " +
          formatFixed(probes.fit_mean_deviation_mm, 2) + " -> " +
-         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords CASE" + seed +
+         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords " + o.case_dir + seed +
          " --unlock " + trialCords(*best, ",") + " --out FILE) to let the fit move " +
          (one ? "it" : "them") + " (" + closures + "; report.md, \"Locked cords\")" + failures +
          "\n";

@@ -314,12 +314,13 @@ int runSweepCord(const SweepCordOptions& options) {
   }
   // The insertion: the cord's point between vertices when it has one, else its vertex (the
   // CSV's vertex_* columns keep their names for scripts written against them).
-  panels.push_back({"Height of the cord's insertion above the closed annulus plane",
-                    axis,
-                    "height (mm)",
-                    {{"insertion (vertex " + std::to_string(vertex) + ")", s, height, true, true}},
-                    false,
-                    kLegendMargin});
+  panels.push_back(
+      {"Height of the cord's insertion above the closed annulus plane",
+       axis,
+       "height (mm)",
+       {{"insertion (nearest vertex " + std::to_string(vertex) + ")", s, height, true, true}},
+       false,
+       kLegendMargin});
 
   StagedOutput staged(options.out_dir, sweepCordOutputFiles(), {}, "sweep-cord");
   const std::filesystem::path& out = staged.dir();
