@@ -580,7 +580,10 @@ std::string caseNameProblem(const std::string& name) {
   return "";
 }
 
-std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagnostics) {
+namespace {
+
+// loadCase on a Diagnostics of its own (whose growth says whether the case failed).
+std::optional<ValveCase> loadCaseChecked(const fs::path& directory, Diagnostics& diagnostics) {
   const std::size_t problems_before = diagnostics.problems().size();
   if (!fs::is_directory(directory)) {
     diagnostics.error(directory.string(), "",
@@ -635,6 +638,17 @@ std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagno
   readOptionalParts(*document, directory, fields, c.mesh.V.rows() > 0 && valve_ok, c);
   if (diagnostics.problems().size() != problems_before) return std::nullopt;
   return c;
+}
+
+}  // namespace
+
+std::optional<ValveCase> loadCase(const fs::path& directory, Diagnostics& diagnostics) {
+  // Its own collector: the caller's may already hold a problem word for word, which would not
+  // be added again (Diagnostics reports each once) and so would not show this case's failure.
+  Diagnostics own;
+  std::optional<ValveCase> loaded = loadCaseChecked(directory, own);
+  diagnostics.merge(own);
+  return loaded;
 }
 
 void writeCase(const fs::path& directory, const ValveCase& c) {

@@ -404,12 +404,16 @@ std::string prepareStl(std::string& bytes) {
   if (bytes.size() < 84) return "";
   const std::uint64_t facets = readUnsigned(bytes.data() + 80, 4, false);
   if (bytes.size() != 84 + 50 * facets) {
-    // ASCII, unless it does not start as ASCII STL does or holds a NUL byte: then a binary
-    // file cut short or padded (it was reported as a bad ASCII 'vertex' line).
-    if (bytes.compare(0, 5, "solid") == 0 && bytes.find('\0') == std::string::npos) return "";
+    // ASCII (CGAL skips blanks before "solid"), or a binary file with bytes after its facets
+    // (CGAL reads the facets the count gives). A binary file shorter than its count was
+    // reported as a bad ASCII 'vertex' line: say what it is.
+    const std::size_t first = bytes.find_first_not_of(" \t\r\n");
+    const bool ascii = first != std::string::npos && bytes.compare(first, 5, "solid") == 0 &&
+                       bytes.find('\0') == std::string::npos;
+    if (ascii || bytes.size() > 84 + 50 * facets) return "";
     return "a binary STL of " + std::to_string(facets) + " facets (the count at byte 80) has " +
            std::to_string(84 + 50 * facets) + " bytes, this file " + std::to_string(bytes.size()) +
-           ": cut short or corrupt";
+           ": cut short";
   }
   for (std::uint64_t f = 0; f < facets; ++f) {
     const char* vertices = bytes.data() + 84 + 50 * f + 12;  // skip the facet normal

@@ -168,11 +168,18 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
     const auto document = loadJsonFile(path, file, diagnostics);
     std::string extension = path.extension().string();
     for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (!document && extension != ".json" && inputFileProblem(path).empty()) {
+    // Only after a parse error: a file that could not be read was not read as anything.
+    const bool parse_error = !diagnostics.problems().empty() &&
+                             diagnostics.problems().back().file == file &&
+                             diagnostics.problems().back().what.find("JSON") != std::string::npos;
+    if (!document && extension != ".json" && parse_error) {
       // A ".dat" or ".xyz" file of numbers read as JSON says only "malformed JSON".
       diagnostics.error(file, "",
-                        "read as JSON, its extension \"" + path.extension().string() +
-                            "\" being none of the text curve formats' (.csv, .txt, .fcsv)");
+                        "read as JSON, " +
+                            (extension.empty() ? std::string("the file having no extension")
+                                               : "its extension \"" + path.extension().string() +
+                                                     "\" being none of the text curve formats'") +
+                            " (.csv, .txt, .fcsv)");
     }
     if (!document) return false;
     JsonFields fields(file, diagnostics);

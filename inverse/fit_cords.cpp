@@ -22,6 +22,7 @@ struct Optimisation {
   std::unique_ptr<FitObjective> objective;
   std::shared_ptr<const ForwardEvaluation> best, optimiser_best;
   std::string termination;
+  bool budget_spent = false;  // the optimiser stopped for the budget
   bool switched_to_full_closures = false;
   SlackReleaseOutcome release;
   std::vector<IterationRecord> history;
@@ -93,6 +94,7 @@ std::unique_ptr<Optimisation> optimise(const ValveCase& valve_case, const CordSe
   auto optimizer = makeOptimizer(options.optimizer);
   const Termination termination = optimizer->minimize(objective, options.optimizer_settings);
   run->termination = termination.message;
+  run->budget_spent = termination.budget_spent;
   run->switched_to_full_closures =
       options.finite_difference.warm_start && !objective.warmDifferences();
   // The drivers count against the optimiser's share; say where the rest of --max-sims went.
@@ -308,6 +310,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
   // What an optimisation's result makes the outcome say.
   auto adopt = [&](const Optimisation& run) {
     outcome.termination = run.termination;
+    outcome.budget_spent = run.budget_spent;
     outcome.switched_to_full_closures = run.switched_to_full_closures;
     outcome.slack_release = run.release;
     outcome.parameter_names = run.parameters->names();

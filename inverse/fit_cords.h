@@ -127,6 +127,7 @@ struct FitOutcome {
   LockedCordProbes locked_probes;  // empty when not asked for or nothing is locked
   TissueRetry tissue_retry;        // when asked for
   std::string termination;
+  bool budget_spent = false;  // the optimiser stopped for the --max-sims budget
   // Warm-started differences were given up for full closures during the solve (the Ceres
   // driver after rejected steps); the uncertainty then uses full closures too.
   bool switched_to_full_closures = false;

@@ -262,22 +262,24 @@ TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
   }
 }
 
-// A tip box wider than the case's reach (50 mm for the small case) would let a tip go where
-// no case file may put one: 1e308 gave crs2 an infinite domain. The reach itself is accepted.
+// A tip box whose corner lies beyond the case's reach (50 mm for the small case: a box of at
+// most 50 / sqrt(3) = 28.87 mm) would let a tip go where no case file may put one: 1e308 gave
+// crs2 an infinite domain. Checked only where it acts (with other --params it is noted).
 TEST(FitCommand, RefusesATipBoxBeyondTheCasesReach) {
-  for (const std::string box : {"50.5", "1e308"}) {
+  for (const std::string box : {"28.9", "1e308"}) {
     const std::string err = refusedFitMessage("--params scales+tips --tip-box " + box);
     EXPECT_NE(err.find("error: fit: --tip-box: " + (box == "1e308" ? std::string("1e+308") : box) +
-                       " mm reaches beyond this case: at most 50 mm"),
+                       " mm reaches beyond this case: at most 28.8 mm"),
               std::string::npos)
         << err;
   }
   TempDir dir;
-  const auto r = runChordfit("fit " + quoted(smallCase()) +
-                             " --params scales+tips --tip-box 50 --max-sims 1 --no-prefit "
-                             "--no-uncertainty --quiet --out " +
-                             quoted(dir / "fit"));
-  EXPECT_EQ(r.exit_code, 0) << r.err;
+  for (const std::string params : {"scales+tips --tip-box 28.8", "scales --tip-box 100"}) {
+    const auto r = runChordfit("fit " + quoted(smallCase()) + " --params " + params +
+                               " --max-sims 1 --no-prefit --no-uncertainty --quiet --out " +
+                               quoted(dir / "fit"));
+    EXPECT_EQ(r.exit_code, 0) << params << "\n" << r.err;
+  }
 }
 
 // The section residuals (--section-weight) reach the fit: recorded in metrics.json and
@@ -690,19 +692,38 @@ TEST(FitCommand, SaysWhenThePreFitsLeftTheOptimiserNoStep) {
       runChordfit("fit " + quoted(prolapse) + " --max-sims 30 --no-uncertainty --quiet --out " +
                   quoted(dir / "fit"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("forward runs, all in the pre-fits: ceres took no step"), std::string::npos)
+  EXPECT_NE(r.out.find("forward runs (pre-fits only; ceres took no step)"), std::string::npos)
       << r.out;
   EXPECT_EQ(r.out.find("fit: ceres after"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("the fitted closure does not: ceres took no step, the pre-fits having "
-                       "used the budget"),
+  EXPECT_NE(r.out.find("the fitted closure does not: ceres took no step, the budget being spent"),
             std::string::npos)
       << r.out;
-  EXPECT_NE(testing::readText(dir / "fit" / "report.md")
-                .find("; ceres took no step, the result is the pre-fits'"),
-            std::string::npos);
+  EXPECT_NE(
+      testing::readText(dir / "fit" / "report.md").find("; pre-fits only; ceres took no step"),
+      std::string::npos);
   EXPECT_NE(
       testing::readText(dir / "fit" / "convergence.svg").find("pre-fits only; ceres took no step"),
       std::string::npos);
+
+  // Without pre-fits, it is not their result; and an NLopt method that evaluated a point of its
+  // own ran (its first evaluation, the start, is no step).
+  const auto bare = runChordfit("fit " + quoted(smallCase()) +
+                                " --no-prefit --max-sims 1 --no-uncertainty --quiet --out " +
+                                quoted(dir / "bare"));
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  EXPECT_NE(bare.out.find("forward run (ceres took no step)"), std::string::npos) << bare.out;
+  const auto nlopt = runChordfit("fit " + quoted(smallCase()) +
+                                 " --optimizer bobyqa --no-prefit --max-sims 1 --no-uncertainty "
+                                 "--quiet --out " +
+                                 quoted(dir / "nlopt"));
+  ASSERT_EQ(nlopt.exit_code, 0) << nlopt.err;
+  EXPECT_NE(nlopt.out.find("(bobyqa took no step)"), std::string::npos) << nlopt.out;
+  const auto stepped = runChordfit("fit " + quoted(smallCase()) +
+                                   " --optimizer bobyqa --no-prefit --max-sims 6 --no-uncertainty "
+                                   "--quiet --out " +
+                                   quoted(dir / "stepped"));
+  ASSERT_EQ(stepped.exit_code, 0) << stepped.err;
+  EXPECT_NE(stepped.out.find("fit: bobyqa after"), std::string::npos) << stepped.out;
 }
 
 // Finite-difference options given to an NLopt fit, which takes no derivatives: a note saying
@@ -716,9 +737,9 @@ TEST(FitCommand, NotesFiniteDifferenceOptionsAnNloptFitDoesNotUse) {
                                (uncertainty ? "" : " --no-uncertainty") + " --out " +
                                quoted(dir / (uncertainty ? "u" : "n")));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    const std::string reach = uncertainty
-                                  ? "the uncertainty's Jacobian after the fit"
-                                  : "Ceres' Jacobians, so on nothing here (--no-uncertainty)";
+    const std::string reach =
+        uncertainty ? "the steps after the fit (the uncertainty's Jacobian, the locked-cord probe)"
+                    : "Ceres' Jacobians, so on nothing here (--no-uncertainty)";
     for (const std::string option : {"--fd-step", "--fd-warm"})
       EXPECT_NE(r.out.find("note: fit: " + option + " acts only on " + reach +
                            " with --optimizer bobyqa"),

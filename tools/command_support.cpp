@@ -375,10 +375,14 @@ bool outputFileUsable(const char* command, const std::string& file) {
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     return reportOutputProblem(command, file, "is a directory; give the file to write");
-  if (std::filesystem::path(file).filename().empty())  // "new/": not there yet
-    return reportOutputProblem(command, file,
-                               "ends in a separator, which names a directory (none is there); "
-                               "give the file to write");
+  if (std::filesystem::path(file).filename().empty())  // "new/": not there yet, or a file
+    return reportOutputProblem(
+        command, file,
+        std::filesystem::exists(std::filesystem::path(file).parent_path(), ec)
+            ? "ends in a separator, which names a directory, but a file is there; give the file "
+              "to write"
+            : "ends in a separator, which names a directory (none is there); give the file to "
+              "write");
   if (!reportOutputProblem(command, file, danglingLinkProblem(file))) return false;
   if (!reportOutputProblem(command, file, specialFileProblem(file))) return false;
   return reportOutputProblem(

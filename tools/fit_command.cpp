@@ -133,13 +133,18 @@ int runFit(const FitCommandOptions& o) {
     return kExitBadInput;
   }
   std::cerr << duplicateTracingsNote(*valve_case);
-  // A tip offset beyond the case's reach puts the tip where no case file may put it (the
-  // readers refuse tips farther from the mesh); 1e308 gave crs2 an infinite domain and sent
-  // bobyqa's first steps out of the ventricle.
-  if (const double reach = valveReachMm(valve_case->mesh.V); o.tip_box_mm > reach) {
-    std::cerr << "error: fit: --tip-box: " << o.tip_box_mm << " mm reaches beyond this case: "
-              << "at most " << reach << " mm (the larger of 50 mm and the valve mesh's span; "
-              << "the default is 8 mm)\n";
+  // A tip moved by the box on all three axes goes sqrt(3) box: beyond the case's reach, where
+  // no case file may put a tip (1e308 gave crs2 an infinite domain and sent bobyqa's first
+  // steps out of the ventricle). Only where it acts: with other --params it is noted, not used.
+  if (const double reach = valveReachMm(valve_case->mesh.V);
+      *mode == inverse::ParameterMode::kScalesAndTips && std::sqrt(3.0) * o.tip_box_mm > reach) {
+    char most[32];
+    std::snprintf(most, sizeof most, "%.1f", reach / std::sqrt(3.0) - 0.05);
+    std::cerr << "error: fit: --tip-box: " << o.tip_box_mm
+              << " mm reaches beyond this case: at most " << most
+              << " mm (a tip moved by it on all three axes goes sqrt(3) times as far, and tips "
+              << "stay within " << reach << " mm of the valve mesh, the larger of 50 mm and its "
+              << "span; the default is 8 mm)\n";
     return kExitBadInput;
   }
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
@@ -354,9 +359,8 @@ int runFit(const FitCommandOptions& o) {
   writeFileAtomically(out / "convergence.csv", convergenceCsv(fit.history));
   if (fit.uncertainty.ok()) writeFileAtomically(out / "uncertainty.csv", uncertaintyCsv(fit));
   // Figures name the method that made the result: the pre-fits' when the optimiser took no step.
-  const std::string method = optimiserRan(fit, o.optimizer)
-                                 ? o.optimizer
-                                 : "pre-fits only; " + o.optimizer + " took no step";
+  const std::string no_step = optimiserNoStep(fit, o.optimizer);
+  const std::string method = no_step.empty() ? o.optimizer : no_step;
   writeFileAtomically(out / "convergence.svg", convergenceSvg(fit.history, method));
   writeFileAtomically(out / "report.md", fitReport(*valve_case, o, fit, seed_metrics, fit_metrics));
   writeFileAtomically(
@@ -368,14 +372,13 @@ int runFit(const FitCommandOptions& o) {
                             method + ", " + o.params + ")"}));
   const StagedOutput::Published published = staged.publish();
 
-  if (optimiserRan(fit, o.optimizer))
+  if (no_step.empty())
     std::printf("fit: %s after %s, %.1f s (%s)\n", o.optimizer.c_str(),
                 counted(fit.forward_sims, "forward run").c_str(), fit.seconds,
                 fit.termination.c_str());
   else  // "ceres after 57 forward runs" credited it with the pre-fits' work
-    std::printf("fit: %s, all in the pre-fits: %s took no step, %.1f s (%s)\n",
-                counted(fit.forward_sims, "forward run").c_str(), o.optimizer.c_str(), fit.seconds,
-                fit.termination.c_str());
+    std::printf("fit: %s (%s), %.1f s (%s)\n", counted(fit.forward_sims, "forward run").c_str(),
+                no_step.c_str(), fit.seconds, fit.termination.c_str());
   // NLopt's local methods stop on a relative cost change between evaluations, which a
   // simulator's map can meet far from a minimum (bobyqa on the quick start's case: AvgD
   // 0.73 mm after 137 of 400 closures, where ceres reaches 0.40; after 137 of 150 too, two

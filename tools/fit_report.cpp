@@ -343,9 +343,24 @@ std::string worseThanSeedNote(const inverse::FitOutcome& fit) {
 }
 
 bool optimiserRan(const inverse::FitOutcome& fit, const std::string& optimizer) {
-  return std::any_of(fit.history.begin(), fit.history.end(), [&](const auto& r) {
-    return r.stage == optimizer && r.iteration >= 1;  // Ceres' iteration 0 is its start
-  });
+  // A record of the optimiser's own beyond its start: not Ceres' iteration 0 (the start, closed
+  // there when no stage before had), not NLopt's first evaluation (the start, cached).
+  int sims_before = 0;  // forward runs when the optimiser started
+  for (const inverse::IterationRecord& r : fit.history) {
+    if (r.stage != optimizer) {
+      if (r.stage.rfind("retry ", 0) == 0 || r.stage == "release") break;  // after it
+      sims_before = r.forward_sims;
+      continue;
+    }
+    if (r.iteration >= 1 && r.forward_sims > sims_before) return true;
+  }
+  return false;
+}
+
+std::string optimiserNoStep(const inverse::FitOutcome& fit, const std::string& optimizer) {
+  if (optimiserRan(fit, optimizer)) return "";
+  const bool prefits = fit.prefit_ran || fit.segment_prefit_ran || fit.tissue_prefit_ran;
+  return (prefits ? "pre-fits only; " : "") + optimizer + " took no step";
 }
 
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
@@ -384,10 +399,9 @@ std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
             " free cords there end at the upper scale bound " + formatWeight(o.scale_bounds[1]) +
             "; a higher one (--scale-bounds " + formatWeight(o.scale_bounds[0]) +
             ",HI) lets them lengthen further";
-  } else if (!optimiserRan(fit, o.optimizer)) {
+  } else if (fit.budget_spent && !optimiserRan(fit, o.optimizer)) {
     // The cords are where the pre-fits left them: the budget, not the cords, is the limit.
-    hint += o.optimizer + " took no step, the pre-fits having used the budget (" + fit.termination +
-            ")" +
+    hint += o.optimizer + " took no step, the budget being spent (" + fit.termination + ")" +
             (o.tissue_retry && !retry.ran && !retry.skipped.empty()
                  ? ", and softer tissue was not tried: the tissue retry did not run (" +
                        retry.skipped + ")"
@@ -773,9 +787,7 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
     md << "- **the fit's best closure did not settle**: it reached the step cap and is the "
           "mean of its last steps; its numbers are less certain than a settled closure's\n";
   md << "- termination: " << fit.termination
-     << (optimiserRan(fit, o.optimizer)
-             ? std::string()
-             : "; " + o.optimizer + " took no step, the result is the pre-fits'")
+     << (optimiserRan(fit, o.optimizer) ? std::string() : "; " + optimiserNoStep(fit, o.optimizer))
      << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n";

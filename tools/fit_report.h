@@ -57,6 +57,9 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
 // Whether the optimiser evaluated any point of its own (a Ceres iteration or an NLopt
 // evaluation in the main fit's history); false when the pre-fits left it too little budget.
 bool optimiserRan(const inverse::FitOutcome& fit, const std::string& optimizer);
+// "" when the optimiser ran; else "pre-fits only; ceres took no step" (a pre-fit ran) or "ceres
+// took no step", for the messages and figures that would credit it with the result.
+std::string optimiserNoStep(const inverse::FitOutcome& fit, const std::string& optimizer);
 
 std::string missedProlapseHint(const ValveCase& c, const FitCommandOptions& o,
                                const inverse::FitOutcome& fit, const ValveMetrics& fit_metrics);

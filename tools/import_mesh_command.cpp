@@ -260,8 +260,8 @@ int runImportMesh(const ImportMeshOptions& options) {
       (F.size() == 0 || (F.minCoeff() >= 0 && F.maxCoeff() < V.rows()))) {
     if (const int merged = weldCoincidentVertices(V, F); merged > 0)
       std::printf(
-          "note: import-mesh: %s: %s merged into the others at the same position (the "
-          "file repeats each triangle's corners), %s left\n",
+          "note: import-mesh: %s: %s merged into others at the same position, %s left (an "
+          "exporter that repeats each triangle's corners leaves separate triangles)\n",
           options.mesh_file.c_str(), counted(merged, "vertex", "vertices").c_str(),
           counted(V.rows(), "vertex", "vertices").c_str());
   }

@@ -496,8 +496,9 @@ int main(int argc, char** argv) {
             "note: fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
             "derivatives)\n",
             option,
-            fit.uncertainty ? "the uncertainty's Jacobian after the fit"
-                            : "Ceres' Jacobians, so on nothing here (--no-uncertainty)",
+            fit.uncertainty
+                ? "the steps after the fit (the uncertainty's Jacobian, the locked-cord probe)"
+                : "Ceres' Jacobians, so on nothing here (--no-uncertainty)",
             fit.optimizer.c_str());
   }
   try {
