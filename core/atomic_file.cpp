@@ -96,9 +96,9 @@ bool readWholeFile(const std::filesystem::path& path, std::string& bytes) {
 }
 
 std::string cannotBeRead(const std::filesystem::path& path) {
+  errno = 0;
   std::FILE* file = std::fopen(path.c_str(), "rb");
-  if (file == nullptr)
-    return "cannot be read (" + std::error_code(errno, std::generic_category()).message() + ")";
+  if (file == nullptr) return "cannot be read" + systemReason();
   std::fclose(file);
   return "cannot be read";
 }

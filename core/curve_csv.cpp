@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <array>
-#include <cctype>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -11,25 +10,13 @@
 
 #include "core/atomic_file.h"
 #include "core/decimal_number.h"
+#include "core/text_case.h"
 
 namespace chordfit {
 namespace {
 
 // Bad lines reported per file before giving up on it.
 constexpr int kMaxReportedLines = 5;
-
-std::string lowerCase(std::string text) {
-  std::transform(text.begin(), text.end(), text.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return text;
-}
-
-std::string trim(const std::string& text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string::npos) return "";
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 // Fields of a data line: split at commas, else semicolons, else runs of blanks.
 std::vector<std::string> splitFields(const std::string& line) {
@@ -39,7 +26,7 @@ std::vector<std::string> splitFields(const std::string& line) {
                                                                : '\0';
   if (separator != '\0') {
     std::istringstream in(line);
-    for (std::string field; std::getline(in, field, separator);) fields.push_back(trim(field));
+    for (std::string field; std::getline(in, field, separator);) fields.push_back(trimmed(field));
     if (!line.empty() && line.back() == separator) fields.push_back("");
   } else {
     std::istringstream in(line);
@@ -50,10 +37,10 @@ std::vector<std::string> splitFields(const std::string& line) {
 
 // The value of a "# key = value" header line of an .fcsv file, or "" when `line` is not it.
 std::string headerValue(const std::string& line, const std::string& key) {
-  const std::string body = trim(line.substr(1));
-  if (lowerCase(body.substr(0, key.size())) != lowerCase(key)) return "";
+  const std::string body = trimmed(line.substr(1));
+  if (asciiLowercase(body.substr(0, key.size())) != asciiLowercase(key)) return "";
   const auto eq = body.find('=', key.size());
-  return eq == std::string::npos ? "" : trim(body.substr(eq + 1));
+  return eq == std::string::npos ? "" : trimmed(body.substr(eq + 1));
 }
 
 // Column layout of the coordinates: the three field indices and whether they are RAS.
@@ -71,7 +58,7 @@ bool columnsFromNames(const std::vector<std::string>& names, Columns& columns) {
     bool complete = true;
     for (int k = 0; k < 3 && complete; ++k) {
       const auto it = std::find_if(names.begin(), names.end(), [&](const std::string& n) {
-        return lowerCase(n) == kTriples[t][k];
+        return asciiLowercase(n) == kTriples[t][k];
       });
       complete = it != names.end();
       if (complete) found.index[k] = static_cast<int>(it - names.begin());
@@ -95,7 +82,7 @@ class CurveTextReader {
 
   // Returns false once the file is hopeless (too many bad lines).
   bool line(const std::string& raw, int number) {
-    const std::string text = trim(raw);
+    const std::string text = trimmed(raw);
     if (text.empty()) return true;
     if (text[0] == '#') return fcsv_ ? header(text, number) : true;
     const std::vector<std::string> fields = splitFields(text);
@@ -196,7 +183,7 @@ class CurveTextReader {
 }  // namespace
 
 bool isDelimitedCurveFile(const std::filesystem::path& path) {
-  const std::string extension = lowerCase(path.extension().string());
+  const std::string extension = asciiLowercase(path.extension().string());
   return extension == ".fcsv" || extension == ".csv" || extension == ".txt";
 }
 
@@ -212,7 +199,7 @@ bool readDelimitedCurve(const std::filesystem::path& path, const std::string& fi
       diagnostics.error(file, "", cannotBeRead(path));
       return false;
     }
-    CurveTextReader reader(file, diagnostics, lowerCase(path.extension().string()) == ".fcsv");
+    CurveTextReader reader(file, diagnostics, asciiLowercase(path.extension().string()) == ".fcsv");
     int number = 0;
     for (std::string line; std::getline(in, line);) {
       // A UTF-8 byte-order mark (spreadsheet exports write one) is not part of the header.

@@ -1,6 +1,5 @@
 #include "core/curve_io.h"
 
-#include <cctype>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -10,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/curve_csv.h"
 #include "core/json_fields.h"
+#include "core/text_case.h"
 
 namespace chordfit {
 namespace {
@@ -166,8 +166,7 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
   if (isDelimitedCurveFile(path)) return readDelimitedCurve(path, file, curve, diagnostics);
   try {
     const auto document = loadJsonFile(path, file, diagnostics);
-    std::string extension = path.extension().string();
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const std::string extension = asciiLowercase(path.extension().string());
     // Only after a parse error: a file that could not be read was not read as anything.
     const bool parse_error = !diagnostics.problems().empty() &&
                              diagnostics.problems().back().file == file &&

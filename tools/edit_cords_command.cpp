@@ -106,11 +106,7 @@ bool parseOffset(const std::string& text, Eigen::Vector3d& offset) {
   if (fields.size() != 3) return false;
   for (int k = 0; k < 3; ++k) {
     // Blanks around a number are the user's spacing ("1, 2, 3"), not part of it.
-    const std::size_t first = fields[k].find_first_not_of(" \t");
-    const std::size_t last = fields[k].find_last_not_of(" \t");
-    const std::string field =
-        first == std::string::npos ? "" : fields[k].substr(first, last - first + 1);
-    if (!parseDecimal(field, offset(k))) return false;
+    if (!parseDecimal(trimmed(fields[k]), offset(k))) return false;
   }
   return true;
 }

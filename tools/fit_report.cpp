@@ -786,9 +786,8 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   if (fit.final_evaluation.ok() && !fit.final_evaluation.converged)
     md << "- **the fit's best closure did not settle**: it reached the step cap and is the "
           "mean of its last steps; its numbers are less certain than a settled closure's\n";
-  md << "- termination: " << fit.termination
-     << (optimiserRan(fit, o.optimizer) ? std::string() : "; " + optimiserNoStep(fit, o.optimizer))
-     << "\n";
+  const std::string no_step = optimiserNoStep(fit, o.optimizer);
+  md << "- termination: " << fit.termination << (no_step.empty() ? "" : "; " + no_step) << "\n";
   md << "- cost: seed " << fit.seed_evaluation.cost << ", fit " << fit.final_evaluation.cost
      << "\n";
   if (const std::string note = worseThanSeedNote(fit); !note.empty())
