@@ -296,6 +296,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
       budget_allows(options.tissue_prefit.closures())) {
     TissuePrefitOptions tissue = options.tissue_prefit;
     tissue.threads = options.finite_difference.threads;
+    tissue.on_closure = stageHeartbeat(options.on_stage, "tissue pre-fit");
     const TissuePrefitResult result = segmentTissuePrefit(valve_case, start_set, start_evaluation,
                                                           options.bounds, seed_residual, tissue);
     outcome.forward_sims += result.forward_sims;
@@ -346,6 +347,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     tissue.enabled = true;
     tissue.threads = options.finite_difference.threads;
     tissue.segments = segmentIds(valve_case.mesh, retry.missing);
+    tissue.on_closure = stageHeartbeat(options.on_stage, "retry tissue pre-fit");
     const int needed = tissue.closures(static_cast<int>(tissue.segments.size())) + 2;
     if (run->parameters->size() == 0) {
       retry.skipped = "no free cord";
@@ -490,6 +492,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     probe.relative_step = options.finite_difference.scale_step;
     probe.threads = options.finite_difference.threads;
     probe.on_start = options.on_stage;
+    probe.on_closure = stageHeartbeat(options.on_stage, "locked-cord probe");
     outcome.locked_probes = probeLockedCords(fit.working_case, outcome.fitted, *best,
                                              outcome.closed_spans, residual, options.bounds, probe);
     outcome.locked_probes.unsettled_sims =

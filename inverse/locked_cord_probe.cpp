@@ -1,6 +1,7 @@
 #include "inverse/locked_cord_probe.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -99,16 +100,18 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
     out.cords.push_back(probe);
   }
   if (taut.empty()) return out;
+  const int n = static_cast<int>(taut.size());
+  // 2 per cord, one trial per cord and one per segment with two or more (at most n / 2).
+  const int most = 3 * n + n / 2;
+  std::atomic<int> closed{0};  // for on_closure
   if (options.on_start) {
-    const int n = static_cast<int>(taut.size());  // segments with two or more: at most n / 2
     options.on_start("locked cords: probing the " + std::to_string(n) + " taut of " +
-                     std::to_string(out.cords.size()) + ", up to " + std::to_string(3 * n + n / 2) +
+                     std::to_string(out.cords.size()) + ", up to " + std::to_string(most) +
                      " closures");
   }
 
   // Central differences: closures at l (1 - h) and l (1 + h) of each taut locked cord.
   const double h = options.relative_step;
-  const int n = static_cast<int>(taut.size());
   std::vector<ForwardEvaluation> sides(2 * n);
   parallelFor(2 * n, options.threads, [&](int k) {
     const int cord = out.cords[taut[k / 2]].cord;
@@ -116,6 +119,7 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
     side.cords = {cord};
     side.lengths_mm = {fitted.cords[cord].rest_length * (k % 2 == 0 ? 1.0 - h : 1.0 + h)};
     sides[k] = closeForData(valve_case, withRestLengths(fitted, side), residual);
+    if (options.on_closure) options.on_closure(++closed, most);
   });
   out.forward_sims += 2 * n;
 
@@ -179,6 +183,7 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
   parallelFor(static_cast<int>(trials.size()), options.threads, [&](int k) {
     const ForwardEvaluation e =
         closeForData(valve_case, withRestLengths(fitted, *trials[k]), residual);
+    if (options.on_closure) options.on_closure(++closed, most);
     if (!e.ok()) {
       trials[k]->error = "the probe's closure failed: " + e.error;
       return;

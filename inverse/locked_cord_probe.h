@@ -49,6 +49,9 @@ struct LockedCordProbeOptions {
   // Before the closures, when there are taut locked cords: a line saying how many and how many
   // closures at most (optional; `chordfit fit` prints it).
   std::function<void(const std::string&)> on_start;
+  // Progress of the closures (FiniteDifferenceOptions::on_closure: called from the worker
+  // threads with the closures done and the most the probe runs); optional.
+  std::function<void(int, int)> on_closure;
 };
 
 // One trial: the listed locked cords at new lengths, every other cord as fitted.

@@ -1,6 +1,7 @@
 #include "inverse/tissue_prefit.h"
 
 #include <algorithm>
+#include <atomic>
 #include <sstream>
 
 #include "core/carpentier.h"
@@ -41,6 +42,9 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
   // then again for the segments not yet changed (a pass in a fixed order would let a
   // neighbour's softening, tried first, take a lesion's place).
   std::vector<bool> done(segment_count, false);
+  std::atomic<int> closed{0};  // over all rounds, for on_closure
+  const int most = options.closures(
+      options.segments.empty() ? segment_count : static_cast<int>(options.segments.size()));
   for (int round = 0; round < options.rounds; ++round) {
     std::vector<Candidate> candidates;
     std::vector<int> candidate_segment;
@@ -75,6 +79,7 @@ TissuePrefitResult segmentTissuePrefit(const ValveCase& valve_case, const CordSe
       ValveCase softened = valve_case;
       softened.tissue_stiffness = candidates[i].tissue;
       evaluations[i] = closeForData(softened, candidates[i].cords, residual);
+      if (options.on_closure) options.on_closure(++closed, most);
     });
     result.forward_sims += static_cast<int>(candidates.size());
     const int best = cheapestBelow(evaluations, result.best.cost);

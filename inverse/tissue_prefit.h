@@ -26,6 +26,7 @@
 // fit_cords.h).
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -46,6 +47,9 @@ struct TissuePrefitOptions {
   // The segments tried (open-state segment ids); empty: every segment. The fit's tissue retry
   // tries those where the tracings show a prolapse its closure lacks.
   std::vector<int> segments;
+  // Progress of the stage's closures (FiniteDifferenceOptions::on_closure: called from the
+  // worker threads with the closures done and the most the stage runs); optional.
+  std::function<void(int, int)> on_closure;
   // Closures of all rounds at most: 2 per factor and segment, fewer segments each round.
   int closures(int segments = 6) const {
     int total = 0;

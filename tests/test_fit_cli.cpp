@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <filesystem>
 #include <regex>
+#include <set>
 #include <sstream>
 
 #include "core/csv_text.h"
@@ -407,7 +408,14 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
                   " --no-prefit --max-sims 5 --threads 2 --out " + quoted(dir / "fit"));
   // 5 = the seed, a Jacobian (2), a trial step and the slack release's closure.
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("ceres   iter"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("ceres    iter"), std::string::npos) << r.out;
+  {  // the progress lines' columns line up whatever the stage ("seed", "ceres", "release")
+    std::istringstream lines(r.out);
+    std::set<std::size_t> iter_columns;
+    for (std::string line; std::getline(lines, line);)
+      if (line.find(" iter ") != std::string::npos) iter_columns.insert(line.find(" iter "));
+    EXPECT_EQ(iter_columns.size(), 1u) << r.out;
+  }
   EXPECT_NE(r.out.find("| seed |"), std::string::npos) << r.out;
   EXPECT_EQ(r.out.find(".staging"), std::string::npos) << "no path of the staging directory";
   for (const char* file : {"cords.json", "closed.ply", "closed.vtk", "metrics.json",

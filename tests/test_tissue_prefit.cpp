@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 
 #include "core/case_io.h"
 #include "core/closure_model.h"
@@ -58,8 +60,19 @@ TEST(TissuePrefit, FindsTheSofterP2AndKeepsManualCords) {
   ASSERT_TRUE(start[0].ok()) << start[0].error;
   inverse::TissuePrefitOptions options;
   options.enabled = true;
+  std::mutex progress_mutex;  // on_closure comes from the worker threads
+  int progress_calls = 0;
+  int largest_done = 0;
+  options.on_closure = [&](int done, int most) {
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    ++progress_calls;
+    largest_done = std::max(largest_done, done);
+    EXPECT_EQ(most, options.closures()) << "the bound the stage announces";
+  };
   const inverse::TissuePrefitResult result =
       inverse::segmentTissuePrefit(p.valve_case, p.base, start[0], bounds, residual, options);
+  EXPECT_EQ(progress_calls, result.forward_sims) << "one progress call per closure";
+  EXPECT_EQ(largest_done, result.forward_sims) << "counted across the rounds";
 
   // Noise-free tracings of a grid point: the first accepted change is the truth itself.
   ASSERT_FALSE(result.changed.empty());

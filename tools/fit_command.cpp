@@ -251,9 +251,12 @@ int runFit(const FitCommandOptions& o) {
       std::fflush(stdout);
     };
     options.on_iteration = [](const IterationRecord& r) {
-      std::printf("%-7s iter %4d  cost %10.4f  best %10.4f  mean %7.4f mm  sims %4d  %7.1f s\n",
-                  r.stage.c_str(), r.iteration, r.cost, r.best_cost, r.mean_deviation_mm,
-                  r.forward_sims, r.elapsed_s);
+      // Columns aligned within each optimisation: the stage names of one ("segments" the
+      // longest) and of the tissue retry's ("retry release" the longest).
+      const int stage_width = r.stage.rfind("retry ", 0) == 0 ? 13 : 8;
+      std::printf("%-*s iter %4d  cost %10.4f  best %10.4f  mean %7.4f mm  sims %4d  %7.1f s\n",
+                  stage_width, r.stage.c_str(), r.iteration, r.cost, r.best_cost,
+                  r.mean_deviation_mm, r.forward_sims, r.elapsed_s);
       std::fflush(stdout);
     };
   }
