@@ -1,6 +1,8 @@
 // The staging directory behind every command's output set (tools/staged_output.h): all or
 // nothing, and only the file names the command declares (which its pre-flight checks).
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 #include <filesystem>
 #include <fstream>
@@ -30,6 +32,33 @@ TEST(StagedOutput, ErrorsNameFilesWithoutTheStagingDirectories) {
             "full/f/closed.ply: write failed (No space left)");
   EXPECT_EQ(withoutStagingDirectories("/a/.staging-1/b.json and /c/.staging-x/d"),
             "/a/b.json and /c/.staging-x/d");
+}
+
+// A run killed part-way (SIGKILL, Ctrl-C) leaves its staging directory behind; the next run
+// into the same directory removes it, but not one whose process still runs (a concurrent run).
+TEST(StagedOutput, RemovesTheStagingDirectoriesOfRunsThatNoLongerExist) {
+  TempDir tmp;
+  const fs::path out = tmp.path() / "out";
+  const pid_t child = ::fork();  // a pid known to have ended
+  if (child == 0) ::_exit(0);
+  ASSERT_GT(child, 0);
+  ::waitpid(child, nullptr, 0);
+  const fs::path abandoned = out / (".staging-" + std::to_string(child));
+  const fs::path running = out / (".staging-" + std::to_string(::getppid()));
+  const fs::path not_staging = out / ".staging-notes";
+  for (const fs::path& dir : {abandoned, running, not_staging}) {
+    fs::create_directories(dir);
+    writeText(dir / "cords.json", "{");
+  }
+  {
+    StagedOutput staged(out, {"a.txt"});
+    writeText(staged.dir() / "a.txt", "a");
+    staged.publish();
+  }
+  EXPECT_FALSE(fs::exists(abandoned)) << "its run has ended";
+  EXPECT_TRUE(fs::exists(running / "cords.json")) << "its process still runs";
+  EXPECT_TRUE(fs::exists(not_staging / "cords.json")) << "not a staging directory's name";
+  EXPECT_EQ(readText(out / "a.txt"), "a");
 }
 
 TEST(StagedOutput, PublishesTheWrittenFilesInDeclaredOrderAndRecordsThem) {

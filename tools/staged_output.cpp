@@ -1,6 +1,9 @@
 #include "tools/staged_output.h"
 
+#include <signal.h>
 #include <unistd.h>
+
+#include <cerrno>
 
 #include <algorithm>
 #include <map>
@@ -20,6 +23,32 @@ std::string withoutStagingDirectories(const std::string& text) {
   return std::regex_replace(text, staging, "");
 }
 
+namespace {
+
+// The pid in a staging directory's name ".staging-<pid>", or -1 for any other name.
+long stagingPid(const std::string& name) {
+  static const std::regex staging(R"(\.staging-([0-9]{1,9}))");
+  std::smatch match;
+  return std::regex_match(name, match, staging) ? std::stol(match[1].str()) : -1;
+}
+
+// Removes the staging directories in `out` of runs that no longer exist: a run killed before
+// its destructor ran (SIGKILL, Ctrl-C) left its staged files there, and a later run would
+// otherwise leave them for good. A live process of that pid keeps its directory (another run
+// writing there now, or an unrelated process that reused the pid: left alone either way).
+void removeAbandonedStagingDirectories(const fs::path& out) {
+  std::error_code ec;
+  for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
+    const long pid = stagingPid(it->path().filename().string());
+    if (pid <= 0 || pid == ::getpid()) continue;
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // still running
+    std::error_code ignored;
+    if (fs::is_directory(it->symlink_status(ignored))) fs::remove_all(it->path(), ignored);
+  }
+}
+
+}  // namespace
+
 StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> declared,
                            std::vector<std::string> superseded, std::string command)
     : out_(out_dir),
@@ -30,6 +59,7 @@ StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> dec
   std::error_code ec;
   created_out_ = !fs::exists(out_, ec);
   fs::create_directories(out_);
+  removeAbandonedStagingDirectories(out_);
   fs::remove_all(staging_);
   fs::create_directories(staging_);
 }
