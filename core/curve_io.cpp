@@ -165,13 +165,18 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
   const std::string file = display_name.empty() ? path.string() : display_name;
   if (isDelimitedCurveFile(path)) return readDelimitedCurve(path, file, curve, diagnostics);
   try {
-    const auto document = loadJsonFile(path, file, diagnostics);
+    if (const std::string problem = inputFileProblem(path, "a curve file"); !problem.empty()) {
+      diagnostics.error(file, "", problem);
+      return false;
+    }
+    std::string text;
+    if (!readWholeFile(path, text)) {
+      diagnostics.error(file, "", cannotBeRead(path));
+      return false;
+    }
+    const auto document = parseJson(text, file, diagnostics);
     const std::string extension = asciiLowercase(path.extension().string());
-    // Only after a parse error: a file that could not be read was not read as anything.
-    const bool parse_error = !diagnostics.problems().empty() &&
-                             diagnostics.problems().back().file == file &&
-                             diagnostics.problems().back().what.find("JSON") != std::string::npos;
-    if (!document && extension != ".json" && parse_error) {
+    if (!document && extension != ".json" && !nlohmann::json::accept(text)) {
       // A ".dat" or ".xyz" file of numbers read as JSON says only "malformed JSON".
       diagnostics.error(file, "",
                         "read as JSON, " +
