@@ -9,6 +9,7 @@
 #include "core/joined.h"
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
+#include "tools/shell_word.h"
 
 namespace chordfit::cli {
 
@@ -312,14 +313,15 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
            trialCords(*best) + " together";
   }
   // edit-cords starts from the case's cords unless told the seed: keep the user's edits.
-  const std::string seed = o.seed_cords_file.empty() ? "" : " --cords " + o.seed_cords_file;
+  const std::string seed =
+      o.seed_cords_file.empty() ? "" : " --cords " + shellWord(o.seed_cords_file);
   return "note: locked cords hold the fit back: " + what + " (" + trialChange(fit, *best) +
          " %): data cost -" + formatFixed(100.0 * drop, 0) + " %, AvgD " +
          formatFixed(probes.fit_mean_deviation_mm, 2) + " -> " +
-         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords " + o.case_dir + seed +
-         " --unlock " + trialCords(*best, ",") + " --out FILE) to let the fit move " +
-         (one ? "it" : "them") + " (" + closures + "; report.md, \"Locked cords\")" + failures +
-         "\n";
+         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords " +
+         shellWord(o.case_dir) + seed + " --unlock " + trialCords(*best, ",") +
+         " --out FILE) to let the fit move " + (one ? "it" : "them") + " (" + closures +
+         "; report.md, \"Locked cords\")" + failures + "\n";
 }
 
 std::string worseThanSeedNote(const inverse::FitOutcome& fit) {
@@ -727,14 +729,15 @@ std::string fitReport(const ValveCase& c, const FitCommandOptions& o,
   if (const std::string why = notRun(fit.prefit_ran, true); !why.empty())
     md << "- global pre-fit: " << why << "\n";
   else if (fit.prefit_kind_stage == inverse::KindStage::kNotAsked)
-    md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: not run (--max-sims "
-       << o.max_sims << " leaves too few closures)\n";
+    md << "- global pre-fit factor: " << formatFixed(fit.prefit_factor, 3)
+       << "; per kind: not run (--max-sims " << o.max_sims << " leaves too few closures)\n";
   else if (fit.prefit_kind_stage == inverse::KindStage::kOneKindFree)
-    md << "- global pre-fit factor: " << fit.prefit_factor
+    md << "- global pre-fit factor: " << formatFixed(fit.prefit_factor, 3)
        << "; per kind: not run (only one cord kind has free cords that are not manual)\n";
   else
-    md << "- global pre-fit factor: " << fit.prefit_factor << "; per kind: primaries "
-       << fit.prefit_primary_factor << ", secondaries " << fit.prefit_secondary_factor << "\n";
+    md << "- global pre-fit factor: " << formatFixed(fit.prefit_factor, 3)
+       << "; per kind: primaries " << formatFixed(fit.prefit_primary_factor, 3) << ", secondaries "
+       << formatFixed(fit.prefit_secondary_factor, 3) << "\n";
   const std::string segment_not_run = notRun(fit.segment_prefit_ran, o.params != "groups");
   md << "- segment pre-fit: "
      << (!segment_not_run.empty()             ? segment_not_run
