@@ -56,21 +56,26 @@ void validateOptions(const SyntheticCaseOptions& o) {
     throw std::invalid_argument("--preset: unknown preset \"" + o.preset +
                                 "\" (known: " + cohortPresetNames() + ")");
   }
-  auto require = [](bool ok, const std::string& what) {
-    if (!ok) throw std::invalid_argument(what);
+  // "<what>, got <value>": the value as given, %g (a 1e308 in %f had 309 digits).
+  auto require = [](bool ok, const std::string& what, double value) {
+    if (ok) return;
+    char got[32];
+    std::snprintf(got, sizeof got, "%g", value);
+    throw std::invalid_argument(what + ", got " + got);
   };
   require(std::isfinite(o.edge_mm) && o.edge_mm >= 0.5 && o.edge_mm <= 5.0,
-          "--edge: must be in [0.5, 5] mm");
+          "--edge: must be in [0.5, 5] mm", o.edge_mm);
   require(o.truth_edge_ratio > 0.0 && o.truth_edge_ratio <= 1.0,
-          "truth_edge_ratio: must be in (0, 1]");
-  require(o.tracing.planes >= 1 && o.tracing.planes <= 36, "--planes: must be in [1, 36]");
+          "truth_edge_ratio: must be in (0, 1]", o.truth_edge_ratio);
+  require(o.tracing.planes >= 1 && o.tracing.planes <= 36, "--planes: must be in [1, 36]",
+          o.tracing.planes);
   require(
       std::isfinite(o.tracing.noise_mm) && o.tracing.noise_mm >= 0.0 && o.tracing.noise_mm <= 5.0,
-      "--noise: must be in [0, 5] mm");
+      "--noise: must be in [0, 5] mm", o.tracing.noise_mm);
   require(std::isfinite(o.tracing.dropout_fraction) && o.tracing.dropout_fraction >= 0.0 &&
               o.tracing.dropout_fraction <= 0.9,
-          "--dropout: must be in [0, 0.9]");
-  require(o.tip_offset_sd_mm >= 0.0, "tip_offset_sd_mm: must be >= 0");
+          "--dropout: must be in [0, 0.9]", o.tracing.dropout_fraction);
+  require(o.tip_offset_sd_mm >= 0.0, "tip_offset_sd_mm: must be >= 0", o.tip_offset_sd_mm);
 }
 
 std::string caseName(const SyntheticCaseOptions& o) {

@@ -79,7 +79,7 @@ struct TracingSamplerOptions {
   int planes = 6;
   double spacing_mm = 0.5;
   double noise_mm = 0.3;          // sigma of the in-plane Gaussian noise
-  double dropout_fraction = 0.1;  // of the total traced length, in [0, 1)
+  double dropout_fraction = 0.1;  // of the traced length, in [0, 1) (make-case: at most 0.9)
   int dropout_pieces = 0;         // gaps; <= 0 selects max(1, round(planes / 2))
 };
 

@@ -43,7 +43,10 @@ struct FitOptions {
   SlackReleaseOptions slack_release;
   std::string optimizer = "ceres";
   OptimizerSettings optimizer_settings;
-  int max_sims = 400;  // forward closures in all (seed, pre-fit, optimiser, final)
+  // Forward closures of the fit: the seed's, the pre-fits', the optimiser's, the slack
+  // release's and the tissue retry's (FitOutcome::forward_sims). Not in it: the uncertainty's
+  // and the locked-cord probe's (below), nor the closure `chordfit fit` writes out afterwards.
+  int max_sims = 400;
   // After the fit, the uncertainty of each parameter (fit_uncertainty.h) from the Jacobian at
   // the best point: the optimiser's when it computed one there, else 2 closures per parameter
   // outside max_sims (FitOutcome::uncertainty.jacobian_sims). `chordfit fit` turns it on.

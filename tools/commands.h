@@ -27,6 +27,8 @@ struct MakeValveOptions {
   std::string name = "parametric-mitral";
   // Anatomy and mesh resolution (target_edge_mm, --edge); the defaults of ValveParameters.
   ValveParameters parameters;
+  // The options given on the command line ("--ap"), for a note on those --annulus overrides.
+  std::vector<std::string> given_options;
 };
 int runMakeValve(const MakeValveOptions& options);
 // The case's files (caseFileNames, core/case_io.h). The pre-flight checks these names and
@@ -45,6 +47,9 @@ struct HeuristicCommandOptions {
 int runHeuristic(const HeuristicCommandOptions& options);
 
 struct MetricsOptions {
+  // Simulator settings over the case's "simulation" block: "KEY=VALUE" (--set), as simulate
+  // closed the mesh with (the orifice coverage reads the contact thickness).
+  std::vector<std::string> settings_overrides;
   std::string case_dir;
   std::string mesh_file;
   std::string out_file;  // optional
@@ -99,6 +104,8 @@ struct MakeCaseOptions {
   bool quiet = false;
 };
 int runMakeCase(const MakeCaseOptions& options);
+// Whether `word` names a cohort preset: "make-case prolapse-P2" meant --preset prolapse-P2.
+bool isPresetName(const std::string& word);
 // The case's files and the truth's under truth/ (syntheticCaseFileNames, core/synthetic_case.h).
 std::vector<std::string> makeCaseOutputFiles();
 
@@ -118,6 +125,7 @@ struct SweepCordOptions {
   int window = 5;           // half-width (points) of the local quadratic fit for the noise
   int threads = 2;
   std::string out_dir;
+  bool quiet = false;  // no progress lines
 };
 int runSweepCord(const SweepCordOptions& options);
 std::vector<std::string> sweepCordOutputFiles();
@@ -137,6 +145,7 @@ struct CompareOptions {
   std::string labels;                    // "a,b,...": one per file; default the file names
   std::string tissues;  // "t1,-,...": one regional tissue file per cord file, "-" = the case's
   std::string out_dir;  // optional: compare.md + compare.csv
+  int threads = 2;      // the cord sets' closures run in parallel (the same output for any count)
   bool quiet = false;
 };
 int runCompare(const CompareOptions& options);
@@ -159,7 +168,7 @@ struct FitCommandOptions {
   std::string seed_cords_file;      // optional; else the case's cords, else the heuristic
   std::string params = "scales";    // scales | groups | scales+tips
   std::string optimizer = "ceres";  // ceres | bobyqa | cobyla | sbplx | crs2
-  int max_sims = 400;               // forward closures in all
+  int max_sims = 400;               // the fit's closures (not the one written out)
   int threads = 2;
   std::vector<double> scale_bounds{0.7, 1.5};
   double tip_box_mm = 8.0;
@@ -177,6 +186,9 @@ struct FitCommandOptions {
   bool uncertainty = true;               // FitOptions::uncertainty
   std::string out_dir;
   bool quiet = false;
+  // The options given on the command line ("--tip-box"), for notes on those that do not act
+  // in this fit (after the values are checked).
+  std::vector<std::string> given_options;
 };
 int runFit(const FitCommandOptions& options);
 std::vector<std::string> fitOutputFiles();

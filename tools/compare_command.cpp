@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -20,6 +21,7 @@
 #include "core/counted.h"
 #include "core/enface_figure.h"
 #include "core/metrics.h"
+#include "core/parallel_for.h"
 #include "core/section_figure.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -334,6 +336,72 @@ std::vector<std::string> enfaceFiguresBeyond(const std::string& out_dir, std::si
   return names;
 }
 
+// Closes every set, up to options.threads at a time; each writes only its own slot, so the
+// results (and every output) are the same for any thread count. The progress lines come in
+// the order given: a finished set is printed once every set before it is. A failed closure
+// stops the sets after it (parallelFor), and the lowest failed set is reported, as with one
+// thread. Returns kExitOk or the failure's exit code.
+int closeSets(const ValveCase& valve_case, SimulationSettings settings,
+              const CompareOptions& options, std::vector<ComparedSet>& sets) {
+  const int count = static_cast<int>(sets.size());
+  const int workers = std::max(1, std::min(options.threads, count));
+  // Threads no set takes go into the closures themselves (bit-identical for any count).
+  settings.threads = std::max(settings.threads, options.threads / workers);
+  std::vector<SimulationResult> results(count);
+  std::mutex print;
+  std::vector<char> finished(count, 0);
+  int printed = 0;
+  auto printFinished = [&] {
+    for (; printed < count && finished[printed]; ++printed) {
+      const ComparedSet& s = sets[printed];
+      const SimulationResult& closed = results[printed];
+      if (!closed.ok()) {
+        printed = count;  // nothing after a failure is printed
+        return;
+      }
+      char avgd[64] = "no tracings";
+      if (s.metrics.has_tracings)
+        std::snprintf(avgd, sizeof avgd, "AvgD %.2f mm", s.metrics.deviation.mean);
+      std::fprintf(stderr, "compare: [%d/%d] %s: %s after %d steps, %.1f s, %s\n", printed + 1,
+                   count, s.label.c_str(),
+                   closed.converged ? "converged" : "NOT converged (step cap)", closed.steps,
+                   closed.seconds, avgd);
+    }
+  };
+  struct ClosureFailed {};
+  const auto closeSet = [&](int i) {
+    ComparedSet& s = sets[i];
+    if (!options.quiet) {
+      const std::lock_guard<std::mutex> lock(print);
+      std::fprintf(stderr, "compare: [%d/%d] %s: closing with %s\n", i + 1, count, s.label.c_str(),
+                   counted(s.cords.cords.size(), "cord").c_str());
+    }
+    SimulationResult& closed = results[i];
+    closed = simulateClosure(s.valve_case, s.cords, settings);
+    if (closed.ok()) {
+      s.metrics = computeMetrics(valve_case, closed.V);
+      s.converged = closed.converged;
+      s.steps = closed.steps;
+      s.closed_V = closed.V;
+    }
+    if (!options.quiet) {
+      const std::lock_guard<std::mutex> lock(print);
+      finished[i] = 1;
+      printFinished();
+    }
+    if (!closed.ok()) throw ClosureFailed{};
+  };
+  try {
+    parallelFor(count, workers, closeSet);
+  } catch (const ClosureFailed&) {
+    // Reported below, from the lowest set that failed.
+  }
+  for (int i = 0; i < count; ++i)
+    if (!results[i].ok())
+      return reportClosureFailure(results[i], sets[i].file, " (nothing written)");
+  return kExitOk;
+}
+
 }  // namespace
 
 std::vector<std::string> compareInputFiles(const CompareOptions& options) {
@@ -397,28 +465,8 @@ int runCompare(const CompareOptions& options) {
     for (ComparedSet& s : sets) s.recovery = recoveryAgainstTruth(s.cords, *truth);
   }
 
-  for (std::size_t i = 0; i < sets.size(); ++i) {
-    ComparedSet& s = sets[i];
-    if (!options.quiet) {
-      std::fprintf(stderr, "compare: [%zu/%zu] %s: closing with %s\n", i + 1, sets.size(),
-                   s.label.c_str(), counted(s.cords.cords.size(), "cord").c_str());
-    }
-    const SimulationResult closed = simulateClosure(s.valve_case, s.cords, settings);
-    if (!closed.ok()) return reportClosureFailure(closed, s.file, " (nothing written)");
-    s.metrics = computeMetrics(*valve_case, closed.V);
-    s.converged = closed.converged;
-    s.steps = closed.steps;
-    s.closed_V = closed.V;
-    if (!options.quiet) {
-      char avgd[64] = "no tracings";
-      if (s.metrics.has_tracings)
-        std::snprintf(avgd, sizeof avgd, "AvgD %.2f mm", s.metrics.deviation.mean);
-      std::fprintf(stderr, "compare: [%zu/%zu] %s: %s after %d steps, %.1f s, %s\n", i + 1,
-                   sets.size(), s.label.c_str(),
-                   closed.converged ? "converged" : "NOT converged (step cap)", closed.steps,
-                   closed.seconds, avgd);
-    }
-  }
+  if (const int failed = closeSets(*valve_case, settings, options, sets); failed != kExitOk)
+    return failed;
 
   if (!options.settings_overrides.empty()) {
     std::cout << "simulator settings over the case's (--set):";

@@ -39,6 +39,36 @@ std::string joinNames(const std::vector<std::string>& names) {
   return joined;
 }
 
+bool given(const FitCommandOptions& o, const char* option) {
+  return std::find(o.given_options.begin(), o.given_options.end(), option) != o.given_options.end();
+}
+
+// Options given to a fit they do not act on: a note each (the run goes on; the user may have
+// meant --params scales+tips, or Ceres). After the values are checked, so that a refused
+// value is not first noted as unused. On stdout, as the fit's other notes.
+void noteOptionsThatDoNotAct(const FitCommandOptions& o) {
+  if (o.params != "scales+tips") {
+    for (const char* option : {"--tip-box", "--tip-weight", "--fd-tip-step"})
+      if (given(o, option))
+        std::printf("note: fit: %s acts only with --params scales+tips (this fit: --params %s)\n",
+                    option, o.params.c_str());
+  }
+  // The finite differences serve Ceres' Jacobians; NLopt's methods take none, so with them
+  // these options reach only the uncertainty's Jacobian, and nothing without it.
+  if (o.optimizer != "ceres") {
+    for (const char* option : {"--fd-step", "--fd-tip-step", "--fd-warm", "--fd-slack-closures"})
+      if (given(o, option))
+        std::printf(
+            "note: fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
+            "derivatives)\n",
+            option,
+            o.uncertainty
+                ? "the steps after the fit (the uncertainty's Jacobian, the locked-cord probe)"
+                : "Ceres' Jacobians, so on nothing here (--no-uncertainty)",
+            o.optimizer.c_str());
+  }
+}
+
 }  // namespace
 
 int runFit(const FitCommandOptions& o) {
@@ -66,7 +96,10 @@ int runFit(const FitCommandOptions& o) {
   }
   if (o.scale_bounds.size() != 2 || !(o.scale_bounds[0] > 0.0) ||
       !(o.scale_bounds[0] < o.scale_bounds[1])) {
-    std::cerr << "error: fit: --scale-bounds: need two numbers 0 < lower < upper\n";
+    std::cerr << "error: fit: --scale-bounds: need two numbers 0 < LO < HI, got";
+    for (std::size_t i = 0; i < o.scale_bounds.size(); ++i)
+      std::cerr << (i == 0 ? " " : ",") << o.scale_bounds[i];
+    std::cerr << "\n";
     return kExitBadInput;
   }
   // A weight's upper bound: beyond it the other residuals are round-off beside its own, and
@@ -81,9 +114,9 @@ int runFit(const FitCommandOptions& o) {
       return kExitBadInput;
     }
   }
+  // --threads is checked where it is read, with every command's (main.cpp).
   if (!optionsArePositive("fit",
                           {{"--max-sims", o.max_sims},
-                           {"--threads", o.threads},
                            {"--tip-box", o.tip_box_mm},
                            {"--fd-step", o.fd_scale_step},
                            {"--fd-tip-step", o.fd_tip_step_mm}},
@@ -122,10 +155,6 @@ int runFit(const FitCommandOptions& o) {
         "secant across the map's kinks, not its slope (the default 0.01 was chosen from "
         "the map's noise, docs/fitting.md)\n",
         o.fd_scale_step, 1.0 - o.fd_scale_step, 1.0 + o.fd_scale_step);
-  if (o.threads > 64) {  // as simulate and sweep-cord
-    std::cerr << "error: fit: --threads: at most 64, got " << o.threads << "\n";
-    return kExitBadInput;
-  }
   auto valve_case = loadCaseOrReport(o.case_dir);
   if (!valve_case) return kExitBadInput;
   if (valve_case->tracings.empty()) {
@@ -216,6 +245,7 @@ int runFit(const FitCommandOptions& o) {
                                                   "fit", o.settings_overrides);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
+  noteOptionsThatDoNotAct(o);  // every input checked
 
   inverse::FitOptions options;
   options.mode = *mode;

@@ -162,4 +162,6 @@ int runMakeCase(const MakeCaseOptions& options) {
 
 std::vector<std::string> makeCaseOutputFiles() { return syntheticCaseFileNames(); }
 
+bool isPresetName(const std::string& word) { return findCohortPreset(word) != nullptr; }
+
 }  // namespace chordfit::cli

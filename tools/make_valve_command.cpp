@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
@@ -66,6 +67,19 @@ std::string changedOptions(const ValveParameters& p, const std::string& annulus_
   return text.empty() ? "the defaults" : text;
 }
 
+// --ap and --cc shape the parametric annulus only: the file's points replace it (the valve
+// was made from the file without a word about them).
+void noteDiametersIgnored(const MakeValveOptions& options) {
+  const std::vector<std::string>& given = options.given_options;
+  std::string ignored;
+  for (const char* option : {"--ap", "--cc"})
+    if (std::find(given.begin(), given.end(), option) != given.end())
+      ignored += (ignored.empty() ? "" : " and ") + std::string(option);
+  if (!ignored.empty())
+    std::cerr << "note: make-valve: " << ignored << " do" << (ignored.size() > 4 ? "" : "es")
+              << " not act with --annulus: the annulus file gives the diameters\n";
+}
+
 }  // namespace
 
 int runMakeValve(const MakeValveOptions& options) {
@@ -83,6 +97,7 @@ int runMakeValve(const MakeValveOptions& options) {
       return reportProblems(diagnostics);
     }
     parameters.annulus_polyline = curve.points;
+    noteDiametersIgnored(options);
   }
   ParametricValve valve;
   try {

@@ -18,7 +18,9 @@ int runMetrics(const MetricsOptions& options) {
   if (!valve_case) return kExitBadInput;
   // The settings give the leaflets' thickness for the orifice coverage: a bad block is refused
   // here as by the commands that simulate.
-  if (!caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kMeasure, "metrics"))
+  // --set: the settings the mesh was closed with, as simulate took them.
+  if (!caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kMeasure, "metrics",
+                            options.settings_overrides))
     return kExitBadInput;
   Diagnostics diagnostics;
   Eigen::MatrixXd V;

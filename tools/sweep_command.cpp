@@ -130,19 +130,24 @@ std::string verdictText(const nlohmann::json& n) {
 }  // namespace
 
 int runSweepCord(const SweepCordOptions& options) {
-  if (!(options.range > 0.0 && options.range < 0.5) || !(options.step > 0.0) ||
-      options.step > options.range) {
-    std::cerr << "error: sweep-cord: --range/--step: need 0 < step <= range < 0.5\n";
+  // Below 0.5 the scales 1 - range stay at half the cord's length or more.
+  if (!(options.range > 0.0 && options.range < 0.5)) {
+    std::cerr << "error: sweep-cord: --range: must be in (0, 0.5), got " << options.range << "\n";
+    return kExitBadInput;
+  }
+  if (!(options.step > 0.0) || options.step > options.range) {
+    std::cerr << "error: sweep-cord: --range/--step: --step must be in (0, --range "
+              << options.range << "], got " << options.step << "\n";
     return kExitBadInput;
   }
   // A quadratic through fewer than 5 points (window 2) leaves no residual to call noise; a
   // window wider than the most scales a sweep may have (kMaxScales) could never be filled;
-  // --cord -1 is the default (the P2 primary cord, see defaultP2PrimaryCord).
+  // --cord -1 is the default (the P2 primary cord, see defaultP2PrimaryCord). --threads is
+  // checked where it is read, with every command's (main.cpp).
   const struct {
     const char* option;
     int value, minimum, maximum;
   } counts[] = {{"--window", options.window, 2, kMaxWindow},
-                {"--threads", options.threads, 1, std::numeric_limits<int>::max()},
                 {"--cord", options.cord, -1, std::numeric_limits<int>::max()}};
   for (const auto& count : counts)
     if (count.value < count.minimum || count.value > count.maximum) {
@@ -188,8 +193,10 @@ int runSweepCord(const SweepCordOptions& options) {
     return kExitBadInput;
   }
   if (cord >= static_cast<int>(cords.cords.size())) {
-    std::cerr << "error: sweep-cord: --cord: no such cord (the set has "
-              << counted(cords.cords.size(), "cord") << ")\n";
+    const std::string valid =
+        cords.cords.empty() ? "" : ": 0.." + std::to_string(cords.cords.size() - 1);
+    std::cerr << "error: sweep-cord: --cord: no such cord " << cord << " (the set has "
+              << counted(cords.cords.size(), "cord") << valid << ")\n";
     return kExitBadInput;
   }
   const auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
@@ -202,8 +209,9 @@ int runSweepCord(const SweepCordOptions& options) {
   const Eigen::MatrixXd tracing_points = stackTracingPoints(valve_case.tracings);
   const double base = cords.cords[cord].rest_length;
   const int vertex = cords.cords[cord].vertex;
-  std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %s, %s\n", cord, vertex, base,
-               counted(count, "scale").c_str(), counted(options.threads, "thread").c_str());
+  if (!options.quiet)
+    std::fprintf(stderr, "sweeping cord %d (vertex %d, l0 %.3f mm) over %s, %s\n", cord, vertex,
+                 base, counted(count, "scale").c_str(), counted(options.threads, "thread").c_str());
 
   // Each point is an independent full closure from the open state; results go to their own
   // slot, so the output does not depend on the thread count or the order of completion. The
@@ -213,6 +221,7 @@ int runSweepCord(const SweepCordOptions& options) {
   std::vector<char> finished(count, 0);
   int printed = 0;
   auto printFinished = [&] {
+    if (options.quiet) return;
     for (; printed < count && finished[printed]; ++printed) {
       const SweepPoint& p = points[printed];
       if (!p.error.empty()) {
