@@ -767,9 +767,20 @@ TEST(ChordfitCli, ADeeplyNestedCaseFileIsRefusedNotACrash) {
   }
 }
 
+// (An unknown command: AnUnknownCommandIsNamed.) A missing argument or command is named.
 TEST(ChordfitCli, UnknownCommandsAndMissingArgumentsAreUsageErrors) {
-  EXPECT_EQ(runChordfit("frobnicate").exit_code, 2);
-  EXPECT_EQ(runChordfit("heuristic").exit_code, 2);
+  const auto no_case = runChordfit("heuristic");
+  EXPECT_EQ(no_case.exit_code, 2);
+  EXPECT_NE(no_case.err.find("heuristic"), std::string::npos) << no_case.err;
+  EXPECT_NE(no_case.err.find("CASE_DIR"), std::string::npos) << no_case.err;
+  EXPECT_NE(no_case.err.find("required"), std::string::npos) << no_case.err;
+  const auto no_out =
+      runChordfit("fit " + quoted(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal"));
+  EXPECT_EQ(no_out.exit_code, 2);
+  EXPECT_NE(no_out.err.find("error: fit: --out: required"), std::string::npos) << no_out.err;
+  const auto no_command = runChordfit("");
+  EXPECT_EQ(no_command.exit_code, 2);
+  EXPECT_NE(no_command.err.find("a command is required"), std::string::npos) << no_command.err;
   const auto r = runChordfit("--help");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("validate"), std::string::npos);

@@ -4,7 +4,9 @@
 #include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
+#include <map>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -41,8 +43,29 @@ std::string refusedFitMessage(const std::string& arguments) {
   const auto r =
       runChordfit("fit " + quoted(smallCase()) + " " + arguments + " --out " + quoted(dir / "fit"));
   EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
-  EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+  // Refused before any work: not even the --out directory (nor a staging directory in it).
+  EXPECT_FALSE(std::filesystem::exists(dir / "fit")) << arguments;
   return r.err;
+}
+
+// Every entry under `dir` (its path relative to `dir`) with its bytes ("" for a directory):
+// a snapshot to tell whether a run changed anything there.
+std::map<std::string, std::string> directorySnapshot(const std::filesystem::path& dir) {
+  std::map<std::string, std::string> files;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(dir)) {
+    const std::string name = entry.path().lexically_relative(dir).generic_string();
+    files[name] = entry.is_regular_file() ? testing::readText(entry.path()) : std::string();
+  }
+  return files;
+}
+
+// The names in `snapshot` of staging directories or what is in them (".staging-<pid>").
+std::vector<std::string> stagingEntries(const std::map<std::string, std::string>& snapshot) {
+  std::vector<std::string> staging;
+  for (const auto& [name, bytes] : snapshot)
+    if (name.rfind(".staging", 0) == 0 || name.find("/.staging") != std::string::npos)
+      staging.push_back(name);
+  return staging;
 }
 
 // "at most 3 forward runs, 1 threads": the fit's first line counts one thread in the singular.
@@ -100,13 +123,29 @@ TEST(FitCommand, RefusesAnOutputThatWouldReplaceOneOfItsInputs) {
 
 TEST(FitCommand, RejectsAnUnknownParameterModeWithExitCode2) {
   const std::string err = refusedFitMessage("--params lengths");
-  EXPECT_NE(err.find("--params"), std::string::npos) << err;
+  EXPECT_NE(err.find("error: fit: --params: expected scales, groups or scales+tips, got "
+                     "\"lengths\""),
+            std::string::npos)
+      << err;
 }
 
 TEST(FitCommand, RejectsAMissingSeedFileWithExitCode2) {
   TempDir dir;
   const std::string err = refusedFitMessage("--seed-cords " + quoted(dir / "nowhere.json"));
   EXPECT_NE(err.find("nowhere.json"), std::string::npos) << err;
+}
+
+// A seed cord set with a field of the wrong type: exit 2 naming the file and the field, before
+// any work (no --out directory).
+TEST(FitCommand, RejectsASeedWithABadFieldNamingTheFileAndTheField) {
+  TempDir dir;
+  auto cords = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  ASSERT_GT(cords["cords"].size(), 3u);
+  cords["cords"][3]["rest_length_mm"] = "x";
+  testing::writeText(dir / "bad.json", cords.dump(2));
+  const std::string err = refusedFitMessage("--seed-cords " + quoted(dir / "bad.json"));
+  EXPECT_NE(err.find("bad.json: cords[3].rest_length_mm: expected a number"), std::string::npos)
+      << err;
 }
 
 // A cord set without cords gave a "fit" of nothing with exit 0 and every output written.
@@ -121,7 +160,9 @@ TEST(FitCommand, RefusesASeedWithoutCords) {
 
 TEST(FitCommand, RejectsInvertedScaleBoundsWithExitCode2) {
   const std::string err = refusedFitMessage("--scale-bounds 1.5,0.7");
-  EXPECT_NE(err.find("--scale-bounds"), std::string::npos) << err;
+  EXPECT_NE(err.find("error: fit: --scale-bounds: need two numbers 0 < LO < HI"), std::string::npos)
+      << err;
+  EXPECT_NE(err.find("got 1.5,0.7"), std::string::npos) << err;
 }
 
 // An upper bound that lets a cord outgrow what a cord set may hold (1000 mm) used to fail only
@@ -159,7 +200,9 @@ TEST(FitCommand, RejectsAnUnknownDistanceWithExitCode2) {
 
 TEST(FitCommand, RejectsANegativeSectionWeightWithExitCode2) {
   const std::string err = refusedFitMessage("--section-weight -0.1");
-  EXPECT_NE(err.find("--section-weight"), std::string::npos) << err;
+  EXPECT_NE(err.find("error: fit: --section-weight: must be in [0, 1000], got -0.1"),
+            std::string::npos)
+      << err;
 }
 
 TEST(FitCommand, RejectsANegativeTipWeightWithExitCode2) {
@@ -255,12 +298,16 @@ TEST(FitCommand, SkipsThePrefitsWhenEveryFreeCordIsManual) {
 
 TEST(FitCommand, NamesTheNonPositiveCountOrStepWithExitCode2) {
   for (const std::string option :
-       {"--max-sims 0", "--threads 0", "--tip-box -1", "--fd-step 0", "--fd-tip-step -0.5"}) {
+       {"--max-sims 0", "--tip-box -1", "--fd-step 0", "--fd-tip-step -0.5"}) {
     const std::string err = refusedFitMessage(option);
     const std::string name = option.substr(0, option.find(' '));
     EXPECT_NE(err.find("error: fit: " + name + ": must be a positive number"), std::string::npos)
         << err;
   }
+  // --threads is checked with every command's (tools/main.cpp), in its own words.
+  const std::string err = refusedFitMessage("--threads 0");
+  EXPECT_NE(err.find("error: fit: --threads: "), std::string::npos) << err;
+  EXPECT_NE(err.find("got 0"), std::string::npos) << err;
 }
 
 // A tip box whose corner lies beyond the case's reach (50 mm for the small case: a box of at
@@ -395,14 +442,29 @@ TEST(FitCommand, AFitWorseThanTheSeedSaysWhyInTheTerminalAndTheReport) {
   EXPECT_EQ(better.out.find("worse than the seed"), std::string::npos) << better.out;
 }
 
-TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
-  TempDir dir;
+// The small case's cords with every cord but cord 0 locked (manual), written to `file`.
+nlohmann::json seedWithOnlyCordZeroFree(const std::filesystem::path& file) {
   auto seed = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
   for (std::size_t c = 1; c < seed["cords"].size(); ++c) {
     seed["cords"][c]["locked"] = true;
     seed["cords"][c]["provenance"] = "manual";
   }
-  testing::writeText(dir / "seed.json", seed.dump(2));
+  testing::writeText(file, seed.dump(2));
+  return seed;
+}
+
+// Each locked cord of `seed` (every cord but 0) written back exactly as it was: its whole
+// object (rest length, scale, provenance, lock, attachment, group), in `fitted` cords.json.
+void expectLockedCordsAsInTheSeed(const nlohmann::json& seed, const nlohmann::json& fitted,
+                                  const std::string& what) {
+  ASSERT_EQ(fitted["cords"].size(), seed["cords"].size()) << what;
+  for (std::size_t c = 1; c < seed["cords"].size(); ++c)
+    EXPECT_EQ(fitted["cords"][c].dump(), seed["cords"][c].dump()) << what << ": cord " << c;
+}
+
+TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
+  TempDir dir;
+  const auto seed = seedWithOnlyCordZeroFree(dir / "seed.json");
   const auto r =
       runChordfit("fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") +
                   " --no-prefit --max-sims 5 --threads 2 --out " + quoted(dir / "fit"));
@@ -457,6 +519,13 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
         << c;
     EXPECT_EQ(fitted["cords"][c]["provenance"], "manual") << c;
   }
+  expectLockedCordsAsInTheSeed(seed, fitted, "--params scales");
+  // The free cord moved (a fit that did nothing would pass the checks above), and the tips,
+  // not fitted with --params scales, are the seed's.
+  EXPECT_NE(fitted["cords"][0]["rest_length_mm"].get<double>(),
+            seed["cords"][0]["rest_length_mm"].get<double>());
+  EXPECT_EQ(fitted["cords"][0]["provenance"], "fitted");
+  EXPECT_EQ(fitted["tips"].dump(), seed["tips"].dump());
   // The free cord's uncertainty: one parameter row, its SD and sensitivity in the report.
   const auto& u = metrics["uncertainty"];
   EXPECT_EQ(u["free_cords"].get<int>(), 1);
@@ -477,6 +546,44 @@ TEST(FitCommand, WritesEveryOutputAndKeepsLockedCordsBitForBit) {
   EXPECT_NE(report.find("| seed |"), std::string::npos);
   EXPECT_NE(report.find("| fit |"), std::string::npos);
   EXPECT_NE(report.find("Fitted length"), std::string::npos);
+}
+
+// The same seed with --params groups (cord 0 alone in the only free group factor) and with
+// --params scales+tips (the tips move, within the tip box): the locked cords are written back
+// exactly as they were either way.
+TEST(FitCommand, KeepsLockedCordsBitForBitWithGroupsAndWithTips) {
+  TempDir dir;
+  const auto seed = seedWithOnlyCordZeroFree(dir / "seed.json");
+  const std::string fit = "--seed-cords " + quoted(dir / "seed.json") +
+                          " --no-prefit --no-uncertainty --threads 2 --quiet ";
+  // 5 = the seed, a Jacobian of the one factor (2), a trial step and the release's closure.
+  ASSERT_FALSE(fitSmallCase(fit + "--params groups --max-sims 5", dir / "groups").empty());
+  const auto groups = nlohmann::json::parse(testing::readText(dir / "groups" / "cords.json"));
+  expectLockedCordsAsInTheSeed(seed, groups, "--params groups");
+  EXPECT_NE(groups["cords"][0]["rest_length_mm"].get<double>(),
+            seed["cords"][0]["rest_length_mm"].get<double>());
+  EXPECT_EQ(groups["cords"][0]["provenance"], "fitted");
+  EXPECT_EQ(groups["tips"].dump(), seed["tips"].dump());
+
+  // 20 = the seed, a Jacobian of 7 parameters (14: a scale and two tips' 3 offsets), a trial
+  // step and the release's closure, and a few to spare.
+  const auto metrics = fitSmallCase(fit + "--params scales+tips --max-sims 20", dir / "tips");
+  ASSERT_FALSE(metrics.empty());
+  const double box = metrics["options"]["tip_box_mm"].get<double>();
+  const auto tips = nlohmann::json::parse(testing::readText(dir / "tips" / "cords.json"));
+  expectLockedCordsAsInTheSeed(seed, tips, "--params scales+tips");
+  ASSERT_EQ(tips["tips"].size(), seed["tips"].size());
+  double largest_move = 0.0;
+  for (std::size_t t = 0; t < seed["tips"].size(); ++t) {
+    EXPECT_EQ(tips["tips"][t]["name"], seed["tips"][t]["name"]);
+    for (int axis = 0; axis < 3; ++axis) {
+      const double move = tips["tips"][t]["position"][axis].get<double>() -
+                          seed["tips"][t]["position"][axis].get<double>();
+      EXPECT_LE(std::abs(move), box + 1e-9) << "tip " << t << " axis " << axis;
+      largest_move = std::max(largest_move, std::abs(move));
+    }
+  }
+  EXPECT_GT(largest_move, 0.1) << "the tips were fitted";
 }
 
 // Every cord locked, 20 % short: nothing to fit, so the locked-cord probe (report.md, metrics.json,
@@ -804,32 +911,66 @@ TEST(FitCommand, GroupFitsCountOnlyTautCordsAsDetermined) {
 }
 
 // The whole fit (pre-fits, optimiser, slack release, uncertainty, the closure written) gives
-// the same files with 1 or 2 threads; metrics.json differs only in its timings and thread count.
+// the same files with 1 or 2 threads, byte for byte, but for the wall times and the thread
+// count: metrics.json's seconds and threads, convergence.csv's elapsed column and report.md's
+// "fit time: ..., threads: ..." line. The budget reaches the optimiser (its Jacobians are
+// where the threads split the work).
 TEST(FitCommand, GivesTheSameFilesWithOneOrTwoThreads) {
   TempDir dir;
   for (const char* threads : {"1", "2"})
     ASSERT_FALSE(
-        fitSmallCase(std::string("--max-sims 30 --quiet --threads ") + threads, dir / threads)
+        fitSmallCase(std::string("--max-sims 100 --quiet --threads ") + threads, dir / threads)
             .empty());
-  for (const char* file : {"cords.json", "closed.ply", "uncertainty.csv"})
-    EXPECT_EQ(testing::readText(dir / "1" / file), testing::readText(dir / "2" / file)) << file;
-  auto stripped = [&](const char* threads) {
-    auto m = nlohmann::json::parse(testing::readText(dir / threads / "metrics.json"));
-    for (const char* key : {"fit_seconds", "sim_seconds", "threads"}) m.erase(key);
+  const auto one = directorySnapshot(dir / "1");
+  const auto two = directorySnapshot(dir / "2");
+  std::vector<std::string> names_one, names_two;
+  for (const auto& entry : one) names_one.push_back(entry.first);
+  for (const auto& entry : two) names_two.push_back(entry.first);
+  ASSERT_EQ(names_one, names_two);
+  for (const char* file : {"cords.json", "closed.ply", "closed.vtk", "uncertainty.csv",
+                           "convergence.svg", "sections.svg", "enface.svg"})
+    EXPECT_EQ(one.count(file), 1u) << file;
+  const std::set<std::string> timed = {"metrics.json", "convergence.csv", "report.md"};
+  for (const auto& [name, bytes] : one) {
+    if (timed.count(name) == 0) {
+      EXPECT_TRUE(bytes == two.at(name)) << name << " differs";
+    }
+  }
+
+  auto stripped = [](const std::string& text) {
+    auto m = nlohmann::json::parse(text);
+    for (const char* key : {"fit_seconds", "sim_seconds", "threads"}) {
+      EXPECT_TRUE(m.contains(key)) << key;
+      m.erase(key);
+    }
+    EXPECT_TRUE(m["uncertainty"].contains("seconds"));
     m["uncertainty"].erase("seconds");
     return m;
   };
-  EXPECT_EQ(stripped("1"), stripped("2"));
-  const std::string one = testing::readText(dir / "1" / "convergence.csv");
-  const std::string two = testing::readText(dir / "2" / "convergence.csv");
-  // The rows without their elapsed time (the last column).
+  EXPECT_EQ(stripped(one.at("metrics.json")), stripped(two.at("metrics.json")));
+
+  // The rows without their elapsed time (the last column); Ceres made steps.
   auto rows = [](const std::string& csv) {
     std::string kept;
     std::istringstream in(csv);
     for (std::string line; std::getline(in, line);) kept += line.substr(0, line.rfind(',')) + "\n";
     return kept;
   };
-  EXPECT_EQ(rows(one), rows(two));
+  const std::string& csv = one.at("convergence.csv");
+  ASSERT_EQ(
+      csv.rfind("stage,iteration,cost,best_cost,mean_deviation_mm,forward_sims,elapsed_s\n", 0), 0u)
+      << csv;
+  ASSERT_NE(csv.find("\nceres,1,"), std::string::npos) << csv;
+  EXPECT_EQ(rows(csv), rows(two.at("convergence.csv")));
+
+  const std::regex times("fit time: [0-9.]+ s, threads: [12]\n");
+  const std::string& report = one.at("report.md");
+  ASSERT_EQ(std::distance(std::sregex_iterator(report.begin(), report.end(), times),
+                          std::sregex_iterator()),
+            1)
+      << report;
+  EXPECT_EQ(std::regex_replace(report, times, ""),
+            std::regex_replace(two.at("report.md"), times, ""));
 }
 
 // On prolapse-P2 seed 1 with a 3 mm case mesh, a warm-started perturbation settles on another
@@ -889,6 +1030,37 @@ TEST(FitCommand, ADivergingSeedClosureExitsWith3AndWritesNothing) {
   EXPECT_EQ(r.exit_code, 3) << r.out << r.err;
   EXPECT_NE(r.err.find("seed closure failed: simulation diverged"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "fit" / "cords.json"));
+}
+
+// A fit that fails (a diverging seed closure, exit 3) or is refused (exit 2) in a directory
+// holding an earlier run's outputs leaves every file there as it was, and no staging
+// directory behind.
+TEST(FitCommand, AFailedOrRefusedFitLeavesAnEarlierRunsOutputsAsTheyWere) {
+  TempDir dir;
+  const auto earlier =
+      fitSmallCase("--no-prefit --no-uncertainty --max-sims 1 --quiet", dir / "fit");
+  ASSERT_FALSE(earlier.empty());
+  const auto before = directorySnapshot(dir / "fit");
+  ASSERT_EQ(before.count("cords.json"), 1u);
+  ASSERT_EQ(before.count("report.md"), 1u);
+
+  std::filesystem::copy(smallCase(), dir / "case", std::filesystem::copy_options::recursive);
+  auto c = nlohmann::json::parse(testing::readText(dir / "case" / "case.json"));
+  c["simulation"] = nlohmann::json::parse(testing::kDivergingSimulationJson);
+  testing::writeText(dir / "case" / "case.json", c.dump());
+  const auto diverged = runChordfit("fit " + quoted(dir / "case") +
+                                    " --max-sims 20 --quiet --out " + quoted(dir / "fit"));
+  EXPECT_EQ(diverged.exit_code, 3) << diverged.out << diverged.err;
+  auto after = directorySnapshot(dir / "fit");
+  EXPECT_TRUE(after == before) << "a diverging fit changed the earlier outputs";
+  EXPECT_TRUE(stagingEntries(after).empty()) << stagingEntries(after).front();
+
+  const auto refused = runChordfit("fit " + quoted(smallCase()) + " --optimizer newton --out " +
+                                   quoted(dir / "fit"));
+  EXPECT_EQ(refused.exit_code, 2) << refused.out << refused.err;
+  after = directorySnapshot(dir / "fit");
+  EXPECT_TRUE(after == before) << "a refused fit changed the earlier outputs";
+  EXPECT_TRUE(stagingEntries(after).empty()) << stagingEntries(after).front();
 }
 
 // The pre-fit's budget check counts the closures its common stage runs: the seed, 8 grid
@@ -975,7 +1147,26 @@ TEST(FitCommand, ChecksTheScaleBoundsOnTheSeedRestLengthsPerCord) {
   const auto metrics = fitSmallCase(
       "--seed-cords " + quoted(dir / "tiny.json") + " --max-sims 20 --no-uncertainty --quiet",
       dir / "fit");
-  EXPECT_FALSE(metrics.empty());
+  ASSERT_FALSE(metrics.empty());
+  EXPECT_EQ(metrics["scale_bounds"], nlohmann::json({0.7, 1.5})) << "the default bounds";
+  // The seed as given, then the start clamped into the bounds (a closure of its own).
+  const auto rows = parseSimpleCsv(testing::readText(dir / "fit" / "convergence.csv"));
+  ASSERT_GE(rows.size(), 3u);
+  EXPECT_EQ(rows[1][0], "seed");
+  EXPECT_EQ(rows[2][0], "clamped");
+  EXPECT_EQ(rows[2][5], "2");
+  // Every fitted cord within [0.7, 1.5] of its seed rest length (round-off aside), the tiny
+  // one included.
+  const auto fitted = nlohmann::json::parse(testing::readText(dir / "fit" / "cords.json"));
+  ASSERT_EQ(fitted["cords"].size(), 32u);
+  for (std::size_t c = 0; c < fitted["cords"].size(); ++c) {
+    const auto& cord = fitted["cords"][c];
+    const double scale =
+        cord["rest_length_mm"].get<double>() / cord["seed_rest_length_mm"].get<double>();
+    EXPECT_GE(scale, 0.7 - 1e-12) << "cord " << c;
+    EXPECT_LE(scale, 1.5 + 1e-12) << "cord " << c;
+    EXPECT_NEAR(cord["scale"].get<double>(), scale, 1e-12) << "cord " << c;
+  }
 }
 
 // Closures that reached the step cap are in report.md, not only on the terminal.

@@ -162,6 +162,12 @@ TEST(InverseFit, RecoversFourPerturbedCordsWithinTwoPercentAndKeepsLockedCords) 
   EXPECT_LE(fit.forward_sims, kRecoveryBudget);
 }
 
+// The start (every scale 0.65) lies inside the bounds, so the checks that the scales stay
+// within them would pass a fit that did nothing: each perturbed cord must also move towards the
+// truth outside the bounds. The two shortened cords (truth 0.5525) end at the lower bound 0.62.
+// The two lengthened ones (truth 0.7475) move up but need not reach 0.68: with the shortened
+// cords held at 0.62 their best lengths lie inside (measured 0.6762 and 0.6672; a fit started
+// at the corner 0.68 moves the second back to 0.663, at a lower cost than the corner's).
 TEST(InverseFit, KeepsEveryScaleWithinItsBounds) {
   const RecoveryProblem& p = recoveryProblem();
   inverse::FitOptions options = perCordOptions("ceres", 40, 2);
@@ -169,10 +175,23 @@ TEST(InverseFit, KeepsEveryScaleWithinItsBounds) {
   options.bounds.scale_upper = 0.68;
   const inverse::FitOutcome fit = inverse::fitCords(p.valve_case, p.base, p.settings, options);
   ASSERT_TRUE(fit.ok()) << fit.error;
+  int shortened = 0, lengthened = 0;
   for (int c : p.perturbed) {
-    EXPECT_GE(fit.fitted.cords[c].scale(), 0.62 - 1e-12) << "cord " << c;
-    EXPECT_LE(fit.fitted.cords[c].scale(), 0.68 + 1e-12) << "cord " << c;
+    const double scale = fit.fitted.cords[c].scale();
+    EXPECT_GE(scale, 0.62 - 1e-12) << "cord " << c;
+    EXPECT_LE(scale, 0.68 + 1e-12) << "cord " << c;
+    if (p.truth.cords[c].scale() < 0.62) {
+      ++shortened;
+      EXPECT_NEAR(scale, 0.62, 1e-3) << "cord " << c << " (truth below the lower bound)";
+    } else {
+      ASSERT_GT(p.truth.cords[c].scale(), 0.68) << "cord " << c;
+      ++lengthened;
+      EXPECT_GT(scale, 0.66) << "cord " << c << " (truth above the upper bound, start 0.65)";
+    }
   }
+  EXPECT_GT(shortened, 0);
+  EXPECT_GT(lengthened, 0);
+  EXPECT_LT(fit.final_evaluation.cost, fit.seed_evaluation.cost);
 }
 
 TEST(InverseFit, EveryOptimizerRunsThroughTheCommonInterfaceWithinItsBudget) {

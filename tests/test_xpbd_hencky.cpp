@@ -27,15 +27,16 @@ SimulationResult pressuriseDisc(double pressure_mmhg, const LeafletMaterial& mat
   settings.material = material;
   settings.pressure_mmhg = pressure_mmhg;
   settings.contact = false;
-  settings.tolerance_mm = 1e-6;  // tight: the deflection is compared to 5 %, not to 1e-4
+  settings.tolerance_mm = 1e-6;  // tight: the deflection is compared to 3 %, not to 1e-4
   settings.max_steps = 100000;
   return simulate(model, settings);
 }
 
 TEST(XpbdHencky, ClampedDiscDeflectionMatchesHenckyAtTwoPressures) {
-  // The issue allows 15 %; measured 0.5 and 1.5 %. Deflection goes as (E h)^(-1/3), so 15 %
-  // would let the stiffness mapping be off by -39 to +52 %; 5 % holds it to about +-15 %.
-  constexpr double kTolerance = 0.05;
+  // The issue allows 15 %; measured 0.5 and 1.5 % (0.50 and 1.47 %). Deflection goes as
+  // (E h)^(-1/3), so 15 % would let the stiffness mapping be off by -39 to +52 %; 3 % holds it to
+  // -8.5 to +9.6 %, with twice the larger measured error as margin.
+  constexpr double kTolerance = 0.03;
   constexpr double kRadius = 10.0;  // mm
   // Thin, stiff membrane so that bending is negligible (w0 / h >> 1), as Hencky assumes;
   // deflections stay moderate (w0 / a ~ 0.15 - 0.25).
