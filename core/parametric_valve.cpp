@@ -168,10 +168,15 @@ void validateParameters(const ValveParameters& p) {
   // Saddle heights: 0 (flat) up to half the smaller diameter. The message names the
   // diameters: a small --cc makes the default heights too tall, and naming only the height
   // blamed a value the user never gave.
-  const double max_saddle = 0.5 * std::min(p.ap_diameter_mm, p.cc_diameter_mm);
-  const std::string saddle_bound = " (half the smaller of ap_diameter_mm " +
-                                   formatNumber(p.ap_diameter_mm) + " and cc_diameter_mm " +
-                                   formatNumber(p.cc_diameter_mm) + ")";
+  // With an annulus polyline the diameters do not act and the heights only through their
+  // ratio (closedPolylineRing): bounded as the polyline's span is.
+  const bool polyline = p.annulus_polyline.has_value();
+  const double max_saddle =
+      polyline ? 0.5 * kMaxAnnulusSpanMm : 0.5 * std::min(p.ap_diameter_mm, p.cc_diameter_mm);
+  const std::string saddle_bound =
+      polyline ? " (with annulus_polyline only the closed/open ratio acts)"
+               : " (half the smaller of ap_diameter_mm " + formatNumber(p.ap_diameter_mm) +
+                     " and cc_diameter_mm " + formatNumber(p.cc_diameter_mm) + ")";
   requireInRange("saddle_height_mm", p.saddle_height_mm, 0.0, max_saddle, false, false,
                  saddle_bound);
   requireInRange("closed_saddle_height_mm", p.closed_saddle_height_mm, 0.0, max_saddle, false,

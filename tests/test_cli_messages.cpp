@@ -131,6 +131,9 @@ TEST(MakeValveCommand, NotesDiametersTheAnnulusFileOverridesAndListsItsFormats) 
   EXPECT_NE(r.err.find("note: make-valve: --ap and --cc do not act with --annulus"),
             std::string::npos)
       << r.err;
+  // Nor do they bound the saddle heights then (--ap 10 refused the default closed saddle).
+  r = runChordfit("make-valve --edge 3" + annulus + " --ap 10 --out " + quoted(dir / "d"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
   r = runChordfit("make-valve --edge 3" + annulus + " --out " + quoted(dir / "c"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(r.err.find("note:"), std::string::npos) << r.err;
@@ -198,6 +201,9 @@ TEST(Cli, RewordsTheCommonParseErrors) {
                 "error: fit: --scale-bounds: given 2 times; give it once");
   expectRefused(fit + " --scale-bounds 1.5,0.7",
                 "error: fit: --scale-bounds: need two numbers 0 < LO < HI, got 1.5,0.7");
+  // Given once, with four values: not "given 2 times".
+  expectRefused(fit + " --scale-bounds 0.5,1.2,0.6,1.3",
+                "error: fit: --scale-bounds: expected two numbers LO,HI, got 4 values");
   EXPECT_FALSE(fs::exists(dir / "v"));
   EXPECT_FALSE(fs::exists(dir / "f"));
 }
@@ -211,6 +217,20 @@ TEST(Cli, IntegerOptionsTakeIntegralValuesInExponentForm) {
   expectRefused(fit + " --max-sims 1e3 --threads 2e0", "error: fit: --params: expected scales");
   expectRefused(fit + " --max-sims 1.5e0",
                 "error: fit: --max-sims: expected an integer, got '1.5e0'");
+  // Base 10 always: "+2" and "02" are 2, a hexadecimal value is no integer of this CLI (CLI11
+  // alone read "077" as octal 63 and took "0x2").
+  expectRefused(fit + " --max-sims +1000 --threads 02", "error: fit: --params: expected scales");
+  expectRefused(fit + " --threads 0x2",
+                "error: fit: --threads: must be an integer in [1, 64], got 0x2");
+  expectRefused(fit + " --max-sims 0x2", "error: fit: --max-sims: expected an integer, got '0x2'");
+  expectRefused("make-case --preset normal-1 --planes 077 --out " + quoted(dir / "c"), "got 77");
+  // Beyond the option's type: the value as given, not as rewritten.
+  expectRefused(fit + " --max-sims 1e10",
+                "error: fit: --max-sims: must be at most 2147483647, got 1e10");
+  expectRefused(fit + " --max-sims -99999999999",
+                "error: fit: --max-sims: must be at least -2147483648, got -99999999999");
+  expectRefused(fit + " --threads 1e308",
+                "error: fit: --threads: must be an integer in [1, 64], got 1e308");
 }
 
 // A refused value is refused first; the note that the option does not act in this fit came

@@ -250,8 +250,7 @@ TEST(MakeCaseCli, RejectsBadPresetsAndOptionsWithExitTwo) {
   r = runChordfit("make-case --preset normal-1 --out " + quoted(dir / "c") +
                   " --seed 99999999999999999999");
   EXPECT_EQ(r.exit_code, 2) << "nor saturate a seed past 2^64 - 1 to 2^64 - 1";
-  EXPECT_NE(r.err.find("--seed: must be at most 18446744073709551615 (2^64 - 1), got "
-                       "99999999999999999999"),
+  EXPECT_NE(r.err.find("--seed: must be at most 18446744073709551615, got 99999999999999999999"),
             std::string::npos)
       << r.err;
   EXPECT_FALSE(fs::exists(dir / "c" / "case.json"));

@@ -1,14 +1,13 @@
 // chordfit: command-line entry. The only translation unit that includes CLI11 (slow headers);
 // it fills the option structs of commands.h and dispatches.
 #include <algorithm>
-#include <cerrno>
-#include <cmath>
 #include <csignal>
-#include <cstdio>
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <iostream>
+#include <limits>
+#include <optional>
 #include <regex>
 #include <string>
 #include <vector>
@@ -19,6 +18,7 @@
 #include "core/json_fields.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/integer_text.h"
 #include "tools/revision.h"
 #include "tools/staged_output.h"
 
@@ -26,24 +26,31 @@ namespace {
 
 using namespace chordfit::cli;
 
-// Integer options also take an integral value written in exponent or decimal form ("1e3",
-// "400.0"), as the integer keys of a case's settings do (docs/case-format.md): CLI11 reads
-// only plain digits. Anything else is left as it is, for the option's checks to refuse.
-CLI::Validator integralInAnyForm() {
+// Integer options take an integral value in any decimal form ("1e3", "400.0", "+3", "007"), as
+// the integer keys of a case's settings do (docs/case-format.md), always in base 10 (CLI11
+// alone reads "077" as octal and takes "0x40"): tools/integer_text.h. Values beyond the
+// option's type are refused here, naming the value as given (CLI11 would say "Could not
+// convert", or wrap "-1" into an unsigned option); the option's own checks then see plain
+// digits. `range`: the refusal names it ("must be an integer in [1, 64], got 2.5") where the
+// option's check would.
+template <typename Integer>
+CLI::Validator integralInAnyForm(const std::string& range) {
+  const std::string lowest = std::to_string(std::numeric_limits<Integer>::min());
+  const std::string highest = std::to_string(std::numeric_limits<Integer>::max());
   return CLI::Validator(
-      [](std::string& value) {
-        if (value.find_first_of(".eE") == std::string::npos ||
-            value.find_first_of("xX") != std::string::npos)
-          return std::string();
-        constexpr double kLargestExactInteger = 9007199254740992.0;  // 2^53
-        char* end = nullptr;
-        const double number = std::strtod(value.c_str(), &end);
-        if (end == value.c_str() + value.size() && std::isfinite(number) &&
-            number == std::floor(number) && std::abs(number) <= kLargestExactInteger) {
-          char digits[32];
-          std::snprintf(digits, sizeof digits, "%.0f", number);
-          value = digits;
-        }
+      [range, lowest, highest](std::string& value) {
+        const std::optional<std::string> integer = canonicalInteger(value);
+        const bool below = integer && compareIntegerTexts(*integer, lowest) < 0;
+        const bool above = integer && compareIntegerTexts(*integer, highest) > 0;
+        if (!range.empty() && (!integer || below || above))
+          return "must be an integer in " + range + ", got " + value;
+        if (!integer) return "expected an integer, got '" + value + "'";
+        if (below)
+          return (lowest == "0" ? std::string("must be a non-negative integer")
+                                : "must be at least " + lowest) +
+                 ", got " + value;
+        if (above) return "must be at most " + highest + ", got " + value;
+        value = *integer;
         return std::string();
       },
       "");
@@ -51,12 +58,13 @@ CLI::Validator integralInAnyForm() {
 
 template <typename Integer>
 CLI::Option* addIntegerOption(CLI::App* cmd, const std::string& name, Integer& value,
-                              const std::string& help) {
-  return cmd->add_option(name, value, help)->transform(integralInAnyForm());
+                              const std::string& help, const std::string& range = "") {
+  return cmd->add_option(name, value, help)->transform(integralInAnyForm<Integer>(range));
 }
 
-// --threads of every command: checked here, on the text, so that "2.5" and "abc" are named as
-// what they are (CLI::Range said "Value 2.5 not in range 1 to 64").
+// --threads of every command: checked here, on the text (plain digits after integralInAnyForm),
+// so that "2.5" and "abc" are named as what they are (CLI::Range said "Value 2.5 not in range
+// 1 to 64").
 constexpr int kMaxThreads = 64;
 
 CLI::Validator threadCount() {
@@ -76,7 +84,8 @@ CLI::Validator threadCount() {
 // `what`: the closures the threads run, e.g. "the closure".
 void addThreadsOption(CLI::App* cmd, int& threads, const std::string& what) {
   addIntegerOption(cmd, "--threads", threads,
-                   "N threads for " + what + ", 1-64; the same result for any count")
+                   "Threads for " + what + ", 1-64; the same result for any count",
+                   "[1, " + std::to_string(kMaxThreads) + "]")
       ->check(threadCount())
       ->capture_default_str();
 }
@@ -112,10 +121,12 @@ void addMakeValve(CLI::App& app, MakeValveOptions& o) {
   cmd->add_option("--cc", p.cc_diameter_mm, "Commissural annulus diameter (open), mm, in (0, 100]")
       ->capture_default_str();
   cmd->add_option("--saddle", p.saddle_height_mm,
-                  "Annulus saddle height (open), mm, at most half the smaller diameter")
+                  "Annulus saddle height (open), mm, at most half the smaller diameter (with "
+                  "--annulus only the closed/open ratio acts)")
       ->capture_default_str();
   cmd->add_option("--closed-saddle", p.closed_saddle_height_mm,
-                  "Saddle height (closed), mm, at most half the smaller diameter")
+                  "Saddle height (closed), mm, at most half the smaller diameter (with --annulus "
+                  "only the closed/open ratio acts)")
       ->capture_default_str();
   cmd->add_option("--anterior-height", p.anterior_height_mm,
                   "A2 height, annulus to free edge, mm, > 0")
@@ -208,7 +219,7 @@ void addSweepCord(CLI::App& app, SweepCordOptions& o) {
   cmd->add_option("--cords", o.cords_file, kCordsFileHelp);
   cmd->add_option("--tissue", o.tissue_file, kTissueFileHelp);
   addIntegerOption(cmd, "--cord", o.cord,
-                   "Cord index K, 0 to the set's cords - 1 (default: the P2 primary cord nearest "
+                   "Cord index, 0 to the set's cords - 1 (default: the P2 primary cord nearest "
                    "P2's centre)")
       ->check(CLI::Validator(
           [](const std::string& value) {
@@ -237,21 +248,9 @@ void addMakeCase(CLI::App& app, MakeCaseOptions& o) {
   cmd->add_option("--preset", o.preset, "Cohort preset (see --list); required unless --list");
   cmd->add_option("--out", o.out_dir,
                   "Output directory: the case, its truth in truth/; required unless --list");
+  // Unsigned: "-1" is refused, not wrapped to 2^64 - 1, and a value past 2^64 - 1 is refused,
+  // not saturated (seed 99999999999999999999 made the case of seed 18446744073709551615).
   addIntegerOption(cmd, "--seed", o.seed, "Patient seed (same seed => identical files)")
-      ->check(CLI::Validator(
-          // The unsigned option would wrap "-1" and saturate past 2^64 - 1 silently (seed
-          // 99999999999999999999 made the case of seed 18446744073709551615).
-          [](std::string& value) {
-            const bool digits =
-                !value.empty() && std::all_of(value.begin(), value.end(),
-                                              [](char c) { return c >= '0' && c <= '9'; });
-            if (!digits) return "must be a non-negative integer, got " + value;
-            errno = 0;
-            std::strtoull(value.c_str(), nullptr, 10);
-            return errno == ERANGE ? "must be at most 18446744073709551615 (2^64 - 1), got " + value
-                                   : std::string();
-          },
-          ""))
       ->capture_default_str();
   addIntegerOption(cmd, "--planes", o.planes, "Long-axis tracing planes, in [1, 36]")
       ->capture_default_str();
@@ -493,32 +492,33 @@ std::string expectedValue(const CLI::Option* option) {
 // "Could not convert: --edge = abc" -> "--edge: expected a number, got 'abc'". Others as
 // CLI11 says them.
 std::string plainParseMessage(CLI::App& app, const std::string& command,
-                              const CLI::ParseError& error) {
+                              const CLI::ParseError& error,
+                              const std::vector<std::string>& arguments) {
   const std::string what = error.what();
   std::smatch match;
   if (dynamic_cast<const CLI::ConversionError*>(&error) != nullptr &&
       std::regex_match(what, match, std::regex("Could not convert: (.+?) = (.*)"))) {
     const std::string name = match[1], value = match[2];
     const CLI::Option* option = findOption(app, command, name);
-    // A whole number CLI11 could not store: too large, not malformed.
-    if (expectedValue(option) == "an integer" && std::regex_match(value, std::regex("-?[0-9]+")))
-      return name + ": " + value + " is out of range (at most 2147483647)";
     return name + ": expected " + expectedValue(option) + ", got '" + value + "'";
   }
-  // The count of values: "--edge 2 --edge 3" gives 2 where 1 is taken, "--scale-bounds 0.5"
-  // 1 where 2 are.
-  auto countMessage = [&](const std::string& name, int wanted, int received) {
-    if (received > wanted && received % wanted == 0)
-      return name + ": given " + std::to_string(received / wanted) + " times; give it once";
+  // The count of values CLI11 received: "--edge 2 --edge 3" gives 2 where 1 is taken,
+  // "--scale-bounds 0.5" 1 where 2 are.
+  auto countMessage = [&](const std::string& name, int received) {
+    // "--scale-bounds 0.5,1.2,0.6,1.3" is given once with 4 values: count the option itself.
+    const long given = std::count_if(arguments.begin(), arguments.end(), [&](const std::string& a) {
+      return a == name || a.rfind(name + "=", 0) == 0;
+    });
+    if (given > 1) return name + ": given " + std::to_string(given) + " times; give it once";
     return name + ": expected " + expectedValue(findOption(app, command, name)) + ", got " +
            std::to_string(received) + (received == 1 ? " value" : " values");
   };
   if (std::regex_match(what, match,
                        std::regex("(.+): At (Most|least) ([0-9]+) required but received ([0-9]+)")))
-    return countMessage(match[1], std::stoi(match[3]), std::stoi(match[4]));
+    return countMessage(match[1], std::stoi(match[4]));
   if (std::regex_match(what, match,
                        std::regex("Expected exactly ([0-9]+) arguments to (.+), got ([0-9]+)")))
-    return countMessage(match[2], std::stoi(match[1]), std::stoi(match[3]));
+    return countMessage(match[2], std::stoi(match[3]));
   if (std::regex_match(what, match, std::regex("(.+) is required")) && match[1] != "A subcommand")
     return std::string(match[1]) + ": required";
   if (dynamic_cast<const CLI::ExtrasError*>(&error) != nullptr) {
@@ -605,8 +605,8 @@ int main(int argc, char** argv) {
     // Every other usage error in the form of the commands' own checks: "error: COMMAND: ...".
     const std::string command = argc > 1 && argv[1][0] != '-' ? argv[1] : "";
     std::cerr << "error: " << (command.empty() ? "" : command + ": ")
-              << plainParseMessage(app, command, e) << " (chordfit "
-              << (command.empty() ? "" : command + " ") << "--help)\n";
+              << plainParseMessage(app, command, e, std::vector<std::string>(argv, argv + argc))
+              << " (chordfit " << (command.empty() ? "" : command + " ") << "--help)\n";
     if (!command.empty() && dynamic_cast<const CLI::ExtrasError*>(&e) != nullptr)
       printStrayArgumentHints(app, command, argc, argv);
     return kExitBadInput;
