@@ -1,6 +1,8 @@
 // The staging directory behind every command's output set (tools/staged_output.h): all or
 // nothing, and only the file names the command declares (which its pre-flight checks).
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -46,10 +48,20 @@ TEST(StagedOutput, RemovesTheStagingDirectoriesOfRunsThatNoLongerExist) {
   const fs::path abandoned = out / (".staging-" + std::to_string(child));
   const fs::path running = out / (".staging-" + std::to_string(::getppid()));
   const fs::path not_staging = out / ".staging-notes";
-  for (const fs::path& dir : {abandoned, running, not_staging}) {
+  // A run on another host or in another container sharing the directory: its pid means
+  // nothing here (this one has ended), its lock is what tells.
+  const pid_t other_host_child = ::fork();
+  if (other_host_child == 0) ::_exit(0);
+  ASSERT_GT(other_host_child, 0);
+  ::waitpid(other_host_child, nullptr, 0);
+  const fs::path locked = out / (".staging-" + std::to_string(other_host_child));
+  for (const fs::path& dir : {abandoned, running, not_staging, locked}) {
     fs::create_directories(dir);
     writeText(dir / "cords.json", "{");
   }
+  const int lock = ::open(locked.c_str(), O_RDONLY | O_DIRECTORY);
+  ASSERT_GE(lock, 0);
+  ASSERT_EQ(::flock(lock, LOCK_EX | LOCK_NB), 0);
   {
     StagedOutput staged(out, {"a.txt"});
     writeText(staged.dir() / "a.txt", "a");
@@ -58,6 +70,8 @@ TEST(StagedOutput, RemovesTheStagingDirectoriesOfRunsThatNoLongerExist) {
   EXPECT_FALSE(fs::exists(abandoned)) << "its run has ended";
   EXPECT_TRUE(fs::exists(running / "cords.json")) << "its process still runs";
   EXPECT_TRUE(fs::exists(not_staging / "cords.json")) << "not a staging directory's name";
+  EXPECT_TRUE(fs::exists(locked / "cords.json")) << "its run holds the lock";
+  ::close(lock);
   EXPECT_EQ(readText(out / "a.txt"), "a");
 }
 

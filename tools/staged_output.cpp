@@ -1,6 +1,8 @@
 #include "tools/staged_output.h"
 
+#include <fcntl.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -32,18 +34,36 @@ long stagingPid(const std::string& name) {
   return std::regex_match(name, match, staging) ? std::stol(match[1].str()) : -1;
 }
 
+// An exclusive lock on `dir` held while the returned descriptor stays open (flock(2): it goes
+// with the process, however it ends, and is seen across containers sharing the directory and
+// by NFS clients); -1 when it is held elsewhere or cannot be taken.
+int lockDirectory(const fs::path& dir) {
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return -1;
+  if (::flock(fd, LOCK_EX | LOCK_NB) != 0) {
+    ::close(fd);
+    return -1;
+  }
+  return fd;
+}
+
 // Removes the staging directories in `out` of runs that no longer exist: a run killed before
 // its destructor ran (SIGKILL, Ctrl-C) left its staged files there, and a later run would
-// otherwise leave them for good. A live process of that pid keeps its directory (another run
-// writing there now, or an unrelated process that reused the pid: left alone either way).
+// otherwise leave them for good. A live run holds its directory's lock (seen from another
+// container or host too, where its pid is not); a run of a chordfit that took no lock is seen
+// by its pid here. A live process of that pid keeps the directory either way (an unrelated
+// one that reused the pid leaves it for a later run).
 void removeAbandonedStagingDirectories(const fs::path& out) {
   std::error_code ec;
   for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
     const long pid = stagingPid(it->path().filename().string());
-    if (pid <= 0 || pid == ::getpid()) continue;
-    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;  // still running
     std::error_code ignored;
-    if (fs::is_directory(it->symlink_status(ignored))) fs::remove_all(it->path(), ignored);
+    if (pid <= 0 || pid == ::getpid() || !fs::is_directory(it->symlink_status(ignored))) continue;
+    const int lock = lockDirectory(it->path());
+    if (lock < 0) continue;  // a live run's, wherever it runs
+    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
+      fs::remove_all(it->path(), ignored);
+    ::close(lock);
   }
 }
 
@@ -62,11 +82,13 @@ StagedOutput::StagedOutput(const fs::path& out_dir, std::vector<std::string> dec
   removeAbandonedStagingDirectories(out_);
   fs::remove_all(staging_);
   fs::create_directories(staging_);
+  lock_fd_ = lockDirectory(staging_);  // so that no other run takes it for abandoned
 }
 
 StagedOutput::~StagedOutput() {
   std::error_code ignored;
   fs::remove_all(staging_, ignored);
+  if (lock_fd_ >= 0) ::close(lock_fd_);
   if (created_out_ && !published_) fs::remove(out_, ignored);  // only when empty
 }
 

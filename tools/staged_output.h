@@ -67,6 +67,7 @@ class StagedOutput {
   std::vector<std::string> declared_, superseded_;
   std::string command_;
   bool created_out_ = false, published_ = false;
+  int lock_fd_ = -1;  // holds the staging directory's lock (staged_output.cpp) while open
 };
 
 // The command name make-valve, make-case and import-mesh record: each writes a whole case
