@@ -165,18 +165,11 @@ bool readCurve(const std::filesystem::path& path, Curve& curve, Diagnostics& dia
   const std::string file = display_name.empty() ? path.string() : display_name;
   if (isDelimitedCurveFile(path)) return readDelimitedCurve(path, file, curve, diagnostics);
   try {
-    if (const std::string problem = inputFileProblem(path, "a curve file"); !problem.empty()) {
-      diagnostics.error(file, "", problem);
-      return false;
-    }
-    std::string text;
-    if (!readWholeFile(path, text)) {
-      diagnostics.error(file, "", cannotBeRead(path));
-      return false;
-    }
-    const auto document = parseJson(text, file, diagnostics);
+    const std::optional<std::string> text = readInputText(path, file, "a curve file", diagnostics);
+    if (!text) return false;
+    const auto document = parseJson(*text, file, diagnostics);
     const std::string extension = asciiLowercase(path.extension().string());
-    if (!document && extension != ".json" && !nlohmann::json::accept(text)) {
+    if (!document && extension != ".json" && !nlohmann::json::accept(*text)) {
       // A ".dat" or ".xyz" file of numbers read as JSON says only "malformed JSON".
       diagnostics.error(file, "",
                         "read as JSON, " +

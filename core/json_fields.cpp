@@ -142,18 +142,25 @@ std::optional<nlohmann::json> parseJson(const std::string& text, const std::stri
   return std::nullopt;
 }
 
-std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
-                                           const std::string& file, Diagnostics& diagnostics) {
-  std::string text;
-  if (const std::string problem = inputFileProblem(path, "a JSON file"); !problem.empty()) {
+std::optional<std::string> readInputText(const std::filesystem::path& path, const std::string& file,
+                                         const std::string& what, Diagnostics& diagnostics) {
+  if (const std::string problem = inputFileProblem(path, what); !problem.empty()) {
     diagnostics.error(file, "", problem);
     return std::nullopt;
   }
+  std::string text;
   if (!readWholeFile(path, text)) {
     diagnostics.error(file, "", cannotBeRead(path));
     return std::nullopt;
   }
-  return parseJson(text, file, diagnostics);
+  return text;
+}
+
+std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
+                                           const std::string& file, Diagnostics& diagnostics) {
+  const std::optional<std::string> text = readInputText(path, file, "a JSON file", diagnostics);
+  if (!text) return std::nullopt;
+  return parseJson(*text, file, diagnostics);
 }
 
 std::string jsonTypeName(const nlohmann::json& value) {

@@ -28,6 +28,12 @@ std::optional<nlohmann::json> parseJson(const std::string& text, const std::stri
 std::optional<nlohmann::json> loadJsonFile(const std::filesystem::path& path,
                                            const std::string& file, Diagnostics& diagnostics);
 
+// The reading half of loadJsonFile, for a reader that looks at the text itself when it does
+// not parse (readCurve): its bytes, or nullopt with the problem reported. `what`: the kind of
+// file the messages name ("a JSON file", "a curve file").
+std::optional<std::string> readInputText(const std::filesystem::path& path, const std::string& file,
+                                         const std::string& what, Diagnostics& diagnostics);
+
 // "object", "array", "string", "number", "boolean", "null".
 std::string jsonTypeName(const nlohmann::json& value);
 

@@ -23,6 +23,7 @@
 #include "tools/command_support.h"
 #include "tools/commands.h"
 #include "tools/fit_report.h"
+#include "tools/shell_word.h"
 #include "tools/staged_output.h"
 
 namespace chordfit::cli {
@@ -460,9 +461,10 @@ int runFit(const FitCommandOptions& o) {
     const std::filesystem::path out_dir(o.out_dir);
     std::cout << "the fitted closure is on softer tissue ("
               << (fit.tissue_retry.kept ? "tissue retry" : "tissue pre-fit")
-              << "): chordfit simulate " << o.case_dir << " --cords "
-              << (out_dir / "cords.json").string() << " --tissue "
-              << (out_dir / "tissue.json").string() << " reproduces it (compare: --tissues)\n";
+              << "): chordfit simulate " << shellWord(o.case_dir) << " --cords "
+              << shellWord((out_dir / "cords.json").string()) << " --tissue "
+              << shellWord((out_dir / "tissue.json").string())
+              << " reproduces it (compare: --tissues)\n";
   }
   std::cout << wroteLine(o.out_dir, published) << "\n";
   return kExitOk;

@@ -22,6 +22,7 @@
 #include "core/mesh_io.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/shell_word.h"
 #include "tools/staged_output.h"
 
 namespace chordfit::cli {
@@ -385,10 +386,10 @@ int runImportMesh(const ImportMeshOptions& options) {
         "next: add the tracings of the closed valve (--tracings, or docs/case-format.md "
         "\"tracings\") to fit; `chordfit simulate %s --out DIR` closes it with the "
         "heuristic cords\n",
-        options.out_dir.c_str());
+        shellWord(options.out_dir).c_str());
   } else {
     std::printf("next: `chordfit fit %s --out DIR` fits the cords to the tracings\n",
-                options.out_dir.c_str());
+                shellWord(options.out_dir).c_str());
   }
   return kExitOk;
 }
