@@ -310,6 +310,15 @@ TEST(ImportMeshCli, WeldsAMeshThatRepeatsEveryTrianglesCorners) {
   EXPECT_EQ(loaded->mesh.V.rows(), truth.mesh.V.rows());
   EXPECT_EQ(loaded->mesh.F.rows(), truth.mesh.F.rows());
   EXPECT_EQ(loaded->mesh.annulus.size(), truth.mesh.annulus.size());
+
+  // --keep-seams leaves the triangles apart: every triangle's rim is a boundary loop, so no
+  // loop passes near both commissures and the import is refused, nothing welded.
+  const auto kept =
+      runChordfit("import-mesh " + quoted(dir / "soup.ply") + " --landmarks " +
+                  quoted(dir / "landmarks.json") + " --keep-seams --out " + quoted(dir / "kept"));
+  EXPECT_EQ(kept.exit_code, 2) << kept.out;
+  EXPECT_EQ(kept.out.find("merged into others"), std::string::npos) << kept.out;
+  EXPECT_FALSE(fs::exists(dir / "kept"));
 }
 
 // import-mesh used to refuse any directory that was not empty, its own earlier output too.

@@ -231,6 +231,7 @@ struct ImportMeshOptions {
   std::string pm_tips_file;         // optional curve file: PM tips, anterolateral first
   std::string name;                 // default: the output directory's name
   std::string out_dir;
+  bool keep_seams = false;  // coincident vertices stay apart (default: welded)
 };
 int runImportMesh(const ImportMeshOptions& options);
 // The case's files, as make-valve's.

@@ -256,13 +256,15 @@ int runImportMesh(const ImportMeshOptions& options) {
   // against it (a mesh in metres made every landmark "130 mm from the nearest boundary loop").
   // Exporters that write each triangle with its own corners leave a mesh of separate
   // triangles, whose boundary loops are every triangle's rim: the landmarks were then blamed
-  // ("24 mm from the nearest boundary loop"). A segmentation's surface is one sheet: weld it.
-  if (diagnostics.ok() && V.allFinite() &&
+  // ("24 mm from the nearest boundary loop"). A segmentation's surface is one sheet: weld it,
+  // unless the user keeps a seam open on purpose (--keep-seams).
+  if (!options.keep_seams && diagnostics.ok() && V.allFinite() &&
       (F.size() == 0 || (F.minCoeff() >= 0 && F.maxCoeff() < V.rows()))) {
     if (const int merged = weldCoincidentVertices(V, F); merged > 0)
       std::printf(
           "note: import-mesh: %s: %s merged into others at the same position, %s left (an "
-          "exporter that repeats each triangle's corners leaves separate triangles)\n",
+          "exporter that repeats each triangle's corners leaves separate triangles; "
+          "--keep-seams keeps them apart)\n",
           options.mesh_file.c_str(), counted(merged, "vertex", "vertices").c_str(),
           counted(V.rows(), "vertex", "vertices").c_str());
   }

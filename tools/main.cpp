@@ -310,6 +310,9 @@ void addImportMesh(CLI::App& app, ImportMeshOptions& o) {
                   "the heuristic places them)");
   cmd->add_option("--name", o.name,
                   "Case name, printable characters (default: the output directory's name)");
+  cmd->add_flag("--keep-seams", o.keep_seams,
+                "Keep vertices at the same position apart (default: welded into one sheet; "
+                "for a seam the mesh leaves open on purpose)");
   cmd->add_option("--out", o.out_dir,
                   "Output directory: the case (an earlier chordfit case there is replaced; a "
                   "file of yours the case would replace is refused)")
