@@ -233,6 +233,17 @@ TEST(Cli, IntegerOptionsTakeIntegralValuesInExponentForm) {
                 "error: fit: --threads: must be an integer in [1, 64], got 1e308");
 }
 
+// A case without tracings names its case.json as every case problem does ("DIR/case.json:
+// tracings: ..."; it read "DIR: case.json: tracings"), and nothing is written.
+TEST(FitCommand, NamesTheCaseFileOfACaseWithoutTracings) {
+  TempDir dir;
+  ASSERT_EQ(runChordfit("make-valve --edge 3 --out " + quoted(dir / "valve")).exit_code, 0);
+  expectRefused(
+      "fit " + quoted(dir / "valve") + " --out " + quoted(dir / "fit"),
+      "error: " + (dir / "valve" / "case.json").string() + ": tracings: the fit needs tracings");
+  EXPECT_FALSE(fs::exists(dir / "fit"));
+}
+
 // A refused value is refused first; the note that the option does not act in this fit came
 // before the error.
 TEST(FitCommand, ChecksValuesBeforeNotingOptionsThatDoNotAct) {

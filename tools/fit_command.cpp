@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <sstream>
 
@@ -159,7 +160,10 @@ int runFit(const FitCommandOptions& o) {
   auto valve_case = loadCaseOrReport(o.case_dir);
   if (!valve_case) return kExitBadInput;
   if (valve_case->tracings.empty()) {
-    std::cerr << "error: " << o.case_dir << ": case.json: tracings: the fit needs tracings\n";
+    // The file and field as every case problem names them ("DIR/case.json: tracings: ...").
+    std::cerr << "error: " << (std::filesystem::path(o.case_dir) / "case.json").string()
+              << ": tracings: the fit needs tracings (a case without them can be simulated, "
+                 "not fitted; docs/case-format.md, \"Tracings\")\n";
     return kExitBadInput;
   }
   std::cerr << duplicateTracingsNote(*valve_case);
