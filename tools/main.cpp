@@ -31,19 +31,25 @@ using namespace chordfit::cli;
 // alone reads "077" as octal and takes "0x40"): tools/integer_text.h. Values beyond the
 // option's type are refused here, naming the value as given (CLI11 would say "Could not
 // convert", or wrap "-1" into an unsigned option); the option's own checks then see plain
-// digits. `range`: the refusal names it ("must be an integer in [1, 64], got 2.5") where the
-// option's check would.
+// digits. `bounds`: the option's own range, checked here too, so that every wrong value is
+// refused in one sentence ("must be an integer in [1, 64], got 2.5").
+struct IntegerBounds {
+  long long lowest, highest;
+};
+
 template <typename Integer>
-CLI::Validator integralInAnyForm(const std::string& range) {
-  const std::string lowest = std::to_string(std::numeric_limits<Integer>::min());
-  const std::string highest = std::to_string(std::numeric_limits<Integer>::max());
+CLI::Validator integralInAnyForm(std::optional<IntegerBounds> bounds) {
+  const std::string lowest =
+      bounds ? std::to_string(bounds->lowest) : std::to_string(std::numeric_limits<Integer>::min());
+  const std::string highest = bounds ? std::to_string(bounds->highest)
+                                     : std::to_string(std::numeric_limits<Integer>::max());
   return CLI::Validator(
-      [range, lowest, highest](std::string& value) {
+      [bounded = bounds.has_value(), lowest, highest](std::string& value) {
         const std::optional<std::string> integer = canonicalInteger(value);
         const bool below = integer && compareIntegerTexts(*integer, lowest) < 0;
         const bool above = integer && compareIntegerTexts(*integer, highest) > 0;
-        if (!range.empty() && (!integer || below || above))
-          return "must be an integer in " + range + ", got " + value;
+        if (bounded && (!integer || below || above))
+          return "must be an integer in [" + lowest + ", " + highest + "], got " + value;
         if (!integer) return "expected an integer, got '" + value + "'";
         if (below)
           return (lowest == "0" ? std::string("must be a non-negative integer")
@@ -58,35 +64,19 @@ CLI::Validator integralInAnyForm(const std::string& range) {
 
 template <typename Integer>
 CLI::Option* addIntegerOption(CLI::App* cmd, const std::string& name, Integer& value,
-                              const std::string& help, const std::string& range = "") {
-  return cmd->add_option(name, value, help)->transform(integralInAnyForm<Integer>(range));
+                              const std::string& help,
+                              std::optional<IntegerBounds> bounds = std::nullopt) {
+  return cmd->add_option(name, value, help)->transform(integralInAnyForm<Integer>(bounds));
 }
 
-// --threads of every command: checked here, on the text (plain digits after integralInAnyForm),
-// so that "2.5" and "abc" are named as what they are (CLI::Range said "Value 2.5 not in range
-// 1 to 64").
+// --threads of every command, in [1, 64] (CLI::Range said "Value 2.5 not in range 1 to 64").
 constexpr int kMaxThreads = 64;
-
-CLI::Validator threadCount() {
-  return CLI::Validator(
-      [](const std::string& value) {
-        const bool digits =
-            !value.empty() && value.size() <= 2 &&
-            std::all_of(value.begin(), value.end(), [](char c) { return c >= '0' && c <= '9'; });
-        const int count = digits ? std::stoi(value) : 0;
-        return count >= 1 && count <= kMaxThreads
-                   ? std::string()
-                   : "must be an integer in [1, " + std::to_string(kMaxThreads) + "], got " + value;
-      },
-      "");
-}
 
 // `what`: the closures the threads run, e.g. "the closure".
 void addThreadsOption(CLI::App* cmd, int& threads, const std::string& what) {
   addIntegerOption(cmd, "--threads", threads,
                    "Threads for " + what + ", 1-64; the same result for any count",
-                   "[1, " + std::to_string(kMaxThreads) + "]")
-      ->check(threadCount())
+                   IntegerBounds{1, kMaxThreads})
       ->capture_default_str();
 }
 
