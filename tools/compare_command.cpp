@@ -8,7 +8,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <mutex>
 #include <optional>
 #include <set>
 #include <sstream>
@@ -25,6 +24,7 @@
 #include "core/section_figure.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/in_order_progress.h"
 #include "tools/staged_output.h"
 #include "tools/truth_recovery.h"
 
@@ -348,33 +348,26 @@ int closeSets(const ValveCase& valve_case, SimulationSettings settings,
   // Threads no set takes go into the closures themselves (bit-identical for any count).
   settings.threads = std::max(settings.threads, options.threads / workers);
   std::vector<SimulationResult> results(count);
-  std::mutex print;
-  std::vector<char> finished(count, 0);
-  int printed = 0;
-  auto printFinished = [&] {
-    for (; printed < count && finished[printed]; ++printed) {
-      const ComparedSet& s = sets[printed];
-      const SimulationResult& closed = results[printed];
-      if (!closed.ok()) {
-        printed = count;  // nothing after a failure is printed
-        return;
-      }
-      char avgd[64] = "no tracings";
-      if (s.metrics.has_tracings)
-        std::snprintf(avgd, sizeof avgd, "AvgD %.2f mm", s.metrics.deviation.mean);
-      std::fprintf(stderr, "compare: [%d/%d] %s: %s after %d steps, %.1f s, %s\n", printed + 1,
-                   count, s.label.c_str(),
-                   closed.converged ? "converged" : "NOT converged (step cap)", closed.steps,
-                   closed.seconds, avgd);
-    }
-  };
+  InOrderProgress progress(count, [&](int i) {
+    const ComparedSet& s = sets[i];
+    const SimulationResult& closed = results[i];
+    if (!closed.ok()) return false;  // nothing after a failure is printed
+    char avgd[64] = "no tracings";
+    if (s.metrics.has_tracings)
+      std::snprintf(avgd, sizeof avgd, "AvgD %.2f mm", s.metrics.deviation.mean);
+    std::fprintf(stderr, "compare: [%d/%d] %s: %s after %d steps, %.1f s, %s\n", i + 1, count,
+                 s.label.c_str(), closed.converged ? "converged" : "NOT converged (step cap)",
+                 closed.steps, closed.seconds, avgd);
+    return true;
+  });
   struct ClosureFailed {};
   const auto closeSet = [&](int i) {
     ComparedSet& s = sets[i];
     if (!options.quiet) {
-      const std::lock_guard<std::mutex> lock(print);
-      std::fprintf(stderr, "compare: [%d/%d] %s: closing with %s\n", i + 1, count, s.label.c_str(),
-                   counted(s.cords.cords.size(), "cord").c_str());
+      progress.say([&] {
+        std::fprintf(stderr, "compare: [%d/%d] %s: closing with %s\n", i + 1, count,
+                     s.label.c_str(), counted(s.cords.cords.size(), "cord").c_str());
+      });
     }
     SimulationResult& closed = results[i];
     closed = simulateClosure(s.valve_case, s.cords, settings);
@@ -384,11 +377,7 @@ int closeSets(const ValveCase& valve_case, SimulationSettings settings,
       s.steps = closed.steps;
       s.closed_V = closed.V;
     }
-    if (!options.quiet) {
-      const std::lock_guard<std::mutex> lock(print);
-      finished[i] = 1;
-      printFinished();
-    }
+    if (!options.quiet) progress.finished(i);
     if (!closed.ok()) throw ClosureFailed{};
   };
   try {

@@ -6,7 +6,6 @@
 #include <cstdio>
 #include <iostream>
 #include <limits>
-#include <mutex>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -23,6 +22,7 @@
 #include "core/svg_line_plot.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
+#include "tools/in_order_progress.h"
 #include "tools/staged_output.h"
 
 namespace chordfit::cli {
@@ -217,27 +217,21 @@ int runSweepCord(const SweepCordOptions& options) {
   // slot, so the output does not depend on the thread count or the order of completion. The
   // progress lines come in scale order too: a finished point is printed once every point
   // before it is.
-  std::mutex print;
-  std::vector<char> finished(count, 0);
-  int printed = 0;
-  auto printFinished = [&] {
-    if (options.quiet) return;
-    for (; printed < count && finished[printed]; ++printed) {
-      const SweepPoint& p = points[printed];
-      if (!p.error.empty()) {
-        std::fprintf(stderr, "  [%3d/%d] scale %.4f: failed (below)\n", printed + 1, count,
-                     p.scale);
-        printed = count;  // the sweep stops at its lowest failing scale
-        return;
-      }
-      // Without tracings there is no deviation to print ("nan mm").
-      char deviation[48] = "";
-      if (!std::isnan(p.mean_deviation))
-        std::snprintf(deviation, sizeof deviation, ", mean deviation %.4f mm", p.mean_deviation);
-      std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm%s%s\n", printed + 1, count,
-                   p.scale, p.height, deviation, p.converged ? "" : " (not converged)");
+  InOrderProgress progress(count, [&](int i) {
+    if (options.quiet) return true;
+    const SweepPoint& p = points[i];
+    if (!p.error.empty()) {
+      std::fprintf(stderr, "  [%3d/%d] scale %.4f: failed (below)\n", i + 1, count, p.scale);
+      return false;  // the sweep stops at its lowest failing scale
     }
-  };
+    // Without tracings there is no deviation to print ("nan mm").
+    char deviation[48] = "";
+    if (!std::isnan(p.mean_deviation))
+      std::snprintf(deviation, sizeof deviation, ", mean deviation %.4f mm", p.mean_deviation);
+    std::fprintf(stderr, "  [%3d/%d] scale %.4f: height %.4f mm%s%s\n", i + 1, count, p.scale,
+                 p.height, deviation, p.converged ? "" : " (not converged)");
+    return true;
+  });
   // The sweep fails at its lowest failing scale: a failed point throws, and parallelFor then
   // runs only the scales below it (one of them may fail too) and rethrows the lowest, as with
   // one thread: the same error for any thread count, without running the rest (a diverging
@@ -260,11 +254,7 @@ int runSweepCord(const SweepCordOptions& options) {
         p.mean_deviation = pointToSurfaceDistances(r.V, valve_case.mesh.F, tracing_points).mean();
       }
     }
-    {
-      const std::lock_guard<std::mutex> lock(print);
-      finished[i] = 1;
-      printFinished();
-    }
+    progress.finished(i);
     if (!r.ok()) throw ScaleFailed{};
   };
   try {
