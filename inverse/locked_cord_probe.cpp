@@ -1,7 +1,6 @@
 #include "inverse/locked_cord_probe.h"
 
 #include <algorithm>
-#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <map>
@@ -9,7 +8,6 @@
 #include <Eigen/Cholesky>
 
 #include "core/metrics.h"
-#include "core/parallel_for.h"
 #include "inverse/global_prefit.h"
 #include "inverse/robust_loss.h"
 
@@ -103,7 +101,6 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
   const int n = static_cast<int>(taut.size());
   // 2 per cord, one trial per cord and one per segment with two or more (at most n / 2).
   const int most = 3 * n + n / 2;
-  std::atomic<int> closed{0};  // for on_closure
   if (options.on_start) {
     options.on_start("locked cords: probing the " + std::to_string(n) + " taut of " +
                      std::to_string(out.cords.size()) + ", up to " + std::to_string(most) +
@@ -112,15 +109,16 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
 
   // Central differences: closures at l (1 - h) and l (1 + h) of each taut locked cord.
   const double h = options.relative_step;
-  std::vector<ForwardEvaluation> sides(2 * n);
-  parallelFor(2 * n, options.threads, [&](int k) {
+  std::vector<CordSet> side_sets;
+  for (int k = 0; k < 2 * n; ++k) {
     const int cord = out.cords[taut[k / 2]].cord;
     LockedCordTrial side;
     side.cords = {cord};
     side.lengths_mm = {fitted.cords[cord].rest_length * (k % 2 == 0 ? 1.0 - h : 1.0 + h)};
-    sides[k] = closeForData(valve_case, withRestLengths(fitted, side), residual);
-    if (options.on_closure) options.on_closure(++closed, most);
-  });
+    side_sets.push_back(withRestLengths(fitted, side));
+  }
+  const std::vector<ForwardEvaluation> sides =
+      closeCordSets(valve_case, side_sets, residual, options.threads, options.on_closure);
   out.forward_sims += 2 * n;
 
   const Eigen::VectorXd& r = fitted_evaluation.data;
@@ -180,17 +178,19 @@ LockedCordProbes probeLockedCords(const ValveCase& valve_case, const CordSet& fi
   // Pointers into out.segments only after it stops growing.
   for (LockedSegmentProbe& probe : out.segments) propose(probe.trial, by_segment[probe.segment]);
 
-  parallelFor(static_cast<int>(trials.size()), options.threads, [&](int k) {
-    const ForwardEvaluation e =
-        closeForData(valve_case, withRestLengths(fitted, *trials[k]), residual);
-    if (options.on_closure) options.on_closure(++closed, most);
+  std::vector<CordSet> trial_sets;
+  for (const LockedCordTrial* trial : trials) trial_sets.push_back(withRestLengths(fitted, *trial));
+  const std::vector<ForwardEvaluation> trial_closures =
+      closeCordSets(valve_case, trial_sets, residual, options.threads, options.on_closure);
+  for (std::size_t k = 0; k < trials.size(); ++k) {
+    const ForwardEvaluation& e = trial_closures[k];
     if (!e.ok()) {
       trials[k]->error = "the probe's closure failed: " + e.error;
-      return;
+      continue;
     }
     trials[k]->data_cost = e.cost;
     trials[k]->mean_deviation_mm = e.mean_deviation_mm;
-  });
+  }
   out.forward_sims += static_cast<int>(trials.size());
   out.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -49,8 +49,8 @@ struct LockedCordProbeOptions {
   // Before the closures, when there are taut locked cords: a line saying how many and how many
   // closures at most (optional; `chordfit fit` prints it).
   std::function<void(const std::string&)> on_start;
-  // Progress of the closures (FiniteDifferenceOptions::on_closure: called from the worker
-  // threads with the closures done and the most the probe runs); optional.
+  // Progress of the closures (closeCordSets' on_closure, called from the worker threads with
+  // the closures done and the count of each of the probe's two batches); optional.
   std::function<void(int, int)> on_closure;
 };
 
