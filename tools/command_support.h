@@ -63,6 +63,14 @@ std::optional<SimulationSettings> caseSettingsOrReport(
     ValveCase& valve_case, const std::string& case_dir, SettingsUse use, const char* command = "",
     const std::vector<std::string>& overrides = {});
 
+// Whether `option` ("--ap") is among the options given on the command line (the options
+// structs' given_options), for a command's notes on options that do not act.
+inline bool optionGiven(const std::vector<std::string>& given_options, const char* option) {
+  for (const std::string& given : given_options)
+    if (given == option) return true;
+  return false;
+}
+
 // Each (option, value) must be a finite number > 0; the first that is not gets
 // "error: <command>: <option>: must be <what>, got <value>" on stderr. Returns whether all are.
 bool optionsArePositive(const char* command,

@@ -41,17 +41,13 @@ std::string joinNames(const std::vector<std::string>& names) {
   return joined;
 }
 
-bool given(const FitCommandOptions& o, const char* option) {
-  return std::find(o.given_options.begin(), o.given_options.end(), option) != o.given_options.end();
-}
-
 // Options given to a fit they do not act on: a note each (the run goes on; the user may have
 // meant --params scales+tips, or Ceres). After the values are checked, so that a refused
 // value is not first noted as unused. On stdout, as the fit's other notes.
 void noteOptionsThatDoNotAct(const FitCommandOptions& o) {
   if (o.params != "scales+tips") {
     for (const char* option : {"--tip-box", "--tip-weight", "--fd-tip-step"})
-      if (given(o, option))
+      if (optionGiven(o.given_options, option))
         std::printf("note: fit: %s acts only with --params scales+tips (this fit: --params %s)\n",
                     option, o.params.c_str());
   }
@@ -59,7 +55,7 @@ void noteOptionsThatDoNotAct(const FitCommandOptions& o) {
   // these options reach only the uncertainty's Jacobian, and nothing without it.
   if (o.optimizer != "ceres") {
     for (const char* option : {"--fd-step", "--fd-tip-step", "--fd-warm", "--fd-slack-closures"})
-      if (given(o, option))
+      if (optionGiven(o.given_options, option))
         std::printf(
             "note: fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
             "derivatives)\n",

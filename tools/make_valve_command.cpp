@@ -1,4 +1,3 @@
-#include <algorithm>
 #include <cstdio>
 #include <iostream>
 #include <stdexcept>
@@ -70,10 +69,9 @@ std::string changedOptions(const ValveParameters& p, const std::string& annulus_
 // --ap and --cc shape the parametric annulus only: the file's points replace it (the valve
 // was made from the file without a word about them).
 void noteDiametersIgnored(const MakeValveOptions& options) {
-  const std::vector<std::string>& given = options.given_options;
   std::string ignored;
   for (const char* option : {"--ap", "--cc"})
-    if (std::find(given.begin(), given.end(), option) != given.end())
+    if (optionGiven(options.given_options, option))
       ignored += (ignored.empty() ? "" : " and ") + std::string(option);
   if (!ignored.empty())
     std::cerr << "note: make-valve: " << ignored << " do" << (ignored.size() > 4 ? "" : "es")
