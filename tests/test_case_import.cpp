@@ -300,10 +300,10 @@ TEST(ImportMeshCli, WeldsAMeshThatRepeatsEveryTrianglesCorners) {
                              quoted(dir / "landmarks.json") + " --out " + quoted(dir / "case"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const long welded = V.rows() - truth.mesh.V.rows();
-  EXPECT_NE(r.out.find(std::to_string(welded) + " vertices merged into others at the same " +
+  EXPECT_NE(r.err.find(std::to_string(welded) + " vertices merged into others at the same " +
                        "position, " + std::to_string(truth.mesh.V.rows()) + " vertices left"),
             std::string::npos)
-      << r.out;
+      << r.err;
   Diagnostics diagnostics;
   const auto loaded = loadCase(dir / "case", diagnostics);
   ASSERT_TRUE(loaded);
@@ -317,7 +317,7 @@ TEST(ImportMeshCli, WeldsAMeshThatRepeatsEveryTrianglesCorners) {
       runChordfit("import-mesh " + quoted(dir / "soup.ply") + " --landmarks " +
                   quoted(dir / "landmarks.json") + " --keep-seams --out " + quoted(dir / "kept"));
   EXPECT_EQ(kept.exit_code, 2) << kept.out;
-  EXPECT_EQ(kept.out.find("merged into others"), std::string::npos) << kept.out;
+  EXPECT_EQ(kept.err.find("merged into others"), std::string::npos) << kept.err;
   EXPECT_FALSE(fs::exists(dir / "kept"));
 }
 
@@ -596,9 +596,9 @@ TEST(ImportMeshCli, RefusesLandmarksOrTipsInAnotherOrderSayingWhichOrderFits) {
   // commissure: a warning that names both, not a refusal.
   r = import(dir / "posterior_point.json", "");
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("point 3 may lie on the posterior annulus, or a commissure be misplaced"),
+  EXPECT_NE(r.err.find("point 3 may lie on the posterior annulus, or a commissure be misplaced"),
             std::string::npos)
-      << r.out;
+      << r.err;
   fs::remove_all(dir / "case");
 
   writePointList(dir / "swapped_tips.json", Eigen::MatrixXd{{2, -12, -18}, {2, 12, -18}});
@@ -665,15 +665,15 @@ TEST(ImportMeshCli, WarnsWhenTheTracingsLieNearerTheOtherLeaflet) {
   EXPECT_NE(r.out.find("tracing points nearest to their own leaflet (open state): 100 %"),
             std::string::npos)
       << r.out;
-  EXPECT_EQ(r.out.find("warning:"), std::string::npos) << r.out;
+  EXPECT_EQ(r.err.find("warning:"), std::string::npos) << r.err;
   r = import("posterior", "anterior");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("tracing points nearest to their own leaflet (open state): 0 %"),
             std::string::npos)
       << r.out;
-  EXPECT_NE(r.out.find("warning: most tracing points are nearer the other leaflet"),
+  EXPECT_NE(r.err.find("warning: most tracing points are nearer the other leaflet"),
             std::string::npos)
-      << r.out;
+      << r.err;
 }
 
 }  // namespace

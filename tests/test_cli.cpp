@@ -116,7 +116,7 @@ TEST(ChordfitCli, AFineParametricValveGetsAStepCapItsRampFitsUnder) {
   TempDir dir;
   const auto made = runChordfit("make-valve --edge 0.25 --out " + quoted(dir / "fine"));
   ASSERT_EQ(made.exit_code, 0) << made.err;
-  EXPECT_NE(made.out.find("note: simulation.max_steps = "), std::string::npos) << made.out;
+  EXPECT_NE(made.err.find("note: simulation.max_steps = "), std::string::npos) << made.err;
   const auto r = runChordfit("validate " + quoted(dir / "fine"));
   EXPECT_EQ(r.exit_code, 0) << r.err;
   // The default valve keeps the default cap (no simulation block).
@@ -398,16 +398,16 @@ TEST(ChordfitCli, MakeValveTakesTheAnatomyAndNamesABadValue) {
     return c ? surfaceArea(c->mesh.V, c->mesh.F) : 0.0;
   };
   EXPECT_GT(area("tall"), 1.05 * area("normal"));
-  EXPECT_EQ(r.out.find("note: make-valve"), std::string::npos) << "the default anatomy: " << r.out;
+  EXPECT_EQ(r.err.find("note: make-valve"), std::string::npos) << "the default anatomy: " << r.err;
   // Made as asked, with a note, when unlike an adult mitral valve.
   r = runChordfit("make-valve --out " + quoted(dir / "odd") +
                   " --edge 3 --ap 40 --cc 30 --commissural-height 24");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("note: make-valve: the commissures (24 mm, --commissural-height) are as "
+  EXPECT_NE(r.err.find("note: make-valve: the commissures (24 mm, --commissural-height) are as "
                        "tall as the anterior leaflet"),
             std::string::npos)
-      << r.out;
-  EXPECT_NE(r.out.find("note: make-valve: --ap / --cc = 1.33"), std::string::npos) << r.out;
+      << r.err;
+  EXPECT_NE(r.err.find("note: make-valve: --ap / --cc = 1.33"), std::string::npos) << r.err;
   r = runChordfit("make-valve --out " + quoted(dir / "bad") + " --posterior-side-height -1");
   EXPECT_EQ(r.exit_code, 2);
   EXPECT_NE(r.err.find("error: make-valve: --posterior-side-height: must be positive"),

@@ -79,14 +79,14 @@ TEST(EditCordsCli, NotesOnlyScalesReallyOutsideTheFitsBoundsAndNamesTheirCords) 
   auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.7 --out " +
                        quoted(dir / "on_bound.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_EQ(r.out.find("outside the fit's default bounds"), std::string::npos) << r.out;
+  EXPECT_EQ(r.err.find("outside the fit's default bounds"), std::string::npos) << r.err;
   r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.7 --cord 3=0.6 --cord 5=1.6 " +
                   "--out " + quoted(dir / "beyond.json"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("note: 2 unlocked cords (3,5) have a scale outside the fit's default "
+  EXPECT_NE(r.err.find("note: 2 unlocked cords (3,5) have a scale outside the fit's default "
                        "bounds [0.7, 1.5]"),
             std::string::npos)
-      << r.out;
+      << r.err;
 }
 
 TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {

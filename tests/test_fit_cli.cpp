@@ -431,15 +431,15 @@ TEST(FitCommand, AFitWorseThanTheSeedSaysWhyInTheTerminalAndTheReport) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   ASSERT_GT(metrics["mean_mm"].get<double>(), metrics["initial_mean_mm"].get<double>());
-  EXPECT_NE(r.out.find("note: the fit ends worse than the seed"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("clamped into them"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("note: the fit ends worse than the seed"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("clamped into them"), std::string::npos) << r.err;
   EXPECT_NE(testing::readText(dir / "fit" / "report.md").find("**the fit ends worse than the seed"),
             std::string::npos);
   // A fit that improves on the seed says nothing of the kind.
   const auto better = runChordfit("fit " + quoted(smallCase()) +
                                   " --max-sims 15 --no-uncertainty --out " + quoted(dir / "ok"));
   ASSERT_EQ(better.exit_code, 0) << better.err;
-  EXPECT_EQ(better.out.find("worse than the seed"), std::string::npos) << better.out;
+  EXPECT_EQ(better.err.find("worse than the seed"), std::string::npos) << better.err;
 }
 
 // The small case's cords with every cord but cord 0 locked (manual), written to `file`.
@@ -599,9 +599,9 @@ TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
       "fit " + quoted(smallCase()) + " --seed-cords " + quoted(dir / "seed.json") + " --max-sims 3";
   const auto r = runChordfit(fit + " --out " + quoted(dir / "fit"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_TRUE(r.out.find("note: locked cords hold the fit back: ") != std::string::npos ||
+  EXPECT_TRUE(r.err.find("note: locked cords hold the fit back: ") != std::string::npos ||
               r.out.find("locked cords: 32, ") != std::string::npos)
-      << r.out;
+      << r.out << r.err;
   const auto metrics = nlohmann::json::parse(testing::readText(dir / "fit" / "metrics.json"));
   ASSERT_TRUE(metrics.contains("locked_cord_probe"));
   const auto& probe = metrics["locked_cord_probe"];
@@ -644,18 +644,20 @@ TEST(FitCommand, ProbesTheLockedCordsUnlessToldNotTo) {
   EXPECT_GT(capped_probe["forward_sims"].get<int>(), 0);
   EXPECT_EQ(capped_probe["unsettled_sims"], capped_probe["forward_sims"]) << capped_probe;
   EXPECT_EQ(capped_metrics["uncertainty"]["error"], "no free parameters");
-  EXPECT_NE(capped.out.find(
-                std::to_string(capped_probe["forward_sims"].get<int>()) + " extra closures, " +
+  // A summary line (stdout) or, when a locked cord holds the fit back, a note (stderr).
+  EXPECT_NE(
+      (capped.out + capped.err)
+          .find(std::to_string(capped_probe["forward_sims"].get<int>()) + " extra closures, " +
                 std::to_string(capped_probe["unsettled_sims"].get<int>()) + " unsettled"),
-            std::string::npos)
-      << capped.out;
+      std::string::npos)
+      << capped.out << capped.err;
   EXPECT_NE(testing::readText(dir / "capped" / "report.md")
                 .find(" reached the step cap without settling), "),
             std::string::npos);
 
   const auto skipped = runChordfit(fit + " --no-uncertainty --out " + quoted(dir / "skipped"));
   ASSERT_EQ(skipped.exit_code, 0) << skipped.err;
-  EXPECT_EQ(skipped.out.find("locked cords"), std::string::npos) << skipped.out;
+  EXPECT_EQ((skipped.out + skipped.err).find("locked cords"), std::string::npos) << skipped.out;
   EXPECT_FALSE(nlohmann::json::parse(testing::readText(dir / "skipped" / "metrics.json"))
                    .contains("locked_cord_probe"));
   EXPECT_EQ(testing::readText(dir / "skipped" / "report.md").find("## Locked cords"),
@@ -675,8 +677,8 @@ TEST(FitCommand, SaysWhatToTryWhenTheTracingsProlapseWhereTheFitDoesNot) {
                   quoted(dir / "bounded"));
   ASSERT_EQ(bounded.exit_code, 0) << bounded.err;
   const std::string upper = "the tracings show prolapse in P2, the fitted closure does not: ";
-  EXPECT_NE(bounded.out.find("note: " + upper), std::string::npos) << bounded.out;
-  EXPECT_NE(bounded.out.find("free cords there end at the upper scale bound 0.75; a higher one "
+  EXPECT_NE(bounded.err.find("note: " + upper), std::string::npos) << bounded.err;
+  EXPECT_NE(bounded.err.find("free cords there end at the upper scale bound 0.75; a higher one "
                              "(--scale-bounds 0.6,HI)"),
             std::string::npos)
       << bounded.out;
@@ -690,7 +692,7 @@ TEST(FitCommand, SaysWhatToTryWhenTheTracingsProlapseWhereTheFitDoesNot) {
       runChordfit("fit " + quoted(prolapse_case) + " --seed-cords " + quoted(dir / "seed.json") +
                   " --no-prefit --no-uncertainty --max-sims 3 --out " + quoted(dir / "locked"));
   ASSERT_EQ(locked.exit_code, 0) << locked.err;
-  EXPECT_NE(locked.out.find(upper + "every cord there is locked"), std::string::npos) << locked.out;
+  EXPECT_NE(locked.err.find(upper + "every cord there is locked"), std::string::npos) << locked.err;
 }
 
 // --params groups: a group factor's bounds keep the group's mean scale within --scale-bounds,
@@ -810,9 +812,9 @@ TEST(FitCommand, SaysWhenThePreFitsLeftTheOptimiserNoStep) {
   EXPECT_NE(r.out.find("forward runs (pre-fits only; ceres took no step)"), std::string::npos)
       << r.out;
   EXPECT_EQ(r.out.find("fit: ceres after"), std::string::npos) << r.out;
-  EXPECT_NE(r.out.find("the fitted closure does not: ceres took no step, the budget being spent"),
+  EXPECT_NE(r.err.find("the fitted closure does not: ceres took no step, the budget being spent"),
             std::string::npos)
-      << r.out;
+      << r.err;
   EXPECT_NE(
       testing::readText(dir / "fit" / "report.md").find("; pre-fits only; ceres took no step"),
       std::string::npos);
@@ -856,11 +858,11 @@ TEST(FitCommand, NotesFiniteDifferenceOptionsAnNloptFitDoesNotUse) {
         uncertainty ? "the steps after the fit (the uncertainty's Jacobian, the locked-cord probe)"
                     : "Ceres' Jacobians, so on nothing here (--no-uncertainty)";
     for (const std::string option : {"--fd-step", "--fd-warm"})
-      EXPECT_NE(r.out.find("note: fit: " + option + " acts only on " + reach +
+      EXPECT_NE(r.err.find("note: fit: " + option + " acts only on " + reach +
                            " with --optimizer bobyqa"),
                 std::string::npos)
-          << r.out;
-    EXPECT_EQ(r.out.find("--fd-slack-closures acts"), std::string::npos) << "not given";
+          << r.err;
+    EXPECT_EQ(r.err.find("--fd-slack-closures acts"), std::string::npos) << "not given";
   }
 }
 
@@ -873,10 +875,10 @@ TEST(FitCommand, NotesTipOptionsWithoutTipsAndReportsPrefitsThatDidNotRun) {
                              " --out " +
                              quoted(dir / "fit"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("note: fit: --tip-box acts only with --params scales+tips (this fit: "
+  EXPECT_NE(r.err.find("note: fit: --tip-box acts only with --params scales+tips (this fit: "
                        "--params groups)"),
             std::string::npos)
-      << r.out;
+      << r.err;
   const std::string report = testing::readText(dir / "fit" / "report.md");
   EXPECT_NE(report.find("- segment pre-fit: not run with --params groups"), std::string::npos)
       << report;

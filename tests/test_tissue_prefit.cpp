@@ -197,7 +197,7 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
       << "the cords alone make the P3 flap: the case no longer tests the retry";
   EXPECT_EQ(without["tissue_retry"]["ran"], false);
   EXPECT_EQ(without["tissue_retry"]["missing_segments"], nlohmann::json::array({"P3"}));
-  EXPECT_NE(first.out.find("leave out --no-tissue-retry"), std::string::npos) << first.out;
+  EXPECT_NE(first.err.find("leave out --no-tissue-retry"), std::string::npos) << first.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "first" / "tissue.json"));
 
   // A budget the first optimisation spends: the retry is skipped, and both say so.
@@ -215,10 +215,10 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
             std::string::npos)
       << small.out;
   EXPECT_EQ(small.out.find("data cost 0.000"), std::string::npos) << small.out;
-  EXPECT_NE(small.out.find("softer tissue was not tried: the tissue retry did not run (--max-sims "
+  EXPECT_NE(small.err.find("softer tissue was not tried: the tissue retry did not run (--max-sims "
                            "50 leaves "),
             std::string::npos)
-      << small.out;
+      << small.err;
 
   const auto second = testing::runChordfit(fit + testing::quoted(dir / "retry"));
   ASSERT_EQ(second.exit_code, 0) << second.err;
@@ -240,7 +240,7 @@ TEST(TissueRetryCli, FitsAgainOnSofterTissueWhenTheFitMissesTheTracingsProlapse)
   ASSERT_FALSE(retry["tissue"].empty());
   EXPECT_EQ(retry["tissue"][0].get<std::string>().rfind("P3 ", 0), 0u) << retry.dump();
   // The fit makes the flap: no advice.
-  EXPECT_EQ(second.out.find("note: the tracings show prolapse"), std::string::npos) << second.out;
+  EXPECT_EQ(second.err.find("note: the tracings show prolapse"), std::string::npos) << second.err;
   EXPECT_TRUE(std::filesystem::exists(dir / "retry" / "tissue.json"));
   EXPECT_NE(second.out.find("tissue retry: the tracings show prolapse in P3, the fit does not"),
             std::string::npos)

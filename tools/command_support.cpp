@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <cstdarg>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -59,6 +60,34 @@ int reportProblems(const Diagnostics& diagnostics) {
   return kExitBadInput;
 }
 
+namespace {
+void printToStderr(const char* prefix, const char* format, va_list arguments) {
+  std::fflush(stdout);
+  std::fputs(prefix, stderr);
+  std::vfprintf(stderr, format, arguments);
+}
+}  // namespace
+
+void printNote(const char* format, ...) {
+  va_list arguments;
+  va_start(arguments, format);
+  printToStderr("note: ", format, arguments);
+  va_end(arguments);
+}
+
+void printWarning(const char* format, ...) {
+  va_list arguments;
+  va_start(arguments, format);
+  printToStderr("warning: ", format, arguments);
+  va_end(arguments);
+}
+
+void printNoteLines(const std::string& lines) {
+  if (lines.empty()) return;
+  std::fflush(stdout);
+  std::fputs(lines.c_str(), stderr);
+}
+
 std::string tissueBesideCordsNote(const char* command, const std::string& cords_file,
                                   const std::string& option) {
   if (cords_file.empty()) return "";
@@ -102,7 +131,8 @@ std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::s
   }
   auto cords = resolveCords(*valve_case, cords_file);
   if (!cords) return std::nullopt;
-  if (tissue_file.empty()) std::cerr << tissueBesideCordsNote(command, cords_file, "--tissue FILE");
+  if (tissue_file.empty())
+    printNoteLines(tissueBesideCordsNote(command, cords_file, "--tissue FILE"));
   return CaseWithCords{std::move(*valve_case), std::move(*cords)};
 }
 
@@ -217,12 +247,11 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
     if (settings.ramp_ms > 0.0)
       std::snprintf(how_fast, sizeof how_fast, "over a %g ms ramp loads the valve at %.3g mmHg/ms",
                     settings.ramp_ms, rate);
-    std::fprintf(stderr,
-                 "note: %s: %g mmHg %s, faster than calibrated (10 mmHg/ms at the defaults): a "
-                 "prolapsing flap may land in another equilibrium; --set ramp_ms=%g keeps 10 "
-                 "mmHg/ms (docs/model.md)\n",
-                 command, settings.pressure_mmhg, how_fast,
-                 std::ceil(settings.pressure_mmhg / 10.0));
+    printNote(
+        "%s: %g mmHg %s, faster than calibrated (10 mmHg/ms at the defaults): a "
+        "prolapsing flap may land in another equilibrium; --set ramp_ms=%g keeps 10 "
+        "mmHg/ms (docs/model.md)\n",
+        command, settings.pressure_mmhg, how_fast, std::ceil(settings.pressure_mmhg / 10.0));
   }
   return settings;
 }
@@ -409,8 +438,8 @@ int fitStepCapToMesh(ValveCase& valve_case) {
   nlohmann::json simulation = nlohmann::json::parse(valve_case.simulation_json);
   simulation["max_steps"] = cap;
   valve_case.simulation_json = simulation.dump();
-  std::printf(
-      "note: simulation.max_steps = %d in case.json: at this mesh's time step (%.3g ms) "
+  printNote(
+      "simulation.max_steps = %d in case.json: at this mesh's time step (%.3g ms) "
       "the %g ms pressure ramp takes %.0f steps, too many to settle within the default cap of "
       "%d\n",
       cap, dt, defaults.ramp_ms, ramp_steps, defaults.max_steps);

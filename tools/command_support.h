@@ -26,6 +26,16 @@ int reportProblems(const Diagnostics& diagnostics);
 // nullopt on bad input.
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
 
+// Notes go to stderr, in every command: stdout carries what the command makes (progress,
+// tables, summaries), stderr what the user may want to know about it (errors, warnings,
+// notes). stdout is flushed first, so that a log of both streams (2>&1) keeps each note
+// after the lines printed before it. printNote and printWarning print "note: " or "warning: "
+// and the formatted text (give it its newline); printNoteLines prints lines that already
+// start with "note: " as they are.
+void printNote(const char* format, ...) __attribute__((format(printf, 1, 2)));
+void printWarning(const char* format, ...) __attribute__((format(printf, 1, 2)));
+void printNoteLines(const std::string& lines);
+
 // A note when a fit's tissue.json lies beside `cords_file` (a fit's output directory) and the
 // command closes those cords on the case's own tissue instead: the fit closed them on that
 // tissue (its tissue pre-fit or tissue retry softened a segment), so this closure is not the

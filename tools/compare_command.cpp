@@ -438,8 +438,8 @@ int runCompare(const CompareOptions& options) {
     if (!cords) return kExitBadInput;
     ComparedSet set{labels[i], options.cords_files[i], *cords, *valve_case, {}, false, 0, {}, {}};
     if (tissues[i] == "-")
-      std::cerr << tissueBesideCordsNote("compare", options.cords_files[i],
-                                         "--tissues, one per cord file");
+      printNoteLines(
+          tissueBesideCordsNote("compare", options.cords_files[i], "--tissues, one per cord file"));
     if (tissues[i] != "-") {
       Diagnostics diagnostics;
       if (!loadTissueFile(tissues[i], tissues[i], set.valve_case, diagnostics))

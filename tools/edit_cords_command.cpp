@@ -365,8 +365,8 @@ int runEditCords(const EditCordsOptions& options) {
     for (std::size_t k = 0; k < outside_bounds.size() && k < 12; ++k)
       listed += (k == 0 ? "" : ",") + std::to_string(outside_bounds[k]);
     if (outside_bounds.size() > 12) listed += ",...";
-    std::printf(
-        "note: %zu unlocked cord%s (%s) %s a scale outside the fit's default bounds [%.1f, "
+    printNote(
+        "%zu unlocked cord%s (%s) %s a scale outside the fit's default bounds [%.1f, "
         "%.1f]; `chordfit fit --seed-cords` starts them clamped (lock them to keep them, or "
         "widen --scale-bounds)\n",
         outside_bounds.size(), outside_bounds.size() == 1 ? "" : "s", listed.c_str(),

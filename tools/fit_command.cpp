@@ -48,16 +48,16 @@ void noteOptionsThatDoNotAct(const FitCommandOptions& o) {
   if (o.params != "scales+tips") {
     for (const char* option : {"--tip-box", "--tip-weight", "--fd-tip-step"})
       if (optionGiven(o.given_options, option))
-        std::printf("note: fit: %s acts only with --params scales+tips (this fit: --params %s)\n",
-                    option, o.params.c_str());
+        printNote("fit: %s acts only with --params scales+tips (this fit: --params %s)\n", option,
+                  o.params.c_str());
   }
   // The finite differences serve Ceres' Jacobians; NLopt's methods take none, so with them
   // these options reach only the uncertainty's Jacobian, and nothing without it.
   if (o.optimizer != "ceres") {
     for (const char* option : {"--fd-step", "--fd-tip-step", "--fd-warm", "--fd-slack-closures"})
       if (optionGiven(o.given_options, option))
-        std::printf(
-            "note: fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
+        printNote(
+            "fit: %s acts only on %s with --optimizer %s (NLopt's methods take no "
             "derivatives)\n",
             option,
             o.uncertainty
@@ -148,8 +148,8 @@ int runFit(const FitCommandOptions& o) {
     return kExitBadInput;
   }
   if (o.fd_scale_step > 0.1)
-    std::printf(
-        "note: fit: --fd-step %g is a central difference over %g..%g of each scale: a "
+    printNote(
+        "fit: --fd-step %g is a central difference over %g..%g of each scale: a "
         "secant across the map's kinks, not its slope (the default 0.01 was chosen from "
         "the map's noise, docs/fitting.md)\n",
         o.fd_scale_step, 1.0 - o.fd_scale_step, 1.0 + o.fd_scale_step);
@@ -162,7 +162,7 @@ int runFit(const FitCommandOptions& o) {
                  "not fitted; docs/case-format.md, \"Tracings\")\n";
     return kExitBadInput;
   }
-  std::cerr << duplicateTracingsNote(*valve_case);
+  printNoteLines(duplicateTracingsNote(*valve_case));
   // A tip moved by the box on all three axes goes sqrt(3) box: beyond the case's reach, where
   // no case file may put a tip (1e308 gave crs2 an infinite domain and sent bobyqa's first
   // steps out of the ventricle). Only where it acts: with other --params it is noted, not used.
@@ -421,15 +421,15 @@ int runFit(const FitCommandOptions& o) {
   const int unused = o.max_sims - fit.forward_sims;
   if (driver && driver->localDerivativeFree() && fit.termination.rfind("converged", 0) == 0 &&
       unused >= std::max(5, o.max_sims / 20)) {
-    std::printf(
-        "note: %s stopped on its tolerance with %d of --max-sims %d %s unused; a "
+    printNote(
+        "%s stopped on its tolerance with %d of --max-sims %d %s unused; a "
         "derivative-free local method can stop early on a simulator's map (compare with "
         "--optimizer ceres, the default)\n",
         o.optimizer.c_str(), unused, o.max_sims, nounFor(o.max_sims, "closure").c_str());
   }
   if (fit.unsettled_sims > 0) {
-    std::printf(
-        "note: %d of the %d forward runs reached the step cap without settling (their state is "
+    printNote(
+        "%d of the %d forward runs reached the step cap without settling (their state is "
         "the mean over the last steps; docs/performance.md)\n",
         fit.unsettled_sims, fit.forward_sims);
   }
@@ -442,20 +442,20 @@ int runFit(const FitCommandOptions& o) {
         extraClosures(fit.uncertainty.jacobian_sims, fit.uncertainty.unsettled_sims).c_str(),
         fit.uncertainty_seconds);
   } else if (o.uncertainty && !fit.uncertainty.error.empty()) {
-    std::printf("note: %s\n", fit.uncertainty.error.c_str());
+    printNote("%s\n", fit.uncertainty.error.c_str());
   }
   if (const std::string why = tissuePrefitNotRun(fit, o); !why.empty())
-    std::cout << "note: --tissue-prefit " << why << " (the cords were fitted on the case's "
-              << "tissue)\n";  // report.md said so; the terminal did not
+    printNote("--tissue-prefit %s (the cords were fitted on the case's tissue)\n",
+              why.c_str());  // report.md said so; the terminal did not
   std::cout << tipOffsetsLine(fit);
   if (fit.tissue_retry.ran || !fit.tissue_retry.skipped.empty())
     std::cout << "tissue retry: " << tissueRetryLine(fit, o) << "\n";
-  std::cout << lockedProbeSummary(*valve_case, o, fit);
+  printLockedProbeSummary(*valve_case, o, fit);
   std::cout << table1Header("Cord set") << table1Row("seed", seed_metrics)
             << table1Row("fit", fit_metrics);
-  if (const std::string note = worseThanSeedNote(fit); !note.empty()) std::cout << "note: " << note;
+  if (const std::string note = worseThanSeedNote(fit); !note.empty()) printNote("%s", note.c_str());
   if (const std::string hint = missedProlapseHint(*valve_case, o, fit, fit_metrics); !hint.empty())
-    std::cout << "note: " << hint;
+    printNote("%s", hint.c_str());
   if (fit.tissue.size() > 0) {
     // compare and simulate close cords on the case's own tissue unless told otherwise.
     const std::filesystem::path out_dir(o.out_dir);

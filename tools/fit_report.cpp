@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <iostream>
 #include <sstream>
 
 #include "core/cordset.h"
@@ -275,16 +276,18 @@ nlohmann::json tissueRetryJson(const inverse::FitOutcome& fit) {
   return j;
 }
 
-std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
-                               const inverse::FitOutcome& fit) {
+void printLockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
+                             const inverse::FitOutcome& fit) {
   const inverse::LockedCordProbes& probes = fit.locked_probes;
-  if (probes.cords.empty()) return "";
+  if (probes.cords.empty()) return;
   const auto taut = std::count_if(probes.cords.begin(), probes.cords.end(),
                                   [](const inverse::LockedCordProbe& p) { return !p.slack; });
   const std::string count = std::to_string(probes.cords.size());
-  if (taut == 0)
-    return "locked cords: " + count +
-           ", all slack in the fitted closure (they hold nothing there)\n";
+  if (taut == 0) {
+    std::cout << "locked cords: " << count
+              << ", all slack in the fitted closure (they hold nothing there)\n";
+    return;
+  }
   int failed = 0;
   auto countFailed = [&](const inverse::LockedCordTrial& t) { failed += t.error.empty() ? 0 : 1; };
   for (const inverse::LockedCordProbe& p : probes.cords) countFailed(p.trial);
@@ -295,12 +298,14 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
   const inverse::LockedCordTrial* best = probes.best();
   const double drop =
       best && probes.fit_data_cost > 0.0 ? 1.0 - best->data_cost / probes.fit_data_cost : 0.0;
-  if (drop < kLockedCordNoteDrop)
-    return "locked cords: " + count + ", " + std::to_string(taut) +
-           " taut; no one-step change of them (at most ±" +
-           formatWeight(100.0 * probes.max_change) + " %) lowers the data cost by " +
-           formatWeight(100.0 * kLockedCordNoteDrop) + " % or more (" + closures +
-           "; report.md, \"Locked cords\")" + failures + "\n";
+  if (drop < kLockedCordNoteDrop) {
+    std::cout << "locked cords: " + count + ", " + std::to_string(taut) +
+                     " taut; no one-step change of them (at most ±" +
+                     formatWeight(100.0 * probes.max_change) + " %) lowers the data cost by " +
+                     formatWeight(100.0 * kLockedCordNoteDrop) + " % or more (" + closures +
+                     "; report.md, \"Locked cords\")" + failures + "\n";
+    return;
+  }
   const Eigen::VectorXi segment = openStateSegments(c.mesh);
   const bool one = best->cords.size() == 1;
   std::string what;
@@ -315,13 +320,15 @@ std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
   // edit-cords starts from the case's cords unless told the seed: keep the user's edits.
   const std::string seed =
       o.seed_cords_file.empty() ? "" : " --cords " + shellWord(o.seed_cords_file);
-  return "note: locked cords hold the fit back: " + what + " (" + trialChange(fit, *best) +
-         " %): data cost -" + formatFixed(100.0 * drop, 0) + " %, AvgD " +
-         formatFixed(probes.fit_mean_deviation_mm, 2) + " -> " +
-         formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords " +
-         shellWord(o.case_dir) + seed + " --unlock " + trialCords(*best, ",") +
-         " --out FILE) to let the fit move " + (one ? "it" : "them") + " (" + closures +
-         "; report.md, \"Locked cords\")" + failures + "\n";
+  printNote(
+      "locked cords hold the fit back: %s\n",
+      (what + " (" + trialChange(fit, *best) + " %): data cost -" + formatFixed(100.0 * drop, 0) +
+       " %, AvgD " + formatFixed(probes.fit_mean_deviation_mm, 2) + " -> " +
+       formatFixed(best->mean_deviation_mm, 2) + " mm; unlock (edit-cords " +
+       shellWord(o.case_dir) + seed + " --unlock " + trialCords(*best, ",") +
+       " --out FILE) to let the fit move " + (one ? "it" : "them") + " (" + closures +
+       "; report.md, \"Locked cords\")" + failures)
+          .c_str());
 }
 
 std::string worseThanSeedNote(const inverse::FitOutcome& fit) {

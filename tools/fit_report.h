@@ -43,12 +43,13 @@ int freeCords(const inverse::FitOutcome& fit);
 // "16 extra closures", or "16 extra closures, 2 unsettled" when some reached the step cap.
 std::string extraClosures(int closures, int unsettled);
 
-// The summary line of the locked-cord probe (inverse/locked_cord_probe.h) for the terminal,
-// "" when no cord is locked or the probe did not run. It speaks of a cord holding the fit back
-// when unlocking it alone lowers the fit's data cost by at least kLockedCordNoteDrop.
+// Prints the summary line of the locked-cord probe (inverse/locked_cord_probe.h), nothing
+// when no cord is locked or the probe did not run: on stdout, or as a note (stderr) when a
+// locked cord holds the fit back, i.e. unlocking it alone lowers the fit's data cost by at
+// least kLockedCordNoteDrop.
 constexpr double kLockedCordNoteDrop = 0.05;
-std::string lockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
-                               const inverse::FitOutcome& fit);
+void printLockedProbeSummary(const ValveCase& c, const FitCommandOptions& o,
+                             const inverse::FitOutcome& fit);
 // When the fit does not reconstruct a prolapse the tracings show (Table 1's last column),
 // what to try, or "": cords all locked there ask to be unlocked; cords at the upper scale
 // bound, a higher bound; otherwise, without --tissue-prefit, softer tissue (the benchmark's

@@ -51,21 +51,21 @@ void noteWhatNoCordHolds(const CordSet& set, const ValveMesh& mesh, bool placed,
         return mesh.leaflet(c.vertex) == static_cast<int>(leaflet);
       });
       if (!held)
-        std::fprintf(stderr,
-                     "note: heuristic: the %s leaflet gets no cord at --primary-spacing %g mm "
-                     "and --secondary-spacing %g mm: nothing holds it down in systole\n",
-                     mesh.leaflet_names[leaflet].c_str(), options.primary_spacing_mm,
-                     options.secondary_spacing_mm);
+        printNote(
+            "heuristic: the %s leaflet gets no cord at --primary-spacing %g mm "
+            "and --secondary-spacing %g mm: nothing holds it down in systole\n",
+            mesh.leaflet_names[leaflet].c_str(), options.primary_spacing_mm,
+            options.secondary_spacing_mm);
     }
   }
   for (std::size_t t = 0; t < set.tips.size(); ++t) {
     const bool used = std::any_of(set.cords.begin(), set.cords.end(),
                                   [&](const Cord& c) { return c.tip == static_cast<int>(t); });
     if (!used)
-      std::fprintf(stderr, "note: heuristic: tip %s carries no cord%s\n", set.tips[t].name.c_str(),
-                   tips_given ? ""
-                              : " (none of the cords lies on its side), so its position, the "
-                                "paper's centroid of its insertions, is a placeholder");
+      printNote("heuristic: tip %s carries no cord%s\n", set.tips[t].name.c_str(),
+                tips_given ? ""
+                           : " (none of the cords lies on its side), so its position, the "
+                             "paper's centroid of its insertions, is a placeholder");
   }
 }
 }  // namespace
@@ -109,18 +109,18 @@ int runHeuristic(const HeuristicCommandOptions& options) {
   }
   const bool case_cords = valve_case->cords && !valve_case->cords->cords.empty();
   if ((options.primary_compliance > 0.0 || options.secondary_compliance > 0.0) && case_cords)
-    std::fprintf(stderr,
-                 "note: heuristic: the case's own cords keep their compliance; "
-                 "--primary-compliance and --secondary-compliance apply to placed cords\n");
+    printNote(
+        "heuristic: the case's own cords keep their compliance; "
+        "--primary-compliance and --secondary-compliance apply to placed cords\n");
   // The placement options were taken without a word on a case whose cords are placed already.
   const HeuristicCommandOptions defaults;
   if (case_cords && (options.primary_spacing_mm != defaults.primary_spacing_mm ||
                      options.secondary_spacing_mm != defaults.secondary_spacing_mm ||
                      options.secondary_depth_mm != defaults.secondary_depth_mm))
-    std::fprintf(stderr,
-                 "note: heuristic: the case's own cords keep their insertions (the heuristic "
-                 "gives them tips and rest lengths); --primary-spacing, --secondary-spacing and "
-                 "--secondary-depth apply when it places the cords\n");
+    printNote(
+        "heuristic: the case's own cords keep their insertions (the heuristic "
+        "gives them tips and rest lengths); --primary-spacing, --secondary-spacing and "
+        "--secondary-depth apply when it places the cords\n");
   HeuristicOptions heuristic;
   heuristic.primary_spacing_mm = options.primary_spacing_mm;
   heuristic.secondary_spacing_mm = options.secondary_spacing_mm;
@@ -137,11 +137,11 @@ int runHeuristic(const HeuristicCommandOptions& options) {
     return c.kind == CordKind::kSecondary;
   });
   if (!case_cords && !any_secondary)
-    std::fprintf(stderr,
-                 "note: heuristic: no secondary cord placed: no leaflet vertex lies "
-                 "--secondary-depth %g mm (along mesh edges) in from the free edge and %g mm or "
-                 "more from the annulus\n",
-                 options.secondary_depth_mm, HeuristicOptions{}.min_annulus_distance_mm);
+    printNote(
+        "heuristic: no secondary cord placed: no leaflet vertex lies "
+        "--secondary-depth %g mm (along mesh edges) in from the free edge and %g mm or "
+        "more from the annulus\n",
+        options.secondary_depth_mm, HeuristicOptions{}.min_annulus_distance_mm);
   noteWhatNoCordHolds(set, valve_case->mesh, !case_cords,
                       valve_case->tips && valve_case->tips->size() == set.tips.size(), options);
   writeCordSet(options.out_file, set, &valve_case->mesh);

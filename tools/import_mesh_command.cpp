@@ -261,8 +261,8 @@ int runImportMesh(const ImportMeshOptions& options) {
   if (!options.keep_seams && diagnostics.ok() && V.allFinite() &&
       (F.size() == 0 || (F.minCoeff() >= 0 && F.maxCoeff() < V.rows()))) {
     if (const int merged = weldCoincidentVertices(V, F); merged > 0)
-      std::printf(
-          "note: import-mesh: %s: %s merged into others at the same position, %s left (an "
+      printNote(
+          "import-mesh: %s: %s merged into others at the same position, %s left (an "
           "exporter that repeats each triangle's corners leaves separate triangles; "
           "--keep-seams keeps them apart)\n",
           options.mesh_file.c_str(), counted(merged, "vertex", "vertices").c_str(),
@@ -342,8 +342,8 @@ int runImportMesh(const ImportMeshOptions& options) {
   if (imported.holes > 0) {
     // A hole lets the leaflet's edge there hang free: the closure and the labels near it
     // differ from the tissue's.
-    std::printf(
-        "warning: the mesh has %d boundary loop(s) besides the annulus and the free edge: holes "
+    printWarning(
+        "the mesh has %d boundary loop(s) besides the annulus and the free edge: holes "
         "in the leaflet surface (a missing triangle?) or loose pieces; each such edge is "
         "simulated as free\n",
         imported.holes);
@@ -356,8 +356,8 @@ int runImportMesh(const ImportMeshOptions& options) {
               "other arc is " +
                   percent(other) + ")"
             : "";
-    std::printf(
-        "warning: the anterior annulus is usually about a third of the circumference; check "
+    printWarning(
+        "the anterior annulus is usually about a third of the circumference; check "
         "the landmarks (anterolateral, posteromedial, anterior)%s\n",
         cause.c_str());
   }
@@ -369,8 +369,8 @@ int runImportMesh(const ImportMeshOptions& options) {
     // 65-80 % on the synthetic cohort's cases (66-80 % over every preset); 35 % measured with
     // landmarks in RAS read as LPS on a valve centred at the origin.
     if (agreement < kLeafletAgreementLow)
-      std::printf(
-          "warning: most tracing points are nearer the other leaflet (65-80 %% lie nearest their "
+      printWarning(
+          "most tracing points are nearer the other leaflet (65-80 %% lie nearest their "
           "own on correctly labelled valves): are the landmarks and the tracings in the same "
           "coordinate system (RAS read as LPS)? Check the leaflet vertex counts above\n");
   }

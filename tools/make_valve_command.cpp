@@ -74,8 +74,8 @@ void noteDiametersIgnored(const MakeValveOptions& options) {
     if (optionGiven(options.given_options, option))
       ignored += (ignored.empty() ? "" : " and ") + std::string(option);
   if (!ignored.empty())
-    std::cerr << "note: make-valve: " << ignored << " do" << (ignored.size() > 4 ? "" : "es")
-              << " not act with --annulus: the annulus file gives the diameters\n";
+    printNote("make-valve: %s do%s not act with --annulus: the annulus file gives the diameters\n",
+              ignored.c_str(), ignored.size() > 4 ? "" : "es");
 }
 
 }  // namespace
@@ -119,15 +119,15 @@ int runMakeValve(const MakeValveOptions& options) {
   // Accepted but unlike an adult mitral valve: say so, the valve is made as asked.
   const ValveParameters& p = parameters;
   if (p.commissural_height_mm >= p.anterior_height_mm)
-    std::printf(
-        "note: make-valve: the commissures (%g mm, --commissural-height) are as tall as "
+    printNote(
+        "make-valve: the commissures (%g mm, --commissural-height) are as tall as "
         "the anterior leaflet (%g mm) or taller: an unusual valve (defaults 8 and 23 "
         "mm)\n",
         p.commissural_height_mm, p.anterior_height_mm);
   if (options.annulus_file.empty() &&
       (p.ap_diameter_mm / p.cc_diameter_mm < 0.6 || p.ap_diameter_mm / p.cc_diameter_mm > 1.1))
-    std::printf(
-        "note: make-valve: --ap / --cc = %.2f; an adult mitral annulus is wider than "
+    printNote(
+        "make-valve: --ap / --cc = %.2f; an adult mitral annulus is wider than "
         "deep (about 0.8, the defaults 28 / 35 mm)\n",
         p.ap_diameter_mm / p.cc_diameter_mm);
   fitStepCapToMesh(valve.valve_case);

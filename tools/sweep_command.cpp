@@ -172,10 +172,10 @@ int runSweepCord(const SweepCordOptions& options) {
   const int count = static_cast<int>(scales);
   const int half = static_cast<int>(half_steps);
   if (std::abs(half * options.step - options.range) > 1e-9 * options.range)
-    std::fprintf(stderr,
-                 "note: sweep-cord: --step %g does not divide --range %g: the scales run from %g "
-                 "to %g, centred on 1\n",
-                 options.step, options.range, 1.0 - half * options.step, 1.0 + half * options.step);
+    printNote(
+        "sweep-cord: --step %g does not divide --range %g: the scales run from %g "
+        "to %g, centred on 1\n",
+        options.step, options.range, 1.0 - half * options.step, 1.0 + half * options.step);
   if (count < 2 * options.window + 1) {  // no full window: no noise to report
     std::cerr << "error: sweep-cord: --window " << options.window << " needs at least "
               << 2 * options.window + 1 << " scales; --range/--step give " << count << "\n";
