@@ -1,12 +1,16 @@
 #include "core/atomic_file.h"
 
 #include <cerrno>
+#include <chrono>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 #include <stdexcept>
 #include <system_error>
 
+#include <fcntl.h>
+#include <signal.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 namespace chordfit {
@@ -32,28 +36,80 @@ std::string systemReason() {
 
 }  // namespace
 
+namespace {
+
+namespace fs = std::filesystem;
+
+// The pid in a temporary file's name "<name>.tmp.<pid>" beside `path`, or -1 for any other.
+long temporaryPid(const fs::path& path, const std::string& entry) {
+  const std::string prefix = path.filename().string() + ".tmp.";
+  if (entry.size() <= prefix.size() || entry.size() > prefix.size() + 9 ||
+      entry.compare(0, prefix.size(), prefix) != 0)
+    return -1;
+  const std::string digits = entry.substr(prefix.size());
+  if (digits.find_first_not_of("0123456789") != std::string::npos) return -1;
+  return std::stol(digits);
+}
+
+// Writes all of `bytes` to `fd`; false (errno set) when the device refuses.
+bool writeAll(int fd, const std::string& bytes) {
+  std::size_t written = 0;
+  while (written < bytes.size()) {
+    const ssize_t n = ::write(fd, bytes.data() + written, bytes.size() - written);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    written += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+}  // namespace
+
+bool leftByEndedProcess(const std::filesystem::path& entry, long pid) {
+  std::error_code ec;
+  const auto age = fs::file_time_type::clock::now() - fs::last_write_time(entry, ec);
+  if (ec || age < std::chrono::seconds(2)) return false;
+  const int fd = ::open(entry.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
+  if (fd < 0) return false;
+  const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+  ::close(fd);
+  return free && ::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH;
+}
+
+void removeAbandonedTemporaries(const std::filesystem::path& path) {
+  std::error_code ec;
+  const fs::path dir = path.has_parent_path() ? path.parent_path() : fs::path(".");
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const long pid = temporaryPid(path, it->path().filename().string());
+    std::error_code ignored;
+    if (pid <= 0 || pid == ::getpid() || !fs::is_regular_file(it->symlink_status(ignored)))
+      continue;
+    if (leftByEndedProcess(it->path(), pid)) fs::remove(it->path(), ignored);
+  }
+}
+
 void writeFileAtomically(const std::filesystem::path& requested, const std::string& bytes) {
-  namespace fs = std::filesystem;
   std::error_code ec;
   const fs::path path = writeTarget(requested);
   if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
-  // The pid keeps concurrent writers (e.g. sharded experiments) from sharing a temp file.
+  removeAbandonedTemporaries(path);
+  // The pid keeps concurrent writers (e.g. sharded experiments) from sharing a temp file; the
+  // lock, held until the rename, keeps removeAbandonedTemporaries of other runs off it.
   fs::path tmp = path;
   tmp += ".tmp." + std::to_string(::getpid());
-  {
-    errno = 0;
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out)
-      throw std::runtime_error(requested.string() + ": cannot open for writing" + systemReason());
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.flush();
-    if (!out) {
-      const std::string reason = systemReason();
-      fs::remove(tmp, ec);
-      throw std::runtime_error(requested.string() + ": write failed" + reason);
-    }
+  errno = 0;
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
+  if (fd < 0)
+    throw std::runtime_error(requested.string() + ": cannot open for writing" + systemReason());
+  ::flock(fd, LOCK_EX);  // advisory; a file system without locks still gets its file
+  if (!writeAll(fd, bytes)) {
+    const std::string reason = systemReason();
+    ::close(fd);
+    fs::remove(tmp, ec);
+    throw std::runtime_error(requested.string() + ": write failed" + reason);
   }
   fs::rename(tmp, path, ec);
+  ::close(fd);
   if (ec) {
     fs::remove(tmp, ec);
     throw std::runtime_error(requested.string() + ": cannot move temporary file into place");

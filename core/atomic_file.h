@@ -14,6 +14,19 @@ namespace chordfit {
 // bytes and the link stays. Throws std::runtime_error naming the path on failure.
 void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
+// Whether `entry`, a temporary file or directory named with the pid of the process writing
+// it, was left by a process that has ended: its lock is free (a live writer holds a flock on
+// it, which another container or NFS client sees too, where its pid means nothing), no process
+// of that pid lives on this machine, and it is older than 2 s (so that a writer between its
+// open and its lock keeps it). A pid reused by an unrelated process keeps it for a later run.
+bool leftByEndedProcess(const std::filesystem::path& entry, long pid);
+
+// Removes the temporary files "<name>.tmp.<pid>" beside `path` that writers no longer alive
+// left (a write killed between its open and its rename: SIGKILL, Ctrl-C); writeFileAtomically
+// calls it first. A live writer's file is kept: it holds a lock on it (seen from another
+// container or NFS client, where its pid is not), and a process of its pid lives here.
+void removeAbandonedTemporaries(const std::filesystem::path& path);
+
 // The largest input file any reader takes. A fine valve mesh (a million triangles, ten times
 // the finest the project makes) is ~60 MB of ASCII PLY and the JSON side files are smaller;
 // parsing holds several times the text in memory, so a file beyond this is a wrong file (a

@@ -1,5 +1,11 @@
 // Atomic output (core/atomic_file.h): the whole file or nothing, and a symbolic link the user
 // made is written through, not replaced.
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
 #include <filesystem>
 
 #include <gtest/gtest.h>
@@ -33,6 +39,43 @@ TEST(AtomicFile, WritesTheWholeFileAndLeavesNoTemporary) {
 
 // latest.json -> runs/7/cords.json: the run's file gets the bytes and the link still points
 // at it (a rename onto the link would have replaced it by a plain file).
+// A write killed between its open and its rename (SIGKILL, Ctrl-C) leaves "<name>.tmp.<pid>";
+// the next write of that file removes it, but not a live writer's: one whose process runs
+// here, one that holds its lock (a writer on another host), or one written a moment ago.
+TEST(AtomicFile, RemovesTheTemporariesOfWritersThatNoLongerExist) {
+  TempDir dir;
+  auto endedPid = [] {
+    const pid_t child = ::fork();
+    if (child == 0) ::_exit(0);
+    ::waitpid(child, nullptr, 0);
+    return std::to_string(child);
+  };
+  const fs::path out = dir / "cords.json";
+  const fs::path abandoned = dir / ("cords.json.tmp." + endedPid());
+  const fs::path running = dir / ("cords.json.tmp." + std::to_string(::getppid()));
+  const fs::path locked = dir / ("cords.json.tmp." + endedPid());
+  const fs::path fresh = dir / ("cords.json.tmp." + endedPid());
+  const fs::path other_file = dir / ("metrics.json.tmp." + endedPid());
+  const fs::path not_temporary = dir / "cords.json.tmp.notes";
+  const auto old = fs::file_time_type::clock::now() - std::chrono::minutes(5);
+  for (const fs::path& file : {abandoned, running, locked, fresh, other_file, not_temporary}) {
+    testing::writeText(file, "{");
+    if (file != fresh) fs::last_write_time(file, old);
+  }
+  const int lock = ::open(locked.c_str(), O_RDONLY);
+  ASSERT_GE(lock, 0);
+  ASSERT_EQ(::flock(lock, LOCK_EX | LOCK_NB), 0);
+  writeFileAtomically(out, "{}");
+  ::close(lock);
+  EXPECT_EQ(testing::readText(out), "{}");
+  EXPECT_FALSE(fs::exists(abandoned)) << "its writer has ended";
+  EXPECT_TRUE(fs::exists(running)) << "its process still runs";
+  EXPECT_TRUE(fs::exists(locked)) << "its writer holds the lock";
+  EXPECT_TRUE(fs::exists(fresh)) << "written a moment ago";
+  EXPECT_TRUE(fs::exists(other_file)) << "another file's, left for its own next write";
+  EXPECT_TRUE(fs::exists(not_temporary)) << "not a temporary's name";
+}
+
 TEST(AtomicFile, WritesThroughASymbolicLink) {
   TempDir dir;
   writeFileAtomically(dir / "runs" / "7" / "cords.json", "old");

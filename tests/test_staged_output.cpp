@@ -6,6 +6,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <chrono>
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
@@ -58,6 +59,7 @@ TEST(StagedOutput, RemovesTheStagingDirectoriesOfRunsThatNoLongerExist) {
   for (const fs::path& dir : {abandoned, running, not_staging, locked}) {
     fs::create_directories(dir);
     writeText(dir / "cords.json", "{");
+    fs::last_write_time(dir, fs::file_time_type::clock::now() - std::chrono::minutes(5));
   }
   const int lock = ::open(locked.c_str(), O_RDONLY | O_DIRECTORY);
   ASSERT_GE(lock, 0);

@@ -1,11 +1,8 @@
 #include "tools/staged_output.h"
 
 #include <fcntl.h>
-#include <signal.h>
 #include <sys/file.h>
 #include <unistd.h>
-
-#include <cerrno>
 
 #include <algorithm>
 #include <map>
@@ -47,23 +44,16 @@ int lockDirectory(const fs::path& dir) {
   return fd;
 }
 
-// Removes the staging directories in `out` of runs that no longer exist: a run killed before
-// its destructor ran (SIGKILL, Ctrl-C) left its staged files there, and a later run would
-// otherwise leave them for good. A live run holds its directory's lock (seen from another
-// container or host too, where its pid is not); a run of a chordfit that took no lock is seen
-// by its pid here. A live process of that pid keeps the directory either way (an unrelated
-// one that reused the pid leaves it for a later run).
+// Removes the staging directories in `out` of runs that no longer exist (leftByEndedProcess):
+// a run killed before its destructor ran (SIGKILL, Ctrl-C) left its staged files there, and a
+// later run would otherwise leave them for good.
 void removeAbandonedStagingDirectories(const fs::path& out) {
   std::error_code ec;
   for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
     const long pid = stagingPid(it->path().filename().string());
     std::error_code ignored;
     if (pid <= 0 || pid == ::getpid() || !fs::is_directory(it->symlink_status(ignored))) continue;
-    const int lock = lockDirectory(it->path());
-    if (lock < 0) continue;  // a live run's, wherever it runs
-    if (::kill(static_cast<pid_t>(pid), 0) != 0 && errno == ESRCH)
-      fs::remove_all(it->path(), ignored);
-    ::close(lock);
+    if (leftByEndedProcess(it->path(), pid)) fs::remove_all(it->path(), ignored);
   }
 }
 
