@@ -585,13 +585,21 @@ namespace {
 // loadCase on a Diagnostics of its own (whose growth says whether the case failed).
 std::optional<ValveCase> loadCaseChecked(const fs::path& directory, Diagnostics& diagnostics) {
   const std::size_t problems_before = diagnostics.problems().size();
-  if (!fs::is_directory(directory)) {
-    diagnostics.error(directory.string(), "",
-                      fs::exists(directory) ? "not a directory" : "case directory not found");
+  std::error_code ec;
+  // A loop of links, a name too long, a parent the user may not search: say why (status()
+  // without an error code threw them out of the command as an unexpected failure).
+  const fs::file_status directory_status = fs::status(directory, ec);
+  if (ec && directory_status.type() != fs::file_type::not_found) {
+    diagnostics.error(directory.string(), "", "cannot be read (" + ec.message() + ")");
+    return std::nullopt;
+  }
+  if (!fs::is_directory(directory_status)) {
+    diagnostics.error(
+        directory.string(), "",
+        fs::exists(directory_status) ? "not a directory" : "case directory not found");
     return std::nullopt;
   }
   const fs::path case_file = directory / kCaseFile;
-  std::error_code ec;
   // A link that loops, or a directory the user may not search, is not "not found": say why.
   const fs::file_status case_file_status = fs::status(case_file, ec);
   if (ec && case_file_status.type() != fs::file_type::not_found) {

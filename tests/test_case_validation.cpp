@@ -133,6 +133,28 @@ TEST_F(ValidateCommand, ReportsAMissingCaseDirectory) {
   EXPECT_NE(r.err.find("case directory not found"), std::string::npos) << r.err;
 }
 
+// A case directory that is a loop of links, or whose name is too long, is bad input said as
+// such (exit 2), on every command that reads a case; it used to leave as an unexpected failure
+// (exit 1, "filesystem error: status: ...").
+TEST_F(ValidateCommand, SaysWhyACaseDirectoryThatIsALoopOfLinksCannotBeRead) {
+  const std::filesystem::path loop = dir_ / "loop";
+  std::filesystem::create_symlink("loop", loop);
+  for (const std::string command : {"validate", "heuristic", "simulate", "fit", "sweep-cord"}) {
+    const std::string out = command == "validate"    ? ""
+                            : command == "heuristic" ? " --out x.json"
+                                                     : " --out x";
+    const testing::CommandResult r = runChordfit(command + " " + testing::quoted(loop) + out);
+    EXPECT_EQ(r.exit_code, 2) << command << ": " << r.err;
+    EXPECT_NE(r.err.find(loop.string() + ": cannot be read (Too many levels of symbolic links)"),
+              std::string::npos)
+        << command << ": " << r.err;
+  }
+  const std::string long_name = (dir_ / std::string(300, 'a')).string();
+  const testing::CommandResult r = runChordfit("validate " + testing::quoted(long_name));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find(": cannot be read (File name too long)"), std::string::npos) << r.err;
+}
+
 TEST_F(ValidateCommand, ReportsMalformedJsonWithLineAndColumn) {
   writeText(dir_ / "case.json", "{\n  \"version\": 1,\n  \"mesh\": \"open.ply\",,\n}");
   // The whole reason, not the part after its last ": " (which cut it to the last characters read).

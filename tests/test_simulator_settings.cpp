@@ -51,6 +51,26 @@ TEST(SimulatorSettingsRanges, ZeroNegativeAndAbsurdValuesAreRejected) {
   EXPECT_EQ(problems.size(), 7u);
 }
 
+// A velocity clamp at the settling tolerance would let an open valve pass for settled
+// (max_step_mm 5e-5 gave "converged" after 159 steps, 39 % of the orifice open): the clamp
+// must be at least 10 x the tolerance; 0 (automatic) and the tolerance's own range stay.
+TEST(SimulatorSettingsRanges, AVelocityClampNearTheToleranceIsRefused) {
+  SimulationSettings s;
+  s.max_step_mm = 5e-5;
+  auto problems = settingsProblems(s);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].key, "max_step_mm");
+  EXPECT_NE(problems[0].what.find("5e-05 mm is below 10 x tolerance_mm (0.0001 mm)"),
+            std::string::npos)
+      << problems[0].what;
+  s.max_step_mm = 2e-3;  // 20 x
+  EXPECT_TRUE(settingsProblems(s).empty());
+  s.tolerance_mm = 1e-3;  // the same clamp against a looser tolerance
+  EXPECT_TRUE(hasProblem(settingsProblems(s), "max_step_mm"));
+  s.max_step_mm = 0.0;
+  EXPECT_TRUE(settingsProblems(s).empty());
+}
+
 // As for every other object's keys: a typo is named with the setting it may have meant.
 TEST(SimulatorSettingsRanges, AnUnknownSettingSuggestsTheNearestKnownOne) {
   Diagnostics diagnostics;
