@@ -404,16 +404,24 @@ std::string prepareStl(std::string& bytes) {
   if (bytes.size() < 84) return "";
   const std::uint64_t facets = readUnsigned(bytes.data() + 80, 4, false);
   if (bytes.size() != 84 + 50 * facets) {
-    // ASCII (CGAL skips blanks before "solid"), or a binary file with bytes after its facets
-    // (CGAL reads the facets the count gives). A binary file shorter than its count was
-    // reported as a bad ASCII 'vertex' line: say what it is.
+    // ASCII (CGAL skips blanks before "solid"), or a binary file whose count does not match
+    // its size. A binary file shorter than its count was reported as a bad ASCII 'vertex'
+    // line; one holding more whole facets than its count lost them without a word (CGAL
+    // reads what the count gives: 349 of 350 facets), or was refused for its landmarks (3 of
+    // 350): say what it is.
     const std::size_t first = bytes.find_first_not_of(" \t\r\n");
     const bool ascii = first != std::string::npos && bytes.compare(first, 5, "solid") == 0 &&
                        bytes.find('\0') == std::string::npos;
-    if (ascii || bytes.size() > 84 + 50 * facets) return "";
-    return "a binary STL of " + std::to_string(facets) + " facets (the count at byte 80) has " +
-           std::to_string(84 + 50 * facets) + " bytes, this file " + std::to_string(bytes.size()) +
-           ": cut short";
+    if (ascii) return "";
+    const std::string counted =
+        "a binary STL of " + std::to_string(facets) + " facets (the count at byte 80) has " +
+        std::to_string(84 + 50 * facets) + " bytes, this file " + std::to_string(bytes.size());
+    if (bytes.size() < 84 + 50 * facets) return counted + ": cut short";
+    // Bytes after the facets that make no whole facet are an exporter's padding: read.
+    const std::size_t extra = bytes.size() - 84 - 50 * facets;
+    if (extra % 50 != 0) return "";
+    return counted + ": it holds " + std::to_string(facets + extra / 50) +
+           " facets, the count is wrong (re-export the mesh)";
   }
   for (std::uint64_t f = 0; f < facets; ++f) {
     const char* vertices = bytes.data() + 84 + 50 * f + 12;  // skip the facet normal

@@ -574,6 +574,14 @@ TEST_F(MeshIoTest, TinyOrGarbageStlIsReported) {
               std::string::npos)
         << header << ": " << p.what;
   }
+  // A count below the facets the file holds: CGAL read only the counted ones.
+  std::string miscounted = binaryStl("binary", {a, a, a});
+  miscounted[80] = 2;
+  const Problem p = readFails(write("miscounted.stl", miscounted));
+  EXPECT_NE(p.what.find("a binary STL of 2 facets (the count at byte 80) has 184 bytes, this "
+                        "file 234: it holds 3 facets, the count is wrong"),
+            std::string::npos)
+      << p.what;
 }
 
 // --- legacy VTK -------------------------------------------------------------------------
