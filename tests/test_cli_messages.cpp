@@ -142,6 +142,26 @@ TEST(MakeValveCommand, NotesDiametersTheAnnulusFileOverridesAndListsItsFormats) 
     EXPECT_NE(help.out.find(format), std::string::npos) << format << "\n" << help.out;
 }
 
+// An --out within the system's path limit but not within it once the staging directory, the
+// file names and temporary suffixes are added is refused before the work, and nothing is made
+// (simulate failed after its closure, exit 1, and left the directories it had created).
+TEST(Cli, RefusesAnOutputPathTooLongForWhatIsWrittenUnderItBeforeTheWork) {
+  TempDir dir;
+  fs::path out = dir.path();
+  while (out.string().size() < 3800) out /= std::string(199, 'd');
+  out /= std::string(4068 - out.string().size() - 1, 'e');
+  ASSERT_EQ(out.string().size(), 4068u);
+  const std::string message =
+      ": a path of 4068 characters: the paths written under it (a "
+      "staging directory and temporary names included) would pass the "
+      "system's limit of 4095 characters; give a shorter path";
+  expectRefused("simulate " + quoted(smallCase()) + " --out " + quoted(out),
+                "error: simulate: --out: " + out.string() + message);
+  expectRefused("heuristic " + quoted(smallCase()) + " --out " + quoted(out),
+                "error: heuristic: --out: " + out.string() + message);
+  EXPECT_TRUE(fs::is_empty(dir.path())) << "nothing made";
+}
+
 // `chordfit --bogus` said only "A subcommand is required".
 TEST(Cli, NamesAnUnknownOptionBeforeTheCommand) {
   expectRefused("--bogus", "error: unknown option --bogus");

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <climits>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -323,12 +324,32 @@ bool reportEmptyOutput(const char* command, const std::string& out) {
   return true;
 }
 
+// The paths a command writes are longer than --out: a staging directory (".staging-<pid>",
+// within a nested command's too), the file, and ".tmp.<pid>". A --out within PATH_MAX but
+// not that much within failed after the work, leaving the directories it had made ("File name
+// too long" at 4,060 of 4,096 characters). The margin holds two staging levels and the
+// temporary suffix with 10-digit pids.
+std::string pathLengthProblem(const std::string& path, const std::string& longest_name) {
+  constexpr std::size_t kWrittenBeside = 2 * (sizeof("/.staging-") + 10) + sizeof(".tmp.") + 10;
+  const std::size_t longest = path.size() + 1 + longest_name.size() + kWrittenBeside;
+  if (longest < PATH_MAX) return "";
+  return "a path of " + std::to_string(path.size()) +
+         " characters: the paths written under it (a staging directory and temporary names "
+         "included) would pass the system's limit of " +
+         std::to_string(PATH_MAX - 1) + " characters; give a shorter path";
+}
+
 }  // namespace
 
 bool outputDirectoryUsable(const char* command, const std::string& directory,
                            const std::vector<std::string>& files,
                            const std::vector<std::string>& inputs) {
   if (reportEmptyOutput(command, directory)) return false;
+  std::string longest_name;
+  for (const std::string& name : files)
+    if (name.size() > longest_name.size()) longest_name = name;
+  if (!reportOutputProblem(command, directory, pathLengthProblem(directory, longest_name)))
+    return false;
   if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
   for (const std::string& name : files) {
     if (const auto problem = whatIsInTheWay(directory, name))
@@ -401,6 +422,7 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
 
 bool outputFileUsable(const char* command, const std::string& file) {
   if (reportEmptyOutput(command, file)) return false;
+  if (!reportOutputProblem(command, file, pathLengthProblem(file, ""))) return false;
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     return reportOutputProblem(command, file, "is a directory; give the file to write");
