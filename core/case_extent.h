@@ -43,11 +43,12 @@ bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& 
 
 // The closed annulus against the open ring it moves (row k of `closed` is where ring vertex k
 // goes): the same winding (Newell normals of the two polygons at less than 90 degrees), a
-// perimeter within 0.25-4 times the ring's, no side under a tenth of the ring's mean side, and
-// the same start (no cyclic shift by an eighth of the ring or more, each polygon about its
-// centre, fits the ring better). Errors name
-// (file, "points"). A reversed, shifted or half-turned order, or a collapsed annulus, passed
-// every other check and then made the closure diverge (exit 3) or pull the ring across.
+// perimeter within 0.5-4 times the ring's, no side under a tenth of the ring's mean side, no
+// side crossing another (seen along the ring's normal: two points swapped), and the same start (no
+// cyclic shift by an eighth of the ring or more, each polygon about its centre, fits the ring
+// better). Errors name (file, "points"). A reversed, shifted or half-turned order, or a collapsed
+// annulus, passed every other check and then made the closure diverge (exit 3) or pull the ring
+// across.
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
                         const std::string& file, Diagnostics& diagnostics);
 

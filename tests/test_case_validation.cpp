@@ -319,6 +319,18 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusShiftedTurnedOrWithARepeatedPoint) 
   expectError("annulus_closed\\.json", "shifted by 4 of 8 places .*half a turn");
   writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 2 : k); });
   expectError("annulus_closed\\.json", "points\\[2\\]: the side to point 3 is 0 mm long");
+  // Two points swapped: the ring pulled through itself diverged at step 62 (exit 3).
+  writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 4 : k == 4 ? 3 : k); });
+  expectError("annulus_closed\\.json",
+              "points\\[3\\]: the closed annulus crosses itself: its side between points 2-3 "
+              "crosses the side 4-5");
+  // Drawn in to 0.4 of its size about its centre (0.35 diverged on the parametric valve).
+  writeClosed([&](Eigen::Index k) -> Eigen::RowVector3d {
+    const Eigen::RowVector3d p = closed.row(k) - centre;
+    return centre + Eigen::RowVector3d(0.4 * p(0), 0.4 * p(1), p(2));
+  });
+  expectError("annulus_closed\\.json",
+              "points: the closed annulus is .* \\(accepted: 0.5 to 4 times\\)");
   // The whole annulus moved toward the apex, turned by 20 degrees about its axis and shrunk by
   // a tenth is no shift: a small rotation between the phases looks like a shift of a place
   // or two.
