@@ -16,6 +16,7 @@
 #include "core/case_io.h"
 #include "core/cordset_io.h"
 #include "core/mesh_io.h"
+#include "core/mesh_topology.h"
 #include "tests/test_support.h"
 
 namespace chordfit {
@@ -343,6 +344,47 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusShiftedTurnedOrWithARepeatedPoint) 
   });
   const testing::CommandResult r = validate();
   EXPECT_EQ(r.err.find("annulus_closed.json: points"), std::string::npos) << r.err;
+}
+
+// A hole in the leaflet surface (a triangle missing) is simulated as a free edge: every command
+// that reads the case warns of it, once, as import-mesh did (validate took it silently); the
+// run goes on.
+TEST(CaseMeshHoles, AreWarnedOfByEveryCommandThatReadsTheCase) {
+  TempDir dir;
+  Diagnostics diagnostics;
+  std::optional<ValveCase> c =
+      loadCase(std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal", diagnostics);
+  ASSERT_TRUE(c);
+  writeCase(dir / "whole", *c);
+  // A triangle none of whose vertices lies on the boundary.
+  std::vector<bool> on_boundary(c->mesh.V.rows(), false);
+  for (const std::vector<int>& loop : boundaryLoops(c->mesh.F))
+    for (int v : loop) on_boundary[v] = true;
+  Eigen::Index interior = -1;
+  for (Eigen::Index f = 0; f < c->mesh.F.rows() && interior < 0; ++f)
+    if (!on_boundary[c->mesh.F(f, 0)] && !on_boundary[c->mesh.F(f, 1)] &&
+        !on_boundary[c->mesh.F(f, 2)])
+      interior = f;
+  ASSERT_GE(interior, 0);
+  Eigen::MatrixXi F(c->mesh.F.rows() - 1, 3);
+  F << c->mesh.F.topRows(interior), c->mesh.F.bottomRows(c->mesh.F.rows() - interior - 1);
+  c->mesh.F = F;
+  writeCase(dir / "holed", *c);
+  const std::string warning =
+      "the valve mesh has 1 boundary loop besides the annulus ring and "
+      "the free edge: holes in the leaflet surface";
+  const std::string holed = testing::quoted(dir / "holed");
+  for (const std::string& command :
+       {"validate " + holed, "heuristic " + holed + " --out " + testing::quoted(dir / "h.json")}) {
+    const auto r = runChordfit(command);
+    EXPECT_EQ(r.exit_code, 0) << command << ": " << r.err;
+    EXPECT_NE(r.err.find("warning: case " + (dir / "holed").string() + ": " + warning),
+              std::string::npos)
+        << command << ": " << r.err;
+  }
+  const auto whole = runChordfit("validate " + testing::quoted(dir / "whole"));
+  EXPECT_EQ(whole.exit_code, 0) << whole.err;
+  EXPECT_EQ(whole.err.find("boundary loop"), std::string::npos) << whole.err;
 }
 
 // Leaflet names make the cord groups and the tracings' leaflets; a leaflet needs vertices.

@@ -27,6 +27,7 @@
 #include "core/counted.h"
 #include "core/heuristic.h"
 #include "core/leaflet_agreement.h"
+#include "core/mesh_topology.h"
 #include "core/metrics.h"
 #include "core/synthetic_case.h"
 #include "tools/commands.h"
@@ -34,8 +35,20 @@
 
 namespace chordfit::cli {
 
+namespace {
+
+// Boundary loops besides the annulus ring and the free edge: holes in the leaflet surface or
+// loose pieces. import-mesh warned of them, validate and the others took such a case silently
+// (each hole's rim is simulated as a free edge, and the labels near it may be off).
+int meshHoles(const ValveMesh& mesh) {
+  return std::max(0, static_cast<int>(boundaryLoops(mesh.F).size()) - 2);
+}
+
+}  // namespace
+
 std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
   static std::set<std::string> warned_cases;
+  static std::set<std::string> warned_holes;
   Diagnostics diagnostics;
   std::optional<ValveCase> loaded = loadCase(case_dir, diagnostics);
   if (!loaded) {
@@ -52,6 +65,14 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
                  "(65-80 % on correctly labelled valves): are the leaflet labels (case.json "
                  "leaflets.labels) or the tracings' leaflets swapped? Each point is measured to "
                  "its own leaflet, so swapped labels make every distance, and a fit, wrong\n";
+  }
+  if (loaded && warned_holes.insert(case_dir).second) {
+    if (const int holes = meshHoles(loaded->mesh); holes > 0)
+      printWarning(
+          "case %s: the valve mesh has %d boundary loop%s besides the annulus ring and the free "
+          "edge: holes in the leaflet surface (a missing triangle?) or loose pieces; each such "
+          "rim is simulated as a free edge\n",
+          case_dir.c_str(), holes, holes == 1 ? "" : "s");
   }
   return loaded;
 }
