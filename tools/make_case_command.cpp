@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
 #include <stdexcept>
@@ -155,8 +156,9 @@ int runMakeCase(const MakeCaseOptions& options) {
   std::cout << "noise floor (true closed mesh vs tracings):\n"
             << table1Header()
             << table1Row(synthetic.valve_case.name + " truth", synthetic.truth_metrics);
-  std::printf("wrote %s (case) and %s/truth (%.1f s)%s\n", options.out_dir.c_str(),
-              options.out_dir.c_str(), synthetic.seconds, removedNote(published).c_str());
+  std::printf("wrote %s (case) and %s (%.1f s)%s\n", options.out_dir.c_str(),
+              (std::filesystem::path(options.out_dir) / "truth").c_str(), synthetic.seconds,
+              removedNote(published).c_str());
   return kExitOk;
 }
 
