@@ -259,6 +259,49 @@ TEST_F(SimulateCommand, AStepCapThatEndsDuringThePressureRampIsAnInputError) {
   EXPECT_EQ(measured.exit_code, 0) << measured.err;
 }
 
+// Stiff tissue factors shorten the automatic time step; such a run was refused as
+// "case.json: simulation.max_steps", whether or not case.json had a simulation block.
+TEST_F(SimulateCommand, AStepCapTheTissuesFactorsOutrunNamesTheTissue) {
+  nlohmann::json c = nlohmann::json::parse(testing::readText(case_dir_ / "case.json"));
+  c["simulation"] = {{"max_steps", 1000}};  // enough for the uniform tissue's ramp
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  const std::string ply = testing::readText(case_dir_ / "open.ply");
+  const std::string count_key = "element vertex ";
+  const std::size_t count_at = ply.find(count_key) + count_key.size();
+  const int vertices = std::stoi(ply.substr(count_at));
+  const nlohmann::json tissue = {{"stiffness", std::vector<double>(vertices, 1000.0)}};
+  testing::writeText(dir_ / "stiff.json", tissue.dump());
+
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + " --tissue " + quoted(dir_ / "stiff.json") +
+                  " --quiet --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+  EXPECT_NE(r.err.find((dir_ / "stiff.json").string() +
+                       ": stiffness: factors up to 1000 shorten the automatic time step"),
+            std::string::npos)
+      << r.err;
+  EXPECT_NE(r.err.find("more than simulation.max_steps = 1000; raise it (--set max_steps="),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("case.json"), r.err.find("case.json's simulation block")) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+
+  // The case's own tissue: named at case.json's tissue_stiffness; validate has no --set.
+  c["tissue_stiffness"] = "tissue.json";
+  testing::writeText(case_dir_ / "case.json", c.dump());
+  testing::writeText(case_dir_ / "tissue.json", tissue.dump());
+  const auto validated = runChordfit("validate " + quoted(case_dir_));
+  EXPECT_EQ(validated.exit_code, 2) << validated.out;
+  EXPECT_NE(validated.err.find("error: case.json: tissue_stiffness: factors up to 1000"),
+            std::string::npos)
+      << validated.err;
+  EXPECT_EQ(validated.err.find("--set"), std::string::npos) << validated.err;
+  // A cap raised as the message says lets the closure run.
+  const auto raised = runChordfit("simulate " + quoted(case_dir_) +
+                                  " --set max_steps=6000 --quiet --out " + quoted(dir_ / "sim"));
+  EXPECT_EQ(raised.exit_code, 0) << raised.err;
+}
+
 // A file output over one of the case's files (metrics --out onto the mesh it measured, a
 // heuristic cord set over case.json) used to exit 0 and leave a case that no longer loads.
 TEST_F(SimulateCommand, FileOutputsDoNotWriteOverTheCasesFiles) {

@@ -176,6 +176,64 @@ std::string stepCapProblem(const ValveCase& valve_case, const SimulationSettings
   return rampBeyondStepCap(settings, caseTimeStepMs(valve_case, settings));
 }
 
+// A step cap that leaves a closure time to settle after a ramp of `ramp_steps` steps: five
+// times the ramp, rounded up to the next 1,000 (what make-valve writes for a fine mesh).
+int stepCapForRamp(double ramp_steps) {
+  return static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
+}
+
+// The case without its regional tissue: the step the mesh alone gives.
+ValveCase withUniformTissue(const ValveCase& valve_case) {
+  ValveCase uniform = valve_case;
+  uniform.tissue_stiffness.resize(0);
+  return uniform;
+}
+
+// The step-cap problem when the tissue's stiffness factors are what shortened the automatic
+// step (the case with uniform tissue fits its ramp under the cap): the factors, the step with
+// and without them, and the two ways out. `takes_set`: the command has --set.
+std::string tissueStepCapProblem(const ValveCase& valve_case, const SimulationSettings& settings,
+                                 bool takes_set) {
+  const double dt = caseTimeStepMs(valve_case, settings);
+  const double uniform_dt = caseTimeStepMs(withUniformTissue(valve_case), settings);
+  const double ramp_steps = std::ceil(settings.ramp_ms / dt);
+  const int cap = stepCapForRamp(ramp_steps);
+  const std::string set_hint = takes_set ? "--set max_steps=" + std::to_string(cap) + ", or " : "";
+  char what[480];
+  std::snprintf(what, sizeof what,
+                "factors up to %g shorten the automatic time step to %.4g ms (%.4g ms with "
+                "uniform tissue): the %g ms pressure ramp takes %.0f steps, more than "
+                "simulation.max_steps = %d; raise it (%s\"max_steps\": %d in case.json's "
+                "simulation block) or give softer factors",
+                valve_case.tissue_stiffness.maxCoeff(), dt, uniform_dt, settings.ramp_ms,
+                ramp_steps, settings.max_steps, set_hint.c_str(), cap);
+  return what;
+}
+
+// Reports `problem`, a pressure ramp beyond the step cap of `settings` (`own`: the case's,
+// before the overrides), at what made it so, checked in this order (each check builds the
+// closure's model, so only once the cap is known to be short): the case's mesh and settings
+// (case.json's simulation.max_steps), then the tissue's stiffness factors, whose stiffer tissue
+// shortens the automatic step (`tissue_file`'s "stiffness" when given, else case.json's
+// tissue_stiffness), then the overrides (`overrides_source`, "<command>: --set"). Blamed on
+// case.json, a stiff tissue file named a simulation block that was not there.
+void reportStepCapProblem(const std::string& problem, const ValveCase& valve_case,
+                          const SimulationSettings& own, const SimulationSettings& settings,
+                          const std::string& overrides_source, bool takes_set,
+                          const std::string& tissue_file, Diagnostics& diagnostics) {
+  const ValveCase uniform = withUniformTissue(valve_case);
+  const bool has_tissue = valve_case.tissue_stiffness.size() > 0;
+  if (!stepCapProblem(uniform, own).empty()) {
+    diagnostics.error("case.json", "simulation.max_steps", problem);
+  } else if (has_tissue && stepCapProblem(uniform, settings).empty()) {
+    diagnostics.error(tissue_file.empty() ? "case.json" : tissue_file,
+                      tissue_file.empty() ? "tissue_stiffness" : "stiffness",
+                      tissueStepCapProblem(valve_case, settings, takes_set));
+  } else {
+    diagnostics.error(overrides_source, "simulation.max_steps", problem);
+  }
+}
+
 // The `--set` items as one JSON object; on a malformed item prints it and returns nullopt.
 std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
                                                        const std::vector<std::string>& overrides) {
@@ -208,7 +266,8 @@ std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
 std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                                                        const std::string& case_dir, SettingsUse use,
                                                        const char* command,
-                                                       const std::vector<std::string>& overrides) {
+                                                       const std::vector<std::string>& overrides,
+                                                       const std::string& tissue_file) {
   // Named inside the case, under a "case DIR: N problem(s)" line, as loadCaseOrReport does.
   const std::string case_file = "case.json";
   Diagnostics diagnostics;
@@ -238,14 +297,9 @@ std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
   // metrics reads the settings (the leaflets' thickness) but runs no closure: the step cap is
   // not its business.
   if (diagnostics.ok() && use != SettingsUse::kMeasure) {
-    const std::string problem = stepCapProblem(valve_case, settings);
-    // Named after the case, unless the case's own settings pass and the overrides broke them
-    // (checked only then: each check builds the closure's model).
-    if (!problem.empty())
-      diagnostics.error(overrides.empty() || !stepCapProblem(valve_case, own).empty()
-                            ? case_file
-                            : overrides_source,
-                        "simulation.max_steps", problem);
+    if (const std::string problem = stepCapProblem(valve_case, settings); !problem.empty())
+      reportStepCapProblem(problem, valve_case, own, settings, overrides_source,
+                           use != SettingsUse::kCheck, tissue_file, diagnostics);
   }
   if (!diagnostics.ok()) {
     const auto of_case = std::count_if(diagnostics.problems().begin(), diagnostics.problems().end(),
@@ -477,7 +531,7 @@ int fitStepCapToMesh(ValveCase& valve_case) {
   // A mesh so fine (or not in millimetres) that no closure could run: validation refuses it;
   // no cap (it would overflow an int).
   if (5.0 * ramp_steps > 1e8) return 0;
-  const int cap = static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
+  const int cap = stepCapForRamp(ramp_steps);
   nlohmann::json simulation = nlohmann::json::parse(valve_case.simulation_json);
   simulation["max_steps"] = cap;
   valve_case.simulation_json = simulation.dump();

@@ -61,8 +61,10 @@ std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::s
 // `--set`), which are also written into valve_case.simulation_json so that everything reading
 // the case's settings later sees them; phase kClose. On unknown keys, wrong types,
 // out-of-range values or a pressure ramp longer than the step cap (not checked when `use` is
-// kMeasure) prints the problems under "case CASE_DIR: N problem(s)", naming case.json or
-// "<command>: --set", and returns nullopt. With kClose it also notes a pressure loaded faster
+// kMeasure) prints the problems under "case CASE_DIR: N problem(s)", naming case.json,
+// "<command>: --set" or, when its stiffness factors shorten the automatic time step, the tissue
+// (`tissue_file`, the --tissue file over the case's own tissue, or case.json's
+// tissue_stiffness), and returns nullopt. With kClose it also notes a pressure loaded faster
 // than the ramp was calibrated for.
 enum class SettingsUse {
   kCheck,    // validate: every check, no closure run now
@@ -71,7 +73,7 @@ enum class SettingsUse {
 };
 std::optional<SimulationSettings> caseSettingsOrReport(
     ValveCase& valve_case, const std::string& case_dir, SettingsUse use, const char* command = "",
-    const std::vector<std::string>& overrides = {});
+    const std::vector<std::string>& overrides = {}, const std::string& tissue_file = "");
 
 // Whether `option` ("--ap") is among the options given on the command line (the options
 // structs' given_options), for a command's notes on options that do not act.

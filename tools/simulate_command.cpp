@@ -104,8 +104,9 @@ int runSimulate(const SimulateOptions& options) {
   if (!loaded) return kExitBadInput;
   ValveCase& valve_case = loaded->valve_case;
   const CordSet& cords = loaded->cords;
-  auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
-                                            "simulate", options.settings_overrides);
+  auto case_settings =
+      caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose, "simulate",
+                           options.settings_overrides, options.tissue_file);
   if (!case_settings) return kExitBadInput;
   SimulationSettings& settings = *case_settings;
   settings.threads = options.threads;

@@ -199,8 +199,9 @@ int runSweepCord(const SweepCordOptions& options) {
               << counted(cords.cords.size(), "cord") << valid << ")\n";
     return kExitBadInput;
   }
-  const auto case_settings = caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose,
-                                                  "sweep-cord", options.settings_overrides);
+  const auto case_settings =
+      caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose, "sweep-cord",
+                           options.settings_overrides, options.tissue_file);
   if (!case_settings) return kExitBadInput;
   const SimulationSettings& settings = *case_settings;
 
