@@ -94,23 +94,43 @@ struct ValveReach {
 
 }  // namespace
 
-bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
-                          const std::string& file, const std::string& where,
-                          Diagnostics& diagnostics) {
+namespace {
+
+// Errors (file, point_wheres[k]) for the points out of reach, the first few of them, and a
+// count of the others at (file, summary_where).
+bool checkEachPointNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
+                             const std::string& file, const std::vector<std::string>& point_wheres,
+                             const std::string& summary_where, Diagnostics& diagnostics) {
   if (mesh_V.rows() == 0) return true;
   const ValveReach valve(mesh_V);
   constexpr int kReported = 3;
   int far = 0;
   for (Eigen::Index k = 0; k < points.rows(); ++k) {
-    if (!valve.check(points.row(k), file, where + "[" + std::to_string(k) + "]", diagnostics,
+    if (!valve.check(points.row(k), file, point_wheres[static_cast<std::size_t>(k)], diagnostics,
                      far < kReported))
       ++far;
   }
   if (far > kReported) {
-    diagnostics.error(file, where,
+    diagnostics.error(file, summary_where,
                       std::to_string(far - kReported) + " more point(s) as far from the valve");
   }
   return far == 0;
+}
+
+}  // namespace
+
+bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
+                          const std::string& file, const std::string& where,
+                          Diagnostics& diagnostics) {
+  std::vector<std::string> point_wheres;
+  for (Eigen::Index k = 0; k < points.rows(); ++k)
+    point_wheres.push_back(where + "[" + std::to_string(k) + "]");
+  return checkEachPointNearValve(mesh_V, points, file, point_wheres, where, diagnostics);
+}
+
+bool checkCurveNearValve(const Eigen::MatrixXd& mesh_V, const Curve& curve, const std::string& file,
+                         Diagnostics& diagnostics) {
+  return checkEachPointNearValve(mesh_V, curve.points, file, curve.point_wheres, "", diagnostics);
 }
 
 namespace {

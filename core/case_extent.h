@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "core/cordset.h"
+#include "core/curve_io.h"
 #include "core/diagnostics.h"
 #include "core/valve_mesh.h"
 
@@ -40,6 +41,11 @@ double valveReachMm(const Eigen::MatrixXd& mesh_V);
 bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
                           const std::string& file, const std::string& where,
                           Diagnostics& diagnostics);
+
+// The same for the points of a curve file (named `file` in messages), each reported where it
+// stands in the file (Curve::point_wheres: "line 4" of a .csv), the count of others at the file.
+bool checkCurveNearValve(const Eigen::MatrixXd& mesh_V, const Curve& curve, const std::string& file,
+                         Diagnostics& diagnostics);
 
 // The closed annulus against the open ring it moves (row k of `closed` is where ring vertex k
 // goes): the same winding (Newell normals of the two polygons at less than 90 degrees), a

@@ -266,9 +266,11 @@ bool checkTracingOnItsPlane(const Tracing& tracing, const std::string& where, Js
   return false;
 }
 
+// `mesh_V`: the valve the points must lie within reach of (checkPointsNearValve; empty: not
+// checked, as when the mesh did not read).
 bool readTracing(const json& entry, const std::string& where, const fs::path& dir,
-                 const std::vector<std::string>& leaflet_names, JsonFields& fields,
-                 Tracing& tracing) {
+                 const std::vector<std::string>& leaflet_names, const Eigen::MatrixXd& mesh_V,
+                 JsonFields& fields, Tracing& tracing) {
   // The keys writeCase writes, and "file": a misspelt optional "leaflet" would otherwise
   // leave the tracing unlabelled, measured to the whole mesh, without a word.
   bool ok = fields.knownKeys(entry, where, {"plane", "leaflet", "points", "file"});
@@ -332,8 +334,9 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
   }
   const std::string points_where = fieldPath(where, points != nullptr ? "points" : "file");
   if (ok && tracing.points.rows() < 2) {
-    fields.error(points_where,
-                 "a tracing needs at least 2 points, got " + std::to_string(tracing.points.rows()));
+    fields.error(points_where, (name.empty() ? "" : name + ": ") +
+                                   "a tracing needs at least 2 points, got " +
+                                   std::to_string(tracing.points.rows()));
     ok = false;
   }
   if (ok) {
@@ -346,11 +349,19 @@ bool readTracing(const json& entry, const std::string& where, const fs::path& di
   if (ok)
     ok =
         checkTracingOnItsPlane(tracing, points_where, fields, points != nullptr ? nullptr : &curve);
+  // A point from a curve file is named where it stands in that file ("t.csv: line 4"), not
+  // as a point of the tracings file, which has none.
+  if (ok)
+    ok = points != nullptr ? checkPointsNearValve(mesh_V, tracing.points, fields.file(),
+                                                  points_where, fields.diagnostics())
+                           : checkCurveNearValve(mesh_V, curve, name, fields.diagnostics());
   return ok;
 }
 
-bool readTracings(const SideFile& file, const fs::path& dir, ValveCase& c,
+// `mesh_ok`: c.mesh read, so that the points can be checked against it.
+bool readTracings(const SideFile& file, const fs::path& dir, bool mesh_ok, ValveCase& c,
                   Diagnostics& diagnostics) {
+  const Eigen::MatrixXd no_mesh;
   return readSideArray(file, "tracings", diagnostics, [&](const json& list, JsonFields& fields) {
     if (!list.is_array()) {
       fields.typeError("tracings", "an array of tracings", list);
@@ -359,8 +370,8 @@ bool readTracings(const SideFile& file, const fs::path& dir, ValveCase& c,
     bool ok = true;
     for (std::size_t i = 0; i < list.size(); ++i) {
       Tracing tracing;
-      if (readTracing(list[i], indexPath("tracings", i), dir, c.mesh.leaflet_names, fields,
-                      tracing)) {
+      if (readTracing(list[i], indexPath("tracings", i), dir, c.mesh.leaflet_names,
+                      mesh_ok ? c.mesh.V : no_mesh, fields, tracing)) {
         c.tracings.push_back(std::move(tracing));
       } else {
         ok = false;
@@ -376,7 +387,7 @@ bool readTracingsFile(const fs::path& path, const std::vector<std::string>& leaf
                       std::vector<Tracing>& tracings, Diagnostics& diagnostics) {
   ValveCase c;
   c.mesh.leaflet_names = leaflet_names;
-  if (!readTracings(SideFile{path, path.string()}, path.parent_path(), c, diagnostics)) {
+  if (!readTracings(SideFile{path, path.string()}, path.parent_path(), false, c, diagnostics)) {
     return false;
   }
   tracings = std::move(c.tracings);
@@ -501,8 +512,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
     c.annulus_closed = closed_curve.points;
     // A point far from the valve is the problem to report: the ring's length and shape measured
     // through it would only repeat it ("the closed annulus is inf mm around" for 1e308).
-    const bool near_valve = !mesh_ok || checkPointsNearValve(c.mesh.V, c.annulus_closed,
-                                                             closed->name, "points", diagnostics);
+    const bool near_valve =
+        !mesh_ok || checkCurveNearValve(c.mesh.V, closed_curve, closed->name, diagnostics);
     ok &= near_valve;
     if (ring_ok && c.annulus_closed.rows() != c.mesh.annulus.size()) {
       diagnostics.error(closed->name, "points",
@@ -530,12 +541,7 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
     // A tracing's curve file is relative to the file that names it, as every relative name
     // is (case.json's to the case; import-mesh --tracings the same): the tracings file's
     // directory, the case's own when it lies at the top.
-    const bool read = readTracings(*tracings, tracings->path.parent_path(), c, diagnostics);
-    ok &= read;
-    for (std::size_t t = 0; read && mesh_ok && t < c.tracings.size(); ++t) {
-      ok &= checkPointsNearValve(c.mesh.V, c.tracings[t].points, tracings->name,
-                                 "tracings[" + std::to_string(t) + "].points", diagnostics);
-    }
+    ok &= readTracings(*tracings, tracings->path.parent_path(), mesh_ok, c, diagnostics);
   }
   if (const auto tips = sideFile(document, "", "pm_tips", false, dir, fields)) {
     const bool read = readTipsFile(*tips, c, diagnostics);

@@ -115,6 +115,7 @@ class CurveTextReader {
       }
     }
     points_.push_back(p);
+    lines_.push_back(number);
     return true;
   }
 
@@ -140,6 +141,7 @@ class CurveTextReader {
       curve.points(r, 0) = flip * points_[i][0];
       curve.points(r, 1) = flip * points_[i][1];
       curve.points(r, 2) = points_[i][2];
+      curve.point_wheres.push_back("line " + std::to_string(lines_[i]));
     }
     return true;
   }
@@ -178,6 +180,7 @@ class CurveTextReader {
   bool seen_header_ = false, seen_data_ = false;
   int bad_lines_ = 0;
   std::vector<std::array<double, 3>> points_;
+  std::vector<int> lines_;  // the line of each point, for point_wheres
 };
 
 }  // namespace

@@ -65,7 +65,8 @@ bool isPlaced(const json& point) {
 }
 
 bool readControlPoints(const json& markup, const std::string& where, JsonFields& fields,
-                       Eigen::MatrixXd& points) {
+                       Curve& curve) {
+  Eigen::MatrixXd& points = curve.points;
   const std::string list_where = fieldPath(where, "controlPoints");
   const json* list = fields.member(markup, where, "controlPoints", true);
   if (list == nullptr) return false;
@@ -92,6 +93,7 @@ bool readControlPoints(const json& markup, const std::string& where, JsonFields&
       continue;
     }
     points.row(placed++) = p.transpose();
+    curve.point_wheres.push_back(fieldPath(point_where, "position"));
   }
   points.conservativeResize(placed, 3);
   return ok;
@@ -121,7 +123,7 @@ bool readMarkups(const json& document, JsonFields& fields, int markup_index, Cur
   }
   curve.closed = type == "ClosedCurve";
   bool ok = checkUnits(markup, where, fields);
-  ok = readControlPoints(markup, where, fields, curve.points) && ok;
+  ok = readControlPoints(markup, where, fields, curve) && ok;
   ok = ok && toLps(markup, where, fields, curve);
   if (ok && curve.points.rows() == 0) {
     fields.error(fieldPath(where, "controlPoints"), "no placed control points");
@@ -142,6 +144,8 @@ bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
       fields.error("(top level)", "no points");
       return false;
     }
+    for (Eigen::Index k = 0; k < curve.points.rows(); ++k)
+      curve.point_wheres.push_back(indexPath("", static_cast<std::size_t>(k)));
     return true;
   }
   const json* points = fields.member(document, "", "points", true);
@@ -155,6 +159,8 @@ bool readPointList(const json& document, JsonFields& fields, Curve& curve) {
     fields.error("points", "no points");
     return false;
   }
+  for (Eigen::Index k = 0; k < curve.points.rows(); ++k)
+    curve.point_wheres.push_back(indexPath("points", static_cast<std::size_t>(k)));
   return true;
 }
 

@@ -7,6 +7,7 @@
 
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include <Eigen/Core>
 
@@ -22,6 +23,11 @@ struct Curve {
   // RAS, and what to write in this file's format to have them read in the other system.
   bool read_as_ras = false;
   std::string other_frame_syntax;
+  // Where each point stands in its file, as a message names it: "line 4" in a delimited text
+  // file, "points[2]" in a point list, "markups[0].controlPoints[3]" in a markups file (one per
+  // row of `points`), so that a later check of a point (far from the valve) can point into the
+  // file rather than at the field that named it.
+  std::vector<std::string> point_wheres;
 };
 
 // Reads one curve. For a markups file with several markups, `markup_index` picks one.

@@ -293,6 +293,12 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusPointFarFromTheValveOnce) {
   const testing::CommandResult r = validate();
   EXPECT_NE(r.err.find("1 problem(s)"), std::string::npos) << r.err;
   EXPECT_EQ(r.err.find("around"), std::string::npos) << r.err;
+  // In a .csv, by its line (a header, then point k on line k + 2).
+  std::string csv = "x,y,z\n";
+  for (const auto& p : points) csv += p[0].dump() + "," + p[1].dump() + "," + p[2].dump() + "\n";
+  writeText(dir_ / "annulus_closed.csv", csv);
+  editCaseJson([](nlohmann::json& j) { j["annulus"]["closed"] = "annulus_closed.csv"; });
+  expectError("annulus_closed\\.csv", "line 5: \\(1e\\+308, .* lies 1e\\+308 mm from the valve");
 }
 
 // From a bad-input sweep: a closed annulus listed from another start (a shifted list, or half
@@ -679,6 +685,12 @@ TEST_F(ValidateCommand, ReportsATracingWithFewerThanTwoPoints) {
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflet": "posterior", "points": [[1, 0, -2]]}]})");
   expectError("tracings\\.json", "tracings\\[0\\]\\.points: a tracing needs at least 2 points");
+  // From a curve file, the file is named as the "no length" message names it.
+  writeText(dir_ / "one.csv", "x,y,z\n1,0,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "file": "one.csv"}]})");
+  expectError("tracings\\.json",
+              "tracings\\[0\\]\\.file: one\\.csv: a tracing needs at least 2 points, got 1");
 }
 
 // Two or more points all in one place used to pass as a tracing of no length, inline or in a
@@ -711,6 +723,14 @@ TEST_F(ValidateCommand, ReportsATracingPointFarFromTheValve) {
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
                               "leaflet": "posterior", "points": [[1e10, 0, -2], [1, 0, -2]]}]})");
   expectError("tracings\\.json", "tracings\\[0\\]\\.points\\[0\\]: .* from the valve mesh");
+  // From a curve file, the point is named where it stands: its file and line (it was named as
+  // "tracings[0].points[2]" of the tracings file, which has no points).
+  writeText(dir_ / "t.csv", "x,y,z\n1,0,-2\n2,0,-2\n1e10,0,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "leaflet": "posterior", "file": "t.csv"}]})");
+  expectError("t\\.csv", "line 4: \\(1e\\+10, 0, -2\\) lies .* from the valve mesh");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.err.find("points["), std::string::npos) << r.err;
 }
 
 TEST_F(ValidateCommand, ReportsATracingOffItsPlane) {
