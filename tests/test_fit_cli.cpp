@@ -172,11 +172,28 @@ TEST(FitCommand, RejectsAnUpperScaleBoundNoCordSetCanHoldBeforeFitting) {
   const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 0.7,100 --out " +
                              quoted(dir / "fit"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the upper bound 100 lets a cord of "),
+  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the upper bound 100 lets cord 0 of the "
+                       "case's cord set ("),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("a cord set holds at most 1000 mm"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "fit"));
+}
+
+// A long seed cord (700 mm, within what a cord set holds) beyond the reach of the default
+// bounds: the message named neither the seed file nor the cord.
+TEST(FitCommand, AnUpperScaleBoundALongSeedCordOutgrowsNamesTheFileAndTheCord) {
+  TempDir dir;
+  auto cords = nlohmann::json::parse(testing::readText(smallCase() / "cords.json"));
+  ASSERT_GT(cords["cords"].size(), 3u);
+  cords["cords"][3]["rest_length_mm"] = 700;
+  cords["cords"][3]["seed_rest_length_mm"] = 700;
+  testing::writeText(dir / "long.json", cords.dump(2));
+  const std::string err = refusedFitMessage("--seed-cords " + quoted(dir / "long.json"));
+  EXPECT_NE(err.find("error: fit: --scale-bounds: the upper bound 1.5 lets cord 3 of " +
+                     (dir / "long.json").string() + " (700 mm) reach 1050 mm"),
+            std::string::npos)
+      << err;
 }
 
 // The same for a lower bound that lets a cord shrink below the 1 mm a cord set must hold.
@@ -185,7 +202,8 @@ TEST(FitCommand, RejectsALowerScaleBoundNoCordSetCanHoldBeforeFitting) {
   const auto r = runChordfit("fit " + quoted(smallCase()) + " --scale-bounds 0.02,1.5 --out " +
                              quoted(dir / "fit"));
   EXPECT_EQ(r.exit_code, 2);
-  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the lower bound 0.02 lets a cord of "),
+  EXPECT_NE(r.err.find("error: fit: --scale-bounds: the lower bound 0.02 lets cord 0 of the "
+                       "case's cord set ("),
             std::string::npos)
       << r.err;
   EXPECT_NE(r.err.find("a cord set holds at least 1 mm"), std::string::npos) << r.err;
@@ -720,7 +738,8 @@ TEST(FitCommand, GroupBoundsThatShrinkACordBelowOneMillimetreAreRefused) {
   const auto groups = runChordfit(fit + quoted(dir / "groups") + " --params groups");
   EXPECT_EQ(groups.exit_code, 2) << groups.err;
   EXPECT_NE(groups.err.find("error: fit: --scale-bounds: with --params groups the lower bound "
-                            "0.0334 lets cord 0 (group "),
+                            "0.0334 lets cord 0 of " +
+                            (dir / "seed.json").string() + " (group "),
             std::string::npos)
       << groups.err;
   EXPECT_NE(groups.err.find("shrink to 0."), std::string::npos) << groups.err;

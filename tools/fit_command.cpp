@@ -67,6 +67,13 @@ void noteOptionsThatDoNotAct(const FitCommandOptions& o) {
   }
 }
 
+// The seed cord set as a message names it: the --seed-cords file, else the case's cords or
+// the heuristic's (resolveCords).
+std::string seedCordsName(const std::string& seed_cords_file, const ValveCase& valve_case) {
+  if (!seed_cords_file.empty()) return seed_cords_file;
+  return valve_case.cords ? "the case's cord set" : "the heuristic's cord set";
+}
+
 }  // namespace
 
 int runFit(const FitCommandOptions& o) {
@@ -194,15 +201,18 @@ int runFit(const FitCommandOptions& o) {
   // Per cord (scales, scales+tips) a scale multiplies the seed rest length, whatever the cord's
   // present length (a manual 0.045 of it starts clamped): check the lengths the bounds reach.
   const bool per_cord = *mode != inverse::ParameterMode::kGroups;
-  for (const Cord& cord : seed->cords) {
+  // The cord named as the user can find it: its index in the seed file (or the case's cords).
+  const std::string seed_name = seedCordsName(o.seed_cords_file, *valve_case);
+  for (std::size_t c = 0; c < seed->cords.size(); ++c) {
+    const Cord& cord = seed->cords[c];
     if (cord.locked) continue;
     const double length =
         per_cord ? cord.seed_rest_length : std::max(cord.seed_rest_length, cord.rest_length);
     const double reach = length * o.scale_bounds[1];
     if (reach > kMaxCordRestLengthMm) {
       std::cerr << "error: fit: --scale-bounds: the upper bound " << o.scale_bounds[1]
-                << " lets a cord of " << length << " mm reach " << reach
-                << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
+                << " lets cord " << c << " of " << seed_name << " (" << length << " mm) reach "
+                << reach << " mm; a cord set holds at most " << kMaxCordRestLengthMm << " mm\n";
       return kExitBadInput;
     }
     const double shortest =
@@ -210,8 +220,9 @@ int runFit(const FitCommandOptions& o) {
     const double shrunk = shortest * o.scale_bounds[0];
     if (shrunk < kMinCordRestLengthMm) {
       std::cerr << "error: fit: --scale-bounds: the lower bound " << o.scale_bounds[0]
-                << " lets a cord of " << shortest << " mm shrink to " << shrunk
-                << " mm; a cord set holds at least " << kMinCordRestLengthMm << " mm\n";
+                << " lets cord " << c << " of " << seed_name << " (" << shortest
+                << " mm) shrink to " << shrunk << " mm; a cord set holds at least "
+                << kMinCordRestLengthMm << " mm\n";
       return kExitBadInput;
     }
   }
@@ -233,7 +244,7 @@ int runFit(const FitCommandOptions& o) {
       const bool too_long = reach > kMaxCordRestLengthMm;
       std::cerr << "error: fit: --scale-bounds: with --params groups the "
                 << (too_long ? "upper" : "lower") << " bound " << o.scale_bounds[too_long ? 1 : 0]
-                << " lets cord " << c << " (group " << names[c] << ", "
+                << " lets cord " << c << " of " << seed_name << " (group " << names[c] << ", "
                 << seed->cords[c].rest_length << " mm) " << (too_long ? "reach " : "shrink to ")
                 << (too_long ? reach : shrunk)
                 << " mm (the group factor's bound keeps the group's mean scale within it, not "
