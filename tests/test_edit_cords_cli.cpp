@@ -169,6 +169,9 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
   CordSet same_names = readCords(kSmallCase / "cords.json");
   same_names.tips[1].name = same_names.tips[0].name;
   writeCordSet(dir / "same_names.json", same_names);
+  CordSet no_cords = readCords(kSmallCase / "cords.json");
+  no_cords.cords.clear();
+  writeCordSet(dir / "no_cords.json", no_cords);
   for (const auto& [arguments, message] : std::vector<std::pair<std::string, std::string>>{
            {"", "nothing to do"},
            {"--segment P4=1.1", "--segment P4=1.1: no cord in segment \"P4\""},
@@ -191,6 +194,10 @@ TEST(EditCordsCli, BadInputExitsTwoNamingTheProblemAndWritesNothing) {
            {"--move-tip anterolateral=1e9,0,0", "--move-tip: tips[0].position: (1e+09, "},
            {"--all 1 --unlock edited", "--unlock edited: \"edited\" is not a cord index"},
            {"--cords " + quoted(dir / "missing.json") + " --all 1", "missing.json"},
+           // The set without cords, named (it was "the cord set has no cords").
+           {"--cords " + quoted(dir / "no_cords.json") + " --all 1",
+            "error: edit-cords: " + (dir / "no_cords.json").string() +
+                " has no cords: nothing to edit"},
            // A cord, group, segment or tip given twice: the last one silently won (scales) or
            // they added up (tip offsets).
            {"--cord 1=1.2 --cord 1=0.8",

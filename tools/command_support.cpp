@@ -139,6 +139,14 @@ std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::stri
   return set;
 }
 
+std::string noCordsProblem(const ValveCase& valve_case, const std::string& case_dir,
+                           const std::string& cords_file, const char* option) {
+  if (!cords_file.empty()) return cords_file + " has no cords";
+  if (valve_case.cords)
+    return case_dir + ": the case's cord set has no cords (give " + option + ")";
+  return case_dir + ": the heuristic placed no cords on this mesh";
+}
+
 std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::string& case_dir,
                                                const std::string& tissue_file,
                                                const std::string& cords_file) {

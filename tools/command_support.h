@@ -26,6 +26,12 @@ int reportProblems(const Diagnostics& diagnostics);
 // nullopt on bad input.
 std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
 
+// Why resolveCords' set cannot be worked on when it has no cords, naming where it came from:
+// "E.json has no cords", "CASE: the case's cord set has no cords (give OPTION)" or "CASE: the
+// heuristic placed no cords on this mesh". `option`: how the command takes a cord file.
+std::string noCordsProblem(const ValveCase& valve_case, const std::string& case_dir,
+                           const std::string& cords_file, const char* option);
+
 // Notes go to stderr, in every command: stdout carries what the command makes (progress,
 // tables, summaries), stderr what the user may want to know about it (errors, warnings,
 // notes). stdout is flushed first, so that a log of both streams (2>&1) keeps each note

@@ -149,7 +149,9 @@ int runEditCords(const EditCordsOptions& options) {
   const CordSet before = set;
   const ValveMesh& mesh = valve_case->mesh;
   const int count = static_cast<int>(set.cords.size());
-  if (count == 0) return usage("the cord set has no cords");
+  if (count == 0)
+    return usage(noCordsProblem(*valve_case, options.case_dir, options.cords_file, "--cords") +
+                 ": nothing to edit");
 
   // Each cord's group (leaflet/tip) and Carpentier segment (open-state position of its vertex).
   const Eigen::VectorXi vertex_segments = openStateSegments(mesh);

@@ -187,12 +187,8 @@ int runFit(const FitCommandOptions& o) {
   const auto seed = resolveCords(*valve_case, o.seed_cords_file);
   if (!seed) return kExitBadInput;
   if (seed->cords.empty()) {
-    // Without --seed-cords the seed is the case's cords, or the heuristic's when it has none.
     std::cerr << "error: fit: "
-              << (!o.seed_cords_file.empty() ? o.seed_cords_file + " has no cords"
-                  : valve_case->cords
-                      ? o.case_dir + ": the case's cord set has no cords (give --seed-cords)"
-                      : o.case_dir + ": the heuristic placed no cords on this mesh")
+              << noCordsProblem(*valve_case, o.case_dir, o.seed_cords_file, "--seed-cords")
               << ": nothing to fit\n";
     return kExitBadInput;
   }
