@@ -335,6 +335,22 @@ TEST_F(CompareCommand, RejectsAMissingCordFileWithoutWritingAnything) {
   EXPECT_FALSE(fs::exists(out / "compare.csv"));
 }
 
+// A tissue file is named with its option: "error: nope.json: file not found" did not say
+// whether a cord file or a tissue file was missing.
+TEST_F(CompareCommand, RejectsAMissingTissueFileNamingTheOption) {
+  const fs::path out = *dir_ / "missing-tissue";
+  const auto r =
+      runChordfit("compare " + quoted(caseDir()) + " " + quoted(caseDir() / "cords.json") +
+                  " --tissues " + quoted(*dir_ / "nope.json") + " --out " + quoted(out));
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find("error: compare: --tissues: " + (*dir_ / "nope.json").string() +
+                       ": file not found"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find("closing"), std::string::npos) << "checked before the first closure";
+  EXPECT_FALSE(fs::exists(out / "compare.csv"));
+}
+
 TEST_F(CompareCommand, RejectsAMissingCase) {
   const auto r =
       runChordfit("compare " + quoted(*dir_ / "no-case") + " " + quoted(caseDir() / "cords.json"));

@@ -441,8 +441,10 @@ int runCompare(const CompareOptions& options) {
       printNoteLines(
           tissueBesideCordsNote("compare", options.cords_files[i], "--tissues, one per cord file"));
     if (tissues[i] != "-") {
+      // Named with the option: in a list beside the cord files, a bare name could be either.
       Diagnostics diagnostics;
-      if (!loadTissueFile(tissues[i], tissues[i], set.valve_case, diagnostics))
+      if (!loadTissueFile(tissues[i], "compare: --tissues: " + tissues[i], set.valve_case,
+                          diagnostics))
         return reportProblems(diagnostics);
     }
     sets.push_back(std::move(set));
