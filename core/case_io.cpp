@@ -14,6 +14,7 @@
 #include "core/json_fields.h"
 #include "core/mesh_checks.h"
 #include "core/mesh_io.h"
+#include "core/quoted_text.h"
 
 namespace chordfit {
 
@@ -54,14 +55,15 @@ bool fileFieldUsable(const std::string& name, const fs::path& dir, const std::st
     problem = "no file given (an empty file name)";
   } else if (!named_entry_exists && ec && ec != std::errc::no_such_file_or_directory) {
     // A directory on the way the user may not search is not a missing file.
-    problem = "\"" + name + "\": cannot be looked up (" + ec.message() + ")";
+    problem = quotedText(name, std::string::npos) + ": cannot be looked up (" + ec.message() + ")";
   } else if (!named_entry_exists) {
-    problem = "\"" + name + "\": file not found";
+    problem = quotedText(name, std::string::npos) + ": file not found";
     if (fs::path(name).is_relative()) problem += " in " + searchedDirectory(dir);
   } else if (!fs::exists(path, ec) && !ec) {
-    problem = "\"" + name + "\" is a symbolic link to nothing (its target is missing)";
+    problem = quotedText(name, std::string::npos) +
+              " is a symbolic link to nothing (its target is missing)";
   } else if (const std::string unusable = inputFileProblem(path); !unusable.empty()) {
-    problem = "\"" + name + "\" " + unusable;
+    problem = quotedText(name, std::string::npos) + " " + unusable;
   }
   if (problem.empty()) return true;
   fields.error(where, problem);
@@ -191,7 +193,7 @@ bool readTracingLeaflet(const json& value, const std::string& where,
         return true;
       }
     }
-    fields.error(where, "\"" + name + "\" is not a leaflet name of this case: case.json names " +
+    fields.error(where, quotedText(name) + " is not a leaflet name of this case: case.json names " +
                             quotedNames(names) + " (leaflets.names or its default)");
     return false;
   }
@@ -418,7 +420,7 @@ bool readVersion(const json& document, JsonFields& fields) {
     std::string text;
     if (!fields.text(*format, "format", text)) return false;
     if (text != "chordfit-case") {
-      fields.error("format", "\"" + text + "\" is not a chordfit-case file");
+      fields.error("format", quotedText(text) + " is not a chordfit-case file");
       return false;
     }
   }
@@ -454,7 +456,7 @@ bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
     for (std::size_t j = 0; j < i; ++j) {
       if (c.mesh.leaflet_names[j] == name) {
         fields.error(indexPath("leaflets.names", i),
-                     "\"" + name + "\" repeats leaflets.names[" + std::to_string(j) + "]");
+                     quotedText(name) + " repeats leaflets.names[" + std::to_string(j) + "]");
         return false;
       }
     }

@@ -7,6 +7,7 @@
 // with a located message before CGAL sees them.
 #include "core/cgal_backend.h"
 #include "core/counted.h"
+#include "core/quoted_text.h"
 #include "core/text_case.h"
 
 #include <algorithm>
@@ -56,14 +57,7 @@ using Polygon = std::vector<std::size_t>;
 // Small text helpers shared by the pre-checks.
 
 // A word from the file as it may appear in a message (a corrupt file can hold any bytes).
-std::string printable(const std::string& word) {
-  constexpr std::size_t kMaxShown = 40;
-  std::string shown;
-  for (char c : word.substr(0, kMaxShown))
-    shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-  if (word.size() > kMaxShown) shown += "...";
-  return shown;
-}
+std::string printable(const std::string& word) { return shownText(word); }
 
 std::string quotedWord(const std::string& word) { return "'" + printable(word) + "'"; }
 

@@ -12,6 +12,7 @@
 
 #include "core/atomic_file.h"
 #include "core/json_fields.h"
+#include "core/quoted_text.h"
 
 namespace chordfit {
 
@@ -136,7 +137,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
       if (auto parsed = parseCordKind(text)) {
         cord.kind = *parsed;
       } else {
-        fields.error(fieldPath(where, "kind"), "\"" + text + "\" is not primary or secondary");
+        fields.error(fieldPath(where, "kind"), quotedText(text) + " is not primary or secondary");
         ok = false;
       }
     } else {
@@ -174,7 +175,7 @@ bool readCord(const json& value, const std::string& where, int tip_count, JsonFi
         cord.provenance = *parsed;
       } else {
         fields.error(fieldPath(where, "provenance"),
-                     "\"" + text + "\" is not heuristic, manual or fitted");
+                     quotedText(text) + " is not heuristic, manual or fitted");
         ok = false;
       }
     } else {
@@ -199,12 +200,13 @@ bool tipNamesDistinct(const json& array, const std::string& where, const std::ve
       const std::string earlier = array[j].contains("name") ? fieldPath(indexPath(where, j), "name")
                                                             : indexPath(where, j) + " (unnamed)";
       if (array[i].contains("name")) {
-        fields.error(
-            fieldPath(indexPath(where, i), "name"),
-            "\"" + tips[i].name + "\" repeats " + earlier + ": each tip needs a name of its own");
+        fields.error(fieldPath(indexPath(where, i), "name"),
+                     quotedText(tips[i].name) + " repeats " + earlier +
+                         ": each tip needs a name of its own");
       } else {
-        fields.error(indexPath(where, i), "unnamed, it is called \"" + tips[i].name + "\", which " +
-                                              earlier + " gives: each tip needs a name of its own");
+        fields.error(indexPath(where, i), "unnamed, it is called " + quotedText(tips[i].name) +
+                                              ", which " + earlier +
+                                              " gives: each tip needs a name of its own");
       }
       ok = false;
       break;
@@ -264,7 +266,7 @@ bool readCordSet(const std::filesystem::path& path, const std::string& file, Cor
   if (const json* format = fields.member(*document, "", "format", false)) {
     std::string text;
     if (fields.text(*format, "format", text) && text != "chordfit-cordset") {
-      fields.error("format", "\"" + text + "\" is not a chordfit-cordset file");
+      fields.error("format", quotedText(text) + " is not a chordfit-cordset file");
       ok = false;
     }
   }

@@ -10,6 +10,7 @@
 
 #include "core/atomic_file.h"
 #include "core/decimal_number.h"
+#include "core/quoted_text.h"
 #include "core/text_case.h"
 
 namespace chordfit {
@@ -93,8 +94,8 @@ class CurveTextReader {
         if (!columnsFromNames(fields, columns_)) {
           return bad(number,
                      "the header names no coordinate columns (expected x,y,z, l,p,s or "
-                     "r,a,s), got \"" +
-                         text + "\"");
+                     "r,a,s), got " +
+                         quotedText(text));
         }
         return true;
       }
@@ -111,7 +112,7 @@ class CurveTextReader {
       const std::string& field = fields[columns_.index[k]];
       if (!parseDecimal(field, p[k])) {
         return bad(number,
-                   std::string(kAxis[k]) + " is not a finite decimal number: \"" + field + "\"");
+                   std::string(kAxis[k]) + " is not a finite decimal number: " + quotedText(field));
       }
     }
     points_.push_back(p);
@@ -155,12 +156,13 @@ class CurveTextReader {
       } else if (system == "LPS" || system == "1") {
         columns_.ras = false;
       } else {
-        return bad(number, "CoordinateSystem: expected LPS, RAS, 0 or 1, got \"" + system + "\"");
+        return bad(number,
+                   "CoordinateSystem: expected LPS, RAS, 0 or 1, got " + quotedText(system));
       }
     } else if (const std::string names = headerValue(text, "columns"); !names.empty()) {
       const bool ras = columns_.ras;
       if (!columnsFromNames(splitFields(names), columns_)) {
-        return bad(number, "columns: expected x, y and z among \"" + names + "\"");
+        return bad(number, "columns: expected x, y and z among " + quotedText(names));
       }
       columns_.ras = ras;  // the coordinate system comes from its own line
     }

@@ -9,6 +9,7 @@
 #include "core/atomic_file.h"
 #include "core/curve_csv.h"
 #include "core/json_fields.h"
+#include "core/quoted_text.h"
 #include "core/text_case.h"
 
 namespace chordfit {
@@ -34,7 +35,7 @@ bool toLps(const json& object, const std::string& where, JsonFields& fields, Cur
     points.col(1) *= -1.0;  // A -> P
   } else if (system != "LPS") {
     fields.error(fieldPath(where, "coordinateSystem"),
-                 "expected \"LPS\" or \"RAS\", got \"" + system + "\"");
+                 "expected \"LPS\" or \"RAS\", got " + quotedText(system));
     return false;
   }
   return true;
@@ -53,7 +54,7 @@ bool checkUnits(const json& markup, const std::string& where, JsonFields& fields
   if (!value->is_string()) return true;  // nothing we can interpret; Slicer's default is mm
   const std::string units = value->get<std::string>();
   if (units == "mm") return true;
-  fields.error(field, "expected \"mm\", got \"" + units + "\"");
+  fields.error(field, "expected \"mm\", got " + quotedText(units));
   return false;
 }
 
@@ -118,7 +119,7 @@ bool readMarkups(const json& document, JsonFields& fields, int markup_index, Cur
     return false;
   if (type != "Curve" && type != "ClosedCurve" && type != "Fiducial") {
     fields.error(fieldPath(where, "type"),
-                 "expected \"Curve\", \"ClosedCurve\" or \"Fiducial\", got \"" + type + "\"");
+                 "expected \"Curve\", \"ClosedCurve\" or \"Fiducial\", got " + quotedText(type));
     return false;
   }
   curve.closed = type == "ClosedCurve";

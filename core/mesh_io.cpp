@@ -1,4 +1,5 @@
 #include "core/mesh_io.h"
+#include "core/quoted_text.h"
 #include "core/text_case.h"
 
 #include <algorithm>
@@ -26,15 +27,8 @@ namespace fs = std::filesystem;
 bool isSpace(char c) { return std::isspace(static_cast<unsigned char>(c)) != 0; }
 
 // A word from the file as it may appear in a message: a corrupt binary file can put any
-// bytes where a keyword was expected.
-std::string quotedWord(const std::string& word) {
-  constexpr std::size_t kMaxShown = 40;
-  std::string shown;
-  for (char c : word.substr(0, kMaxShown))
-    shown += std::isprint(static_cast<unsigned char>(c)) ? c : '?';
-  if (word.size() > kMaxShown) shown += "...";
-  return "'" + shown + "'";
-}
+// bytes where a keyword was expected (shownText escapes them).
+std::string quotedWord(const std::string& word) { return "'" + shownText(word) + "'"; }
 
 // ---------------------------------------------------------------------------------------
 // Legacy VTK polydata reader.

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/json_fields.h"
+#include "core/quoted_text.h"
 
 namespace chordfit {
 
@@ -206,7 +207,7 @@ SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagno
         else if (out == "open")
           s.phase = ClosurePhase::kOpen;
         else
-          fields.error(where, "expected \"close\" or \"open\", got \"" + out + "\"");
+          fields.error(where, "expected \"close\" or \"open\", got " + quotedText(out));
       }
     }
     if (!known) {

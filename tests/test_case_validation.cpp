@@ -649,6 +649,24 @@ TEST_F(ValidateCommand, SkipsAByteOrderMarkInACsvCurveAndNamesItInAMesh) {
   expectError("open\\.ply", "starts with a UTF-8 byte-order mark");
 }
 
+// Binary garbage in a curve file was echoed as it was (NUL bytes, escape sequences, broken
+// UTF-8 on the terminal): non-printable bytes are shown as \xNN, a long value cut with "…".
+TEST_F(ValidateCommand, QuotesBinaryBytesOfACurveFileEscaped) {
+  const std::string garbage("\xac\xae\0\x1b[31m", 8);  // 8 characters shown
+  writeText(dir_ / "t.csv", "x,y,z\n1,0,-2\n" + garbage + std::string(60, 'A') + ",0,-2\n");
+  useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
+                              "file": "t.csv"}]})");
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("error: t.csv: line 3: x is not a finite decimal number: "
+                       "\"\\xac\\xae\\x00\\x1b[31m" +
+                       std::string(32, 'A') + "…\"\n"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(r.err.find('\0'), std::string::npos);
+  EXPECT_EQ(r.err.find('\x1b'), std::string::npos);
+}
+
 // One tracing, one cord, one tip: the summary read "1 polylines", "1 cords on 1 tips".
 TEST_F(ValidateCommand, SummaryCountsOneOfAThingInTheSingular) {
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
