@@ -436,6 +436,27 @@ bool readVersion(const json& document, JsonFields& fields) {
   return true;
 }
 
+// Why `name` cannot name a leaflet, naming the character, or "". A leaflet's name is part of
+// its cord groups' names ("anterior/anterolateral"), which edit-cords takes as --group NAME=S:
+// a '/' in it made groups that could not be told apart ("a/b" + "c" and "a" + "b/c"), an '='
+// would end NAME early; a control character (a newline) broke the summary's lines and the
+// groups' names, as in the case's name.
+std::string leafletNameProblem(const std::string& name) {
+  for (const char ch : name) {
+    const auto byte = static_cast<unsigned char>(ch);
+    if (byte < 0x20 || byte == 0x7f)
+      return "contains a control character (" + shownText(std::string(1, ch)) +
+             "): give a name of printable characters";
+    if (ch == '/')
+      return "contains '/', which joins a cord group's leaflet and tip "
+             "(\"anterior/anterolateral\"): edit-cords --group could not tell them apart";
+    if (ch == '=')
+      return "contains '=', which ends the group or segment in edit-cords --group NAME=S and "
+             "--segment SEG=S";
+  }
+  return "";
+}
+
 bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
   const json* names = fields.member(leaflets, "leaflets", "names", false);
   if (names == nullptr) return true;  // mitral default
@@ -451,6 +472,10 @@ bool readLeafletNames(const json& leaflets, JsonFields& fields, ValveCase& c) {
     // blank or repeated one merged two leaflets into one group.
     if (name.find_first_not_of(" \t") == std::string::npos) {
       fields.error(indexPath("leaflets.names", i), "a leaflet name must not be blank");
+      return false;
+    }
+    if (const std::string problem = leafletNameProblem(name); !problem.empty()) {
+      fields.error(indexPath("leaflets.names", i), quotedText(name) + " " + problem);
       return false;
     }
     for (std::size_t j = 0; j < i; ++j) {

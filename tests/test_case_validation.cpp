@@ -684,6 +684,27 @@ TEST_F(ValidateCommand, ReportsAControlCharacterInTheCaseName) {
   expectError("case\\.json", "name: contains a control character");
 }
 
+// A leaflet's name is part of its cord groups' names, which edit-cords --group NAME=S takes: a
+// newline broke the summary and the groups, a '/' made groups edit-cords could not tell apart
+// ("a/b/anterolateral"), an '=' ended NAME early. All passed.
+TEST_F(ValidateCommand, ReportsALeafletNameWithAControlCharacterASlashOrAnEquals) {
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"anterior", "a\nb"}; });
+  expectError(
+      "case\\.json",
+      "leaflets\\.names\\[1\\]: \"a\\\\x0ab\" contains a control character \\(\\\\x0a\\): give "
+      "a name of printable characters");
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"a/b", "c"}; });
+  expectError("case\\.json",
+              "leaflets\\.names\\[0\\]: \"a/b\" contains '/', which joins a cord "
+              "group's leaflet and tip");
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"a", "b=c"}; });
+  expectError("case\\.json", "leaflets\\.names\\[1\\]: \"b=c\" contains '=', which ends the group");
+  // The characters edit-cords does not parse stay allowed.
+  editCaseJson([](nlohmann::json& j) { j["leaflets"]["names"] = {"anterior, AML", "posterior"}; });
+  const testing::CommandResult r = validate();
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+}
+
 TEST_F(ValidateCommand, ReportsATracingWithBothPointsAndAFile) {
   writeText(dir_ / "tracing.csv", "1,0,-2\n2,0,-2\n");
   useTracings(R"({"tracings": [{"plane": {"origin": [0,0,0], "normal": [0,1,0]},
