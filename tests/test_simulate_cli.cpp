@@ -285,6 +285,21 @@ TEST_F(SimulateCommand, AStepCapTheTissuesFactorsOutrunNamesTheTissue) {
       << r.err;
   EXPECT_EQ(r.err.find("case.json"), r.err.find("case.json's simulation block")) << r.err;
   EXPECT_FALSE(std::filesystem::exists(dir_ / "sim" / "metrics.json"));
+  // compare reads its --tissues after the case's settings: named there too, before any
+  // closure (it was blamed on the cord file once the closure ran).
+  ASSERT_EQ(
+      runChordfit("heuristic " + quoted(case_dir_) + " --out " + quoted(dir_ / "h.json")).exit_code,
+      0);
+  const auto compared =
+      runChordfit("compare " + quoted(case_dir_) + " " + quoted(dir_ / "h.json") + " --tissues " +
+                  quoted(dir_ / "stiff.json") + " --out " + quoted(dir_ / "cmp"));
+  EXPECT_EQ(compared.exit_code, 2) << compared.out << compared.err;
+  EXPECT_NE(compared.err.find("error: compare: --tissues: " + (dir_ / "stiff.json").string() +
+                              ": stiffness: factors up to 1000 shorten the automatic time step"),
+            std::string::npos)
+      << compared.err;
+  EXPECT_EQ((compared.out + compared.err).find("closing"), std::string::npos) << compared.err;
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "cmp"));
 
   // The case's own tissue: named at case.json's tissue_stiffness; validate has no --set.
   c["tissue_stiffness"] = "tissue.json";

@@ -271,6 +271,19 @@ std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
 
 }  // namespace
 
+bool tissueStepCapOrReport(const ValveCase& valve_case, const SimulationSettings& settings,
+                           const char* command, const std::string& tissue_file) {
+  const std::string problem = stepCapProblem(valve_case, settings);
+  if (problem.empty()) return true;
+  Diagnostics diagnostics;
+  // The case's settings, overrides included, passed with its own tissue: `settings` stands
+  // for both.
+  reportStepCapProblem(problem, valve_case, settings, settings, std::string(command) + ": --set",
+                       true, tissue_file, diagnostics);
+  reportProblems(diagnostics);
+  return false;
+}
+
 std::optional<SimulationSettings> caseSettingsOrReport(ValveCase& valve_case,
                                                        const std::string& case_dir, SettingsUse use,
                                                        const char* command,

@@ -81,6 +81,13 @@ std::optional<SimulationSettings> caseSettingsOrReport(
     ValveCase& valve_case, const std::string& case_dir, SettingsUse use, const char* command = "",
     const std::vector<std::string>& overrides = {}, const std::string& tissue_file = "");
 
+// After a tissue file has replaced `valve_case`'s tissue (compare --tissues, one per cord set,
+// read after caseSettingsOrReport): whether the pressure ramp still fits under the step cap of
+// `settings`; otherwise reports it at `tissue_file` as caseSettingsOrReport does and returns
+// false (a stiff file was blamed on the cord file, once its closure ran).
+bool tissueStepCapOrReport(const ValveCase& valve_case, const SimulationSettings& settings,
+                           const char* command, const std::string& tissue_file);
+
 // Whether `option` ("--ap") is among the options given on the command line (the options
 // structs' given_options), for a command's notes on options that do not act.
 inline bool optionGiven(const std::vector<std::string>& given_options, const char* option) {

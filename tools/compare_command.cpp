@@ -446,6 +446,9 @@ int runCompare(const CompareOptions& options) {
       if (!loadTissueFile(tissues[i], "compare: --tissues: " + tissues[i], set.valve_case,
                           diagnostics))
         return reportProblems(diagnostics);
+      if (!tissueStepCapOrReport(set.valve_case, settings, "compare",
+                                 "compare: --tissues: " + tissues[i]))
+        return kExitBadInput;
     }
     sets.push_back(std::move(set));
   }
