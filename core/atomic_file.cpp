@@ -40,9 +40,15 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// The pid in a temporary file's name "<name>.tmp.<pid>" beside `path`, or -1 for any other.
+// The temporary file of `path` written by process `pid`: hidden, and named so that no file a
+// user keeps beside it is taken for one (a backup "cords.json.tmp.20261129" was, and removed).
+std::string temporaryPrefix(const fs::path& path) {
+  return "." + path.filename().string() + ".chordfit-tmp.";
+}
+
+// The pid in a temporary file's name beside `path` (temporaryPrefix), or -1 for any other.
 long temporaryPid(const fs::path& path, const std::string& entry) {
-  const std::string prefix = path.filename().string() + ".tmp.";
+  const std::string prefix = temporaryPrefix(path);
   if (entry.size() <= prefix.size() || entry.size() > prefix.size() + 9 ||
       entry.compare(0, prefix.size(), prefix) != 0)
     return -1;
@@ -69,6 +75,8 @@ bool leftByEndedProcess(const std::filesystem::path& entry, long pid) {
   std::error_code ec;
   const auto age = fs::file_time_type::clock::now() - fs::last_write_time(entry, ec);
   if (ec || age < std::chrono::seconds(2)) return false;
+  // Read-only, as a directory can only be opened: on an NFS mount that maps flock to POSIX
+  // locks the lock then fails, and the entry is kept (never a live one removed).
   const int fd = ::open(entry.c_str(), O_RDONLY | O_CLOEXEC | O_NOFOLLOW);
   if (fd < 0) return false;
   const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
@@ -94,22 +102,27 @@ void writeFileAtomically(const std::filesystem::path& requested, const std::stri
   if (path.has_parent_path()) fs::create_directories(path.parent_path(), ec);
   removeAbandonedTemporaries(path);
   // The pid keeps concurrent writers (e.g. sharded experiments) from sharing a temp file; the
-  // lock, held until the rename, keeps removeAbandonedTemporaries of other runs off it.
-  fs::path tmp = path;
-  tmp += ".tmp." + std::to_string(::getpid());
+  // lock, held while it is written, keeps removeAbandonedTemporaries of other runs off it.
+  const fs::path tmp = path.parent_path() / (temporaryPrefix(path) + std::to_string(::getpid()));
   errno = 0;
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0666);
   if (fd < 0)
     throw std::runtime_error(requested.string() + ": cannot open for writing" + systemReason());
-  ::flock(fd, LOCK_EX);  // advisory; a file system without locks still gets its file
-  if (!writeAll(fd, bytes)) {
-    const std::string reason = systemReason();
-    ::close(fd);
+  // Advisory and not waited for: a file system without locks, or an NFS server in its grace
+  // period, still gets its file.
+  ::flock(fd, LOCK_EX | LOCK_NB);
+  errno = 0;
+  bool written = writeAll(fd, bytes);
+  std::string reason = systemReason();
+  // close() can report what write() did not (a full quota on NFS): checked before the rename,
+  // so that a failed file is never put in place.
+  errno = 0;
+  if (::close(fd) != 0 && written) written = false, reason = systemReason();
+  if (!written) {
     fs::remove(tmp, ec);
     throw std::runtime_error(requested.string() + ": write failed" + reason);
   }
   fs::rename(tmp, path, ec);
-  ::close(fd);
   if (ec) {
     fs::remove(tmp, ec);
     throw std::runtime_error(requested.string() + ": cannot move temporary file into place");

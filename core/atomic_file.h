@@ -9,22 +9,25 @@
 
 namespace chordfit {
 
-// Writes `bytes` to `path` atomically (temp file in the same directory + rename).
+// Writes `bytes` to `path` atomically: to ".<name>.chordfit-tmp.<pid>" in the same directory,
+// then renamed over it.
 // Creates missing parent directories. A symbolic link is written through: its target gets the
 // bytes and the link stays. Throws std::runtime_error naming the path on failure.
 void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
 // Whether `entry`, a temporary file or directory named with the pid of the process writing
 // it, was left by a process that has ended: its lock is free (a live writer holds a flock on
-// it, which another container or NFS client sees too, where its pid means nothing), no process
+// it, which another container on this host sees too, where its pid means nothing), no process
 // of that pid lives on this machine, and it is older than 2 s (so that a writer between its
 // open and its lock keeps it). A pid reused by an unrelated process keeps it for a later run.
+// On an NFS mount flock may not reach other clients, or may fail on a read-only descriptor:
+// where the lock cannot be taken the entry is kept; where it is local to each client, a live
+// writer on another client is known only by its age.
 bool leftByEndedProcess(const std::filesystem::path& entry, long pid);
 
-// Removes the temporary files "<name>.tmp.<pid>" beside `path` that writers no longer alive
-// left (a write killed between its open and its rename: SIGKILL, Ctrl-C); writeFileAtomically
-// calls it first. A live writer's file is kept: it holds a lock on it (seen from another
-// container or NFS client, where its pid is not), and a process of its pid lives here.
+// Removes the temporary files ".<name>.chordfit-tmp.<pid>" beside `path` that writers no
+// longer alive left (a write killed between its open and its rename: SIGKILL, Ctrl-C);
+// writeFileAtomically calls it first. A live writer's file is kept (leftByEndedProcess).
 void removeAbandonedTemporaries(const std::filesystem::path& path);
 
 // The largest input file any reader takes. A fine valve mesh (a million triangles, ten times

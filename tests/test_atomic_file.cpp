@@ -37,11 +37,11 @@ TEST(AtomicFile, WritesTheWholeFileAndLeavesNoTemporary) {
   EXPECT_EQ(entries, 1) << "a temporary file was left beside the output";
 }
 
-// latest.json -> runs/7/cords.json: the run's file gets the bytes and the link still points
-// at it (a rename onto the link would have replaced it by a plain file).
-// A write killed between its open and its rename (SIGKILL, Ctrl-C) leaves "<name>.tmp.<pid>";
-// the next write of that file removes it, but not a live writer's: one whose process runs
-// here, one that holds its lock (a writer on another host), or one written a moment ago.
+// A write killed between its open and its rename (SIGKILL, Ctrl-C) leaves
+// ".<name>.chordfit-tmp.<pid>"; the next write of that file removes it, but not a live
+// writer's: one whose process runs here, one that holds its lock (a writer in another
+// container), or one written a moment ago; nor a file of the user's named like one
+// ("cords.json.tmp.<digits>", a dated backup, was taken for one and removed).
 TEST(AtomicFile, RemovesTheTemporariesOfWritersThatNoLongerExist) {
   TempDir dir;
   auto endedPid = [] {
@@ -51,14 +51,16 @@ TEST(AtomicFile, RemovesTheTemporariesOfWritersThatNoLongerExist) {
     return std::to_string(child);
   };
   const fs::path out = dir / "cords.json";
-  const fs::path abandoned = dir / ("cords.json.tmp." + endedPid());
-  const fs::path running = dir / ("cords.json.tmp." + std::to_string(::getppid()));
-  const fs::path locked = dir / ("cords.json.tmp." + endedPid());
-  const fs::path fresh = dir / ("cords.json.tmp." + endedPid());
-  const fs::path other_file = dir / ("metrics.json.tmp." + endedPid());
-  const fs::path not_temporary = dir / "cords.json.tmp.notes";
+  const fs::path abandoned = dir / (".cords.json.chordfit-tmp." + endedPid());
+  const fs::path running = dir / (".cords.json.chordfit-tmp." + std::to_string(::getppid()));
+  const fs::path locked = dir / (".cords.json.chordfit-tmp." + endedPid());
+  const fs::path fresh = dir / (".cords.json.chordfit-tmp." + endedPid());
+  const fs::path other_file = dir / (".metrics.json.chordfit-tmp." + endedPid());
+  const fs::path not_temporary = dir / ".cords.json.chordfit-tmp.notes";
+  const fs::path users_backup = dir / "cords.json.tmp.20261129";
   const auto old = fs::file_time_type::clock::now() - std::chrono::minutes(5);
-  for (const fs::path& file : {abandoned, running, locked, fresh, other_file, not_temporary}) {
+  for (const fs::path& file :
+       {abandoned, running, locked, fresh, other_file, not_temporary, users_backup}) {
     testing::writeText(file, "{");
     if (file != fresh) fs::last_write_time(file, old);
   }
@@ -74,8 +76,11 @@ TEST(AtomicFile, RemovesTheTemporariesOfWritersThatNoLongerExist) {
   EXPECT_TRUE(fs::exists(fresh)) << "written a moment ago";
   EXPECT_TRUE(fs::exists(other_file)) << "another file's, left for its own next write";
   EXPECT_TRUE(fs::exists(not_temporary)) << "not a temporary's name";
+  EXPECT_TRUE(fs::exists(users_backup)) << "the user's file";
 }
 
+// latest.json -> runs/7/cords.json: the run's file gets the bytes and the link still points
+// at it (a rename onto the link would have replaced it by a plain file).
 TEST(AtomicFile, WritesThroughASymbolicLink) {
   TempDir dir;
   writeFileAtomically(dir / "runs" / "7" / "cords.json", "old");

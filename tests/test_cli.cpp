@@ -61,7 +61,8 @@ TEST(ChordfitCli, RunsTheFoundationPipelineOnAParametricValve) {
   EXPECT_EQ(cords.tips.size(), 2u);
   EXPECT_GT(cords.cords.size(), 10u);
   for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
-    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left a temp file";
+    EXPECT_EQ(entry.path().string().find(".chordfit-tmp."), std::string::npos)
+        << "left a temp file";
   }
 
   r = runChordfit("metrics " + quoted(case_dir) + " --mesh " + quoted(case_dir / "open.ply") +

@@ -67,7 +67,8 @@ TEST(EditCordsCli, ScalesTheSeedLengthMostSpecificLastMarksManualAndLocks) {
   EXPECT_NE(r.out.find("edited"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find(" 1 cord scaled\n"), std::string::npos) << "--cord 0=0.8: " << r.out;
   for (const auto& entry : fs::directory_iterator(dir.path())) {
-    EXPECT_EQ(entry.path().string().find(".tmp."), std::string::npos) << "left a temp file";
+    EXPECT_EQ(entry.path().string().find(".chordfit-tmp."), std::string::npos)
+        << "left a temp file";
   }
 }
 
