@@ -438,9 +438,9 @@ bool readVersion(const json& document, JsonFields& fields) {
 
 // Why `name` cannot name a leaflet, naming the character, or "". A leaflet's name is part of
 // its cord groups' names ("anterior/anterolateral"), which edit-cords takes as --group NAME=S:
-// a '/' in it made groups that could not be told apart ("a/b" + "c" and "a" + "b/c"), an '='
-// would end NAME early; a control character (a newline) broke the summary's lines and the
-// groups' names, as in the case's name.
+// a '/' in it made groups that could not be told apart ("a/b" + "c" and "a" + "b/c"); a
+// control character (a newline) broke the summary's lines and the groups' names, as in the
+// case's name. An '=' is fine: edit-cords splits NAME=S at the last '=', before a number.
 std::string leafletNameProblem(const std::string& name) {
   for (const char ch : name) {
     const auto byte = static_cast<unsigned char>(ch);
@@ -450,9 +450,6 @@ std::string leafletNameProblem(const std::string& name) {
     if (ch == '/')
       return "contains '/', which joins a cord group's leaflet and tip "
              "(\"anterior/anterolateral\"): edit-cords --group could not tell them apart";
-    if (ch == '=')
-      return "contains '=', which ends the group or segment in edit-cords --group NAME=S and "
-             "--segment SEG=S";
   }
   return "";
 }

@@ -411,9 +411,11 @@ std::string prepareStl(std::string& bytes) {
         "a binary STL of " + std::to_string(facets) + " facets (the count at byte 80) has " +
         std::to_string(84 + 50 * facets) + " bytes, this file " + std::to_string(bytes.size());
     if (bytes.size() < 84 + 50 * facets) return counted + ": cut short";
-    // Bytes after the facets that make no whole facet are an exporter's padding: read.
+    // Bytes after the facets that make no whole facet, or only zeros (a block's padding), are
+    // an exporter's padding: read.
     const std::size_t extra = bytes.size() - 84 - 50 * facets;
-    if (extra % 50 != 0) return "";
+    if (extra % 50 != 0 || bytes.find_first_not_of('\0', 84 + 50 * facets) == std::string::npos)
+      return "";
     return counted + ": it holds " + std::to_string(facets + extra / 50) +
            " facets, the count is wrong (re-export the mesh)";
   }

@@ -104,17 +104,28 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
   // The closure settles when no vertex moves more than tolerance_mm per step; a velocity clamp
   // at or near it would meet that criterion with the valve still moving at the clamp
   // (max_step_mm 5e-5 reported a closure "converged" after 159 steps, 39 % of the orifice
-  // open). 10x keeps a settled valve apart from a clamped one.
+  // open; tolerance_mm 0.3 against the automatic 0.25 mm clamp, right after the ramp). 10x
+  // keeps a settled valve apart from a clamped one. The automatic clamp is the simulator's
+  // (simulator.cpp): 0.25 x the contact thickness.
   constexpr double kMinStepToTolerance = 10.0;
-  if (s.max_step_mm > 0.0 && std::isfinite(s.tolerance_mm) && s.tolerance_mm > 0.0 &&
-      s.max_step_mm < kMinStepToTolerance * s.tolerance_mm) {
-    char what[240];
-    std::snprintf(what, sizeof what,
-                  "%g mm is below %g x tolerance_mm (%g mm): a closure clamped to it would pass "
-                  "the settling test while still moving (0 = automatic, 0.25 x the contact "
-                  "thickness)",
-                  s.max_step_mm, kMinStepToTolerance, s.tolerance_mm);
-    problems.push_back({"max_step_mm", what});
+  const bool automatic_clamp = !(s.max_step_mm > 0.0);
+  const double clamp = automatic_clamp ? 0.25 * contactThicknessMm(s) : s.max_step_mm;
+  if (std::isfinite(clamp) && clamp > 0.0 && std::isfinite(s.tolerance_mm) &&
+      s.tolerance_mm > 0.0 && clamp < kMinStepToTolerance * s.tolerance_mm) {
+    char what[300];
+    if (automatic_clamp)
+      std::snprintf(what, sizeof what,
+                    "%g mm is more than a tenth of the largest step a vertex may take (%g mm, "
+                    "0.25 x the contact thickness): a closure would pass the settling test while "
+                    "still moving",
+                    s.tolerance_mm, clamp);
+    else
+      std::snprintf(what, sizeof what,
+                    "%g mm is below %g x tolerance_mm (%g mm): a closure clamped to it would pass "
+                    "the settling test while still moving (0 = automatic, 0.25 x the contact "
+                    "thickness)",
+                    s.max_step_mm, kMinStepToTolerance, s.tolerance_mm);
+    problems.push_back({automatic_clamp ? "tolerance_mm" : "max_step_mm", what});
   }
   return problems;
 }

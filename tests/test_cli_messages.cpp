@@ -152,13 +152,27 @@ TEST(Cli, RefusesAnOutputPathTooLongForWhatIsWrittenUnderItBeforeTheWork) {
   out /= std::string(4068 - out.string().size() - 1, 'e');
   ASSERT_EQ(out.string().size(), 4068u);
   const std::string message =
-      ": a path of 4068 characters: the paths written under it (a "
-      "staging directory and temporary names included) would pass the "
-      "system's limit of 4095 characters; give a shorter path";
+      ": a path of 4068 bytes: the paths written under it (a staging "
+      "directory and temporary names included) would pass the system's "
+      "limit of 4095 bytes; give a shorter path";
   expectRefused("simulate " + quoted(smallCase()) + " --out " + quoted(out),
                 "error: simulate: --out: " + out.string() + message);
-  expectRefused("heuristic " + quoted(smallCase()) + " --out " + quoted(out),
-                "error: heuristic: --out: " + out.string() + message);
+  // A single file has no staging directory: refused nearer the limit.
+  fs::path file = dir.path();
+  while (file.string().size() < 3880) file /= std::string(199, 'd');
+  file /= std::string(4085 - file.string().size() - 1, 'f');
+  ASSERT_EQ(file.string().size(), 4085u);
+  expectRefused("heuristic " + quoted(smallCase()) + " --out " + quoted(file),
+                "error: heuristic: --out: " + file.string() +
+                    ": a path of 4085 bytes: its temporary name while it is written would pass "
+                    "the system's limit of 4095 bytes; give a shorter path");
+  // A file name legal on its own that its temporary name takes past NAME_MAX.
+  const fs::path long_name = dir.path() / (std::string(245, 'c') + ".json");
+  expectRefused("heuristic " + quoted(smallCase()) + " --out " + quoted(long_name),
+                "error: heuristic: --out: " + long_name.string() +
+                    ": a file name of 250 bytes: its temporary name while it is written would "
+                    "pass the system's limit of 255 bytes for a name; give a name of at most 230 "
+                    "bytes");
   EXPECT_TRUE(fs::is_empty(dir.path())) << "nothing made";
 }
 

@@ -554,6 +554,9 @@ TEST_F(MeshIoTest, AsciiStlAfterBlanksAndBinaryStlWithTrailingBytesAreRead) {
   a << 0, 0, 0, 1, 0, 0, 0, 1, 0;
   readOk(write("extra.stl", binaryStl("binary", {a}) + "trailing bytes"), V, F);
   EXPECT_EQ(F.rows(), 1);
+  // Zeros padding the file to a block: a whole facet's worth, but no facet.
+  readOk(write("padded.stl", binaryStl("binary", {a}) + std::string(100, '\0')), V, F);
+  EXPECT_EQ(F.rows(), 1);
 }
 
 TEST_F(MeshIoTest, TinyOrGarbageStlIsReported) {

@@ -69,6 +69,18 @@ TEST(SimulatorSettingsRanges, AVelocityClampNearTheToleranceIsRefused) {
   EXPECT_TRUE(hasProblem(settingsProblems(s), "max_step_mm"));
   s.max_step_mm = 0.0;
   EXPECT_TRUE(settingsProblems(s).empty());
+  // The automatic clamp (0.25 x the contact thickness, 0.25 mm here) against a tolerance
+  // above a tenth of it: named at the tolerance.
+  s.tolerance_mm = 0.03;
+  problems = settingsProblems(s);
+  ASSERT_EQ(problems.size(), 1u);
+  EXPECT_EQ(problems[0].key, "tolerance_mm");
+  EXPECT_NE(problems[0].what.find("0.03 mm is more than a tenth of the largest step a vertex may "
+                                  "take (0.25 mm, 0.25 x the contact thickness)"),
+            std::string::npos)
+      << problems[0].what;
+  s.material.thickness_mm = 2.0;  // a 0.5 mm clamp
+  EXPECT_TRUE(settingsProblems(s).empty());
 }
 
 // As for every other object's keys: a typo is named with the setting it may have meant.

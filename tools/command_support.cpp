@@ -60,11 +60,12 @@ std::optional<ValveCase> loadCaseOrReport(const std::string& case_dir) {
     // Not an error: a valve traced in an unusual frame may still be right, and the user
     // decides; but every later number depends on it, so say it first (once per run: fit
     // reads the case again for its fitted closure).
-    std::cerr << "warning: case " << case_dir << ": only " << std::lround(100.0 * agreement)
-              << " % of the tracing points lie nearest an open-state vertex of their own leaflet "
-                 "(65-80 % on correctly labelled valves): are the leaflet labels (case.json "
-                 "leaflets.labels) or the tracings' leaflets swapped? Each point is measured to "
-                 "its own leaflet, so swapped labels make every distance, and a fit, wrong\n";
+    printWarning(
+        "case %s: only %ld %% of the tracing points lie nearest an open-state vertex of their "
+        "own leaflet (65-80 %% on correctly labelled valves): are the leaflet labels (case.json "
+        "leaflets.labels) or the tracings' leaflets swapped? Each point is measured to its own "
+        "leaflet, so swapped labels make every distance, and a fit, wrong\n",
+        case_dir.c_str(), std::lround(100.0 * agreement));
   }
   if (loaded && warned_holes.insert(case_dir).second) {
     if (const int holes = meshHoles(loaded->mesh); holes > 0)
@@ -104,7 +105,7 @@ void printWarning(const char* format, ...) {
   va_end(arguments);
 }
 
-void printNoteLines(const std::string& lines) {
+void printLinesToStderr(const std::string& lines) {
   if (lines.empty()) return;
   std::fflush(stdout);
   std::fputs(lines.c_str(), stderr);
@@ -162,7 +163,7 @@ std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::s
   auto cords = resolveCords(*valve_case, cords_file);
   if (!cords) return std::nullopt;
   if (tissue_file.empty())
-    printNoteLines(tissueBesideCordsNote(command, cords_file, "--tissue FILE"));
+    printLinesToStderr(tissueBesideCordsNote(command, cords_file, "--tissue FILE"));
   return CaseWithCords{std::move(*valve_case), std::move(*cords)};
 }
 
@@ -205,9 +206,19 @@ std::string tissueStepCapProblem(const ValveCase& valve_case, const SimulationSe
   const double dt = caseTimeStepMs(valve_case, settings);
   const double uniform_dt = caseTimeStepMs(withUniformTissue(valve_case), settings);
   const double ramp_steps = std::ceil(settings.ramp_ms / dt);
+  char what[480];
+  // A cap beyond the 1e8 steps the settings accept (and an int) would be no advice.
+  if (!(5.0 * ramp_steps <= 1e8)) {
+    std::snprintf(what, sizeof what,
+                  "factors up to %g shorten the automatic time step to %.4g ms (%.4g ms with "
+                  "uniform tissue): the %g ms pressure ramp takes %.3g steps, more than any step "
+                  "cap a closure is allowed (1e8); give softer factors",
+                  valve_case.tissue_stiffness.maxCoeff(), dt, uniform_dt, settings.ramp_ms,
+                  ramp_steps);
+    return what;
+  }
   const int cap = stepCapForRamp(ramp_steps);
   const std::string set_hint = takes_set ? "--set max_steps=" + std::to_string(cap) + ", or " : "";
-  char what[480];
   std::snprintf(what, sizeof what,
                 "factors up to %g shorten the automatic time step to %.4g ms (%.4g ms with "
                 "uniform tissue): the %g ms pressure ramp takes %.0f steps, more than "
@@ -272,14 +283,13 @@ std::optional<nlohmann::json> settingOverridesOrReport(const char* command,
 }  // namespace
 
 bool tissueStepCapOrReport(const ValveCase& valve_case, const SimulationSettings& settings,
-                           const char* command, const std::string& tissue_file) {
-  const std::string problem = stepCapProblem(valve_case, settings);
-  if (problem.empty()) return true;
+                           const std::string& tissue_file) {
+  if (stepCapProblem(valve_case, settings).empty()) return true;
+  // The case's settings, overrides included, passed with the case's own tissue: the file that
+  // replaced it is the cause (with uniform tissue the case may not pass: a fit's softer
+  // tissue.json lengthens the step).
   Diagnostics diagnostics;
-  // The case's settings, overrides included, passed with its own tissue: `settings` stands
-  // for both.
-  reportStepCapProblem(problem, valve_case, settings, settings, std::string(command) + ": --set",
-                       true, tissue_file, diagnostics);
+  diagnostics.error(tissue_file, "stiffness", tissueStepCapProblem(valve_case, settings, true));
   reportProblems(diagnostics);
   return false;
 }
@@ -421,18 +431,42 @@ bool reportEmptyOutput(const char* command, const std::string& out) {
 }
 
 // The paths a command writes are longer than --out: a staging directory (".staging-<pid>",
-// within a nested command's too), the file, and ".tmp.<pid>". A --out within PATH_MAX but
-// not that much within failed after the work, leaving the directories it had made ("File name
-// too long" at 4,060 of 4,096 characters). The margin holds two staging levels and the
-// temporary suffix with 10-digit pids.
-std::string pathLengthProblem(const std::string& path, const std::string& longest_name) {
-  constexpr std::size_t kWrittenBeside = 2 * (sizeof("/.staging-") + 10) + sizeof(".tmp.") + 10;
-  const std::size_t longest = path.size() + 1 + longest_name.size() + kWrittenBeside;
-  if (longest < PATH_MAX) return "";
-  return "a path of " + std::to_string(path.size()) +
-         " characters: the paths written under it (a staging directory and temporary names "
-         "included) would pass the system's limit of " +
-         std::to_string(PATH_MAX - 1) + " characters; give a shorter path";
+// within a nested command's too) and a file's temporary (".<name>.chordfit-tmp.<pid>"). An
+// --out within the system's limits but not that much within failed after the work: at 4,060
+// of PATH_MAX's 4,096 bytes (leaving the directories it had made), or with a file name of
+// 250 bytes that its temporary took past NAME_MAX's 255. Lengths are bytes; pids up to 10
+// digits.
+constexpr std::size_t kTemporaryNameExtra = sizeof("..chordfit-tmp.") - 1 + 10;
+constexpr std::size_t kStagingExtra = sizeof("/.staging-") - 1 + 10;
+
+// `longer`: what the command writes that is longer than the path given.
+std::string pathTooLong(const std::string& path, const std::string& longer) {
+  return "a path of " + std::to_string(path.size()) + " bytes: " + longer +
+         " would pass the system's limit of " + std::to_string(PATH_MAX - 1) +
+         " bytes; give a shorter path";
+}
+
+// For an output directory whose longest file name is `longest_name`.
+std::string directoryPathLengthProblem(const std::string& dir, const std::string& longest_name) {
+  const std::size_t longest =
+      dir.size() + 2 * kStagingExtra + 1 + longest_name.size() + kTemporaryNameExtra;
+  return longest < PATH_MAX
+             ? ""
+             : pathTooLong(dir,
+                           "the paths written under it (a staging directory and temporary names "
+                           "included)");
+}
+
+// For an output file, written beside itself.
+std::string filePathLengthProblem(const std::string& file) {
+  if (file.size() + kTemporaryNameExtra >= PATH_MAX)
+    return pathTooLong(file, "its temporary name while it is written");
+  const std::size_t name = std::filesystem::path(file).filename().string().size();
+  if (name + kTemporaryNameExtra <= NAME_MAX) return "";
+  return "a file name of " + std::to_string(name) + " bytes: its temporary name while it is " +
+         "written would pass the system's limit of " + std::to_string(NAME_MAX) +
+         " bytes for a name; give a name of at most " +
+         std::to_string(NAME_MAX - kTemporaryNameExtra) + " bytes";
 }
 
 }  // namespace
@@ -444,7 +478,7 @@ bool outputDirectoryUsable(const char* command, const std::string& directory,
   std::string longest_name;
   for (const std::string& name : files)
     if (name.size() > longest_name.size()) longest_name = name;
-  if (!reportOutputProblem(command, directory, pathLengthProblem(directory, longest_name)))
+  if (!reportOutputProblem(command, directory, directoryPathLengthProblem(directory, longest_name)))
     return false;
   if (!reportOutputProblem(command, directory, outputPlaceProblem(directory))) return false;
   for (const std::string& name : files) {
@@ -518,7 +552,7 @@ std::vector<std::string> caseInputFiles(const std::string& case_dir, bool with_c
 
 bool outputFileUsable(const char* command, const std::string& file) {
   if (reportEmptyOutput(command, file)) return false;
-  if (!reportOutputProblem(command, file, pathLengthProblem(file, ""))) return false;
+  if (!reportOutputProblem(command, file, filePathLengthProblem(file))) return false;
   std::error_code ec;
   if (std::filesystem::is_directory(file, ec))
     return reportOutputProblem(command, file, "is a directory; give the file to write");

@@ -36,11 +36,11 @@ std::string noCordsProblem(const ValveCase& valve_case, const std::string& case_
 // tables, summaries), stderr what the user may want to know about it (errors, warnings,
 // notes). stdout is flushed first, so that a log of both streams (2>&1) keeps each note
 // after the lines printed before it. printNote and printWarning print "note: " or "warning: "
-// and the formatted text (give it its newline); printNoteLines prints lines that already
-// start with "note: " as they are.
+// and the formatted text (give it its newline); printLinesToStderr prints lines that already
+// start with "note: " or "warning: " as they are.
 void printNote(const char* format, ...) __attribute__((format(printf, 1, 2)));
 void printWarning(const char* format, ...) __attribute__((format(printf, 1, 2)));
-void printNoteLines(const std::string& lines);
+void printLinesToStderr(const std::string& lines);
 
 // A note when a fit's tissue.json lies beside `cords_file` (a fit's output directory) and the
 // command closes those cords on the case's own tissue instead: the fit closed them on that
@@ -86,7 +86,7 @@ std::optional<SimulationSettings> caseSettingsOrReport(
 // `settings`; otherwise reports it at `tissue_file` as caseSettingsOrReport does and returns
 // false (a stiff file was blamed on the cord file, once its closure ran).
 bool tissueStepCapOrReport(const ValveCase& valve_case, const SimulationSettings& settings,
-                           const char* command, const std::string& tissue_file);
+                           const std::string& tissue_file);
 
 // Whether `option` ("--ap") is among the options given on the command line (the options
 // structs' given_options), for a command's notes on options that do not act.

@@ -438,7 +438,7 @@ int runCompare(const CompareOptions& options) {
     if (!cords) return kExitBadInput;
     ComparedSet set{labels[i], options.cords_files[i], *cords, *valve_case, {}, false, 0, {}, {}};
     if (tissues[i] == "-")
-      printNoteLines(
+      printLinesToStderr(
           tissueBesideCordsNote("compare", options.cords_files[i], "--tissues, one per cord file"));
     if (tissues[i] != "-") {
       // Named with the option: in a list beside the cord files, a bare name could be either.
@@ -446,8 +446,7 @@ int runCompare(const CompareOptions& options) {
       if (!loadTissueFile(tissues[i], "compare: --tissues: " + tissues[i], set.valve_case,
                           diagnostics))
         return reportProblems(diagnostics);
-      if (!tissueStepCapOrReport(set.valve_case, settings, "compare",
-                                 "compare: --tissues: " + tissues[i]))
+      if (!tissueStepCapOrReport(set.valve_case, settings, "compare: --tissues: " + tissues[i]))
         return kExitBadInput;
     }
     sets.push_back(std::move(set));

@@ -359,7 +359,7 @@ int runEditCords(const EditCordsOptions& options) {
         counted(left_locked, "locked cord").c_str());
   }
   if (!any_changed && !requests.empty() && moves.empty())
-    std::fprintf(stderr, "warning: edit-cords: nothing changed: %s\n",
+    printWarning("edit-cords: nothing changed: %s\n",
                  edited.empty() ? "every cord the scalings name is locked"
                                 : "the scalings leave every rest length as it was (scale 1)");
   if (!outside_bounds.empty()) {

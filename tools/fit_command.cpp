@@ -169,7 +169,7 @@ int runFit(const FitCommandOptions& o) {
                  "not fitted; docs/case-format.md, \"Tracings\")\n";
     return kExitBadInput;
   }
-  printNoteLines(duplicateTracingsNote(*valve_case));
+  printLinesToStderr(duplicateTracingsNote(*valve_case));
   // A tip moved by the box on all three axes goes sqrt(3) box: beyond the case's reach, where
   // no case file may put a tip (1e308 gave crs2 an infinite domain and sent bobyqa's first
   // steps out of the ventricle). Only where it acts: with other --params it is noted, not used.

@@ -119,22 +119,23 @@ int runMakeCase(const MakeCaseOptions& options) {
   if (!synthetic.truth_result.converged) {
     // Known at the default edge (docs/status.md, "Closures reach the quasi-static criterion"):
     // say what the truth is then and where every preset's truth settles.
-    std::cerr << "warning: the truth closure did not reach equilibrium within "
-              << synthetic.truth_settings.max_steps
-              << " steps; the truth is the mean of its last steps (cycling by hundredths of a mm "
-                 "at the most loaded cords, as five of the seven seed-1 truths do at the default "
-                 "edge); at --edge 2.5, the benchmark's, all its truths (seeds 1-3) settle\n";
+    printWarning(
+        "the truth closure did not reach equilibrium within %d steps; the truth is the mean of "
+        "its last steps (cycling by hundredths of a mm at the most loaded cords, as five of the "
+        "seven seed-1 truths do at the default edge); at --edge 2.5, the benchmark's, all its "
+        "truths (seeds 1-3) settle\n",
+        synthetic.truth_settings.max_steps);
   }
   if (!as_intended) {
-    std::cerr << "warning: the truth prolapses in " << joinSegments(prolapse.segments)
-              << ", the preset intends " << joinSegments(synthetic.preset.intended_prolapse)
-              << "\n";
+    printWarning("the truth prolapses in %s, the preset intends %s\n",
+                 joinSegments(prolapse.segments).c_str(),
+                 joinSegments(synthetic.preset.intended_prolapse).c_str());
   }
   const std::vector<std::string>& traced = synthetic.truth_metrics.tracing_prolapse.segments;
   if (traced != synthetic.preset.intended_prolapse) {
-    std::cerr << "warning: the tracings show prolapse in " << joinSegments(traced)
-              << ", the preset intends " << joinSegments(synthetic.preset.intended_prolapse)
-              << "\n";
+    printWarning("the tracings show prolapse in %s, the preset intends %s\n",
+                 joinSegments(traced).c_str(),
+                 joinSegments(synthetic.preset.intended_prolapse).c_str());
   }
   int points = 0;
   for (const Tracing& t : synthetic.valve_case.tracings)

@@ -10,6 +10,7 @@
 #include "core/atomic_file.h"
 #include "core/json_fields.h"
 #include "core/metrics.h"
+#include "tools/command_support.h"
 
 namespace chordfit::cli {
 
@@ -17,7 +18,7 @@ namespace {
 
 // A warning, not an error: the comparison itself does not need the truth.
 std::nullopt_t ignoreTruth(const std::filesystem::path& file, const std::string& what) {
-  std::cerr << "warning: " << file.string() << ": " << what << "; compared without the truth\n";
+  printWarning("%s: %s; compared without the truth\n", file.string().c_str(), what.c_str());
   return std::nullopt;
 }
 

@@ -37,8 +37,8 @@ int runValidate(const ValidateOptions& options) {
   if (!caseSettingsOrReport(*valve_case, options.case_dir, SettingsUse::kCheck))
     return kExitBadInput;
   std::cout << caseSummary(*valve_case);
-  printNoteLines(pmTipsBesideCordsNote(*valve_case));
-  printNoteLines(duplicateTracingsNote(*valve_case));
+  printLinesToStderr(pmTipsBesideCordsNote(*valve_case));
+  printLinesToStderr(duplicateTracingsNote(*valve_case));
   std::cout << "valid\n";
   return kExitOk;
 }
