@@ -184,7 +184,13 @@ std::pair<Eigen::Index, Eigen::Index> firstCrossingSides(const Eigen::MatrixXd& 
 }  // namespace
 
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
-                        const std::string& file, Diagnostics& diagnostics) {
+                        const std::string& file, Diagnostics& diagnostics,
+                        const std::vector<std::string>& point_wheres) {
+  const auto where = [&](Eigen::Index k) {
+    return static_cast<std::size_t>(k) < point_wheres.size()
+               ? point_wheres[static_cast<std::size_t>(k)]
+               : "points[" + std::to_string(k) + "]";
+  };
   if (open_ring.rows() < 3 || closed.rows() != open_ring.rows()) return true;  // checked elsewhere
   const double open_length = perimeter(open_ring), closed_length = perimeter(closed);
   // 0.5: the parametric valve's closed annulus drawn in to 0.35 of its size made the closure
@@ -211,9 +217,9 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
   for (Eigen::Index k = 0; k < n; ++k) {
     const double closed_side = (closed.row((k + 1) % n) - closed.row(k)).norm();
     if (!(closed_side >= 0.1 * mean_open_side)) {
-      diagnostics.error(file, "points[" + std::to_string(k) + "]",
-                        "the side to point " + std::to_string((k + 1) % n) + " is " +
-                            millimetres(closed_side) + " long, under a tenth of the ring's mean " +
+      diagnostics.error(file, where(k),
+                        "the side to " + where((k + 1) % n) + " is " + millimetres(closed_side) +
+                            " long, under a tenth of the ring's mean " +
                             millimetres(mean_open_side) + ": a repeated point?");
       return false;
     }
@@ -221,11 +227,9 @@ bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd&
   // No side crossing another, seen along the ring's normal: two points swapped (or a point
   // out of place) passed the checks above and made the closure diverge (exit 3) at step 62.
   if (const auto [k, j] = firstCrossingSides(closed, polygonNormal(open_ring)); k >= 0) {
-    const auto side = [n](Eigen::Index s) {
-      return std::to_string(s) + "-" + std::to_string((s + 1) % n);
-    };
-    diagnostics.error(file, "points[" + std::to_string(k + 1) + "]",
-                      "the closed annulus crosses itself: its side between points " + side(k) +
+    const auto side = [&](Eigen::Index s) { return where(s) + " to " + where((s + 1) % n); };
+    diagnostics.error(file, where(k + 1),
+                      "the closed annulus crosses itself: its side " + side(k) +
                           " crosses the side " + side(j) +
                           " (seen along the annulus ring's normal): points swapped or out of "
                           "order?");

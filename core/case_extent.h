@@ -56,7 +56,8 @@ bool checkCurveNearValve(const Eigen::MatrixXd& mesh_V, const Curve& curve, cons
 // annulus, passed every other check and then made the closure diverge (exit 3) or pull the ring
 // across.
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
-                        const std::string& file, Diagnostics& diagnostics);
+                        const std::string& file, Diagnostics& diagnostics,
+                        const std::vector<std::string>& point_wheres = {});
 
 // Two PM tips closer than this give every cord one origin: refused wherever tips are read.
 constexpr double kMinPmTipSeparationMm = 1.0;

@@ -549,7 +549,8 @@ bool readValve(const json& document, const fs::path& dir, JsonFields& fields, Va
       Eigen::MatrixXd open_ring(c.mesh.annulus.size(), 3);
       for (Eigen::Index k = 0; k < c.mesh.annulus.size(); ++k)
         open_ring.row(k) = c.mesh.V.row(c.mesh.annulus(k));
-      ok &= checkClosedAnnulus(open_ring, c.annulus_closed, closed->name, diagnostics);
+      ok &= checkClosedAnnulus(open_ring, c.annulus_closed, closed->name, diagnostics,
+                               closed_curve.point_wheres);
     }
   } else {
     ok = false;

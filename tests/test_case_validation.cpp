@@ -325,12 +325,24 @@ TEST_F(ValidateCommand, ReportsAClosedAnnulusShiftedTurnedOrWithARepeatedPoint) 
   });
   expectError("annulus_closed\\.json", "shifted by 4 of 8 places .*half a turn");
   writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 2 : k); });
-  expectError("annulus_closed\\.json", "points\\[2\\]: the side to point 3 is 0 mm long");
+  expectError("annulus_closed\\.json", "points\\[2\\]: the side to points\\[3\\] is 0 mm long");
   // Two points swapped: the ring pulled through itself diverged at step 62 (exit 3).
   writeClosed([&](Eigen::Index k) { return closed.row(k == 3 ? 4 : k == 4 ? 3 : k); });
   expectError("annulus_closed\\.json",
-              "points\\[3\\]: the closed annulus crosses itself: its side between points 2-3 "
-              "crosses the side 4-5");
+              "points\\[3\\]: the closed annulus crosses itself: its side points\\[2\\] to "
+              "points\\[3\\] crosses the side points\\[4\\] to points\\[5\\]");
+  // The same from a .csv curve: its points named by their lines.
+  std::string csv;
+  for (Eigen::Index k = 0; k < n; ++k) {
+    const Eigen::RowVector3d p = closed.row(k == 3 ? 4 : k == 4 ? 3 : k);
+    csv += std::to_string(p(0)) + "," + std::to_string(p(1)) + "," + std::to_string(p(2)) + "\n";
+  }
+  writeText(dir_ / "closed.csv", csv);
+  editCaseJson([](nlohmann::json& j) { j["annulus"]["closed"] = "closed.csv"; });
+  expectError("closed\\.csv",
+              "line 4: the closed annulus crosses itself: its side line 3 to line 4 crosses the "
+              "side line 5 to line 6");
+  editCaseJson([](nlohmann::json& j) { j["annulus"]["closed"] = "annulus_closed.json"; });
   // Drawn in to 0.4 of its size about its centre (0.35 diverged on the parametric valve).
   writeClosed([&](Eigen::Index k) -> Eigen::RowVector3d {
     const Eigen::RowVector3d p = closed.row(k) - centre;
