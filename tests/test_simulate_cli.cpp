@@ -457,7 +457,17 @@ TEST(SweepCordCommand, WritesOneRowPerScaleWhateverTheThreadCount) {
   const std::string csv = testing::readText(dir / "one" / "sweep.csv");
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 9) << "header + scales 0.98..1.02";
   EXPECT_EQ(csv, testing::readText(dir / "two" / "sweep.csv"));
+  // Each closure's crossing triangle pairs, none on this valve (the last column).
+  EXPECT_EQ(csv.substr(0, csv.find('\n')),
+            "scale,mean_deviation_mm,vertex_x_mm,vertex_y_mm,vertex_z_mm,vertex_height_mm,"
+            "converged,steps,self_intersections");
+  for (std::size_t at = csv.find('\n'); at + 1 < csv.size(); at = csv.find('\n', at + 1))
+    EXPECT_EQ(csv.substr(csv.rfind(',', csv.find('\n', at + 1)) + 1,
+                         csv.find('\n', at + 1) - csv.rfind(',', csv.find('\n', at + 1)) - 1),
+              "0");
   const auto summary = nlohmann::json::parse(testing::readText(dir / "one" / "sweep.json"));
+  EXPECT_EQ(summary["closures_with_self_intersections"], 0);
+  EXPECT_EQ(one.err.find("pass through each other"), std::string::npos) << one.err;
   EXPECT_GT(summary["vertex_height"]["change_over_0.5_percent"].get<double>(), 0.0);
   EXPECT_TRUE(std::filesystem::exists(dir / "one" / "sweep.svg"));
   // The verdict, in sweep.json and on the printed line: this taut cord moves the map.
