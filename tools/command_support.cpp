@@ -186,8 +186,10 @@ std::string stepCapProblem(const ValveCase& valve_case, const SimulationSettings
 }
 
 // A step cap that leaves a closure time to settle after a ramp of `ramp_steps` steps: five
-// times the ramp, rounded up to the next 1,000 (what make-valve writes for a fine mesh).
-int stepCapForRamp(double ramp_steps) {
+// times the ramp, rounded up to the next 1,000 (what make-valve writes for a fine mesh);
+// nullopt beyond the 1e8 steps the settings accept, where it would also overflow an int.
+std::optional<int> stepCapForRamp(double ramp_steps) {
+  if (!(5.0 * ramp_steps <= 1e8)) return std::nullopt;
   return static_cast<int>(std::ceil(5.0 * ramp_steps / 1000.0)) * 1000;
 }
 
@@ -206,9 +208,9 @@ std::string tissueStepCapProblem(const ValveCase& valve_case, const SimulationSe
   const double dt = caseTimeStepMs(valve_case, settings);
   const double uniform_dt = caseTimeStepMs(withUniformTissue(valve_case), settings);
   const double ramp_steps = std::ceil(settings.ramp_ms / dt);
+  const std::optional<int> cap = stepCapForRamp(ramp_steps);
   char what[480];
-  // A cap beyond the 1e8 steps the settings accept (and an int) would be no advice.
-  if (!(5.0 * ramp_steps <= 1e8)) {
+  if (!cap) {
     std::snprintf(what, sizeof what,
                   "factors up to %g shorten the automatic time step to %.4g ms (%.4g ms with "
                   "uniform tissue): the %g ms pressure ramp takes %.3g steps, more than any step "
@@ -217,15 +219,14 @@ std::string tissueStepCapProblem(const ValveCase& valve_case, const SimulationSe
                   ramp_steps);
     return what;
   }
-  const int cap = stepCapForRamp(ramp_steps);
-  const std::string set_hint = takes_set ? "--set max_steps=" + std::to_string(cap) + ", or " : "";
+  const std::string set_hint = takes_set ? "--set max_steps=" + std::to_string(*cap) + ", or " : "";
   std::snprintf(what, sizeof what,
                 "factors up to %g shorten the automatic time step to %.4g ms (%.4g ms with "
                 "uniform tissue): the %g ms pressure ramp takes %.0f steps, more than "
                 "simulation.max_steps = %d; raise it (%s\"max_steps\": %d in case.json's "
                 "simulation block) or give softer factors",
                 valve_case.tissue_stiffness.maxCoeff(), dt, uniform_dt, settings.ramp_ms,
-                ramp_steps, settings.max_steps, set_hint.c_str(), cap);
+                ramp_steps, settings.max_steps, set_hint.c_str(), *cap);
   return what;
 }
 
@@ -584,18 +585,18 @@ int fitStepCapToMesh(ValveCase& valve_case) {
   const double ramp_steps = std::ceil(defaults.ramp_ms / dt);
   if (!(5.0 * ramp_steps > defaults.max_steps)) return 0;
   // A mesh so fine (or not in millimetres) that no closure could run: validation refuses it;
-  // no cap (it would overflow an int).
-  if (5.0 * ramp_steps > 1e8) return 0;
-  const int cap = stepCapForRamp(ramp_steps);
+  // no cap.
+  const std::optional<int> cap = stepCapForRamp(ramp_steps);
+  if (!cap) return 0;
   nlohmann::json simulation = nlohmann::json::parse(valve_case.simulation_json);
-  simulation["max_steps"] = cap;
+  simulation["max_steps"] = *cap;
   valve_case.simulation_json = simulation.dump();
   printNote(
       "simulation.max_steps = %d in case.json: at this mesh's time step (%.3g ms) "
       "the %g ms pressure ramp takes %.0f steps, too many to settle within the default cap of "
       "%d\n",
-      cap, dt, defaults.ramp_ms, ramp_steps, defaults.max_steps);
-  return cap;
+      *cap, dt, defaults.ramp_ms, ramp_steps, defaults.max_steps);
+  return *cap;
 }
 
 int reportClosureFailure(const SimulationResult& result, const std::string& what,
