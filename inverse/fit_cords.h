@@ -1,6 +1,10 @@
-// A whole fit of a case's cords (DESIGN §7, issue 5): seed closure, optional global scale
-// pre-fit (global_prefit.h), the chosen optimiser on the chosen parameterisation, and the
-// fitted CordSet with its full closure. This is what `chordfit fit` and the tests call.
+// A whole fit of a case's cords (DESIGN §7, issue 5), in stages: the seed's closure; the
+// pre-fits that pick the start (global and per kind, global_prefit.h; per segment,
+// segment_prefit.h; softer tissue per segment when asked, tissue_prefit.h); the chosen
+// optimiser on the chosen parameterisation, then the slack release (cord_optimisation.h);
+// the tissue retry where the fit misses a prolapse the tracings show; then, outside the
+// budget, each parameter's uncertainty (fit_uncertainty.h) and the locked-cord probe
+// (locked_cord_probe.h). This is what `chordfit fit` and the tests call.
 //
 // Manual edits: locked cords are constants (bit for bit); unlocked manual cords are the start
 // and the prior of their parameters and are not touched by the pre-fit.
