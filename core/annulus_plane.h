@@ -7,6 +7,12 @@
 
 namespace chordfit {
 
+// The z component of (u, 0) x (v, 0): twice the signed area of the triangle u, v span,
+// positive when v lies counter-clockwise of u.
+inline double cross2d(const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
+  return u.x() * v.y() - u.y() * v.x();
+}
+
 struct Plane {
   Eigen::Vector3d centre = Eigen::Vector3d::Zero();
   Eigen::Vector3d normal = Eigen::Vector3d::UnitZ();  // unit

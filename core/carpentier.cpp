@@ -176,14 +176,6 @@ int segmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
   return position.leaflet * 3 + index;
 }
 
-namespace {
-
-double cross2(const Eigen::Vector2d& u, const Eigen::Vector2d& v) {
-  return u.x() * v.y() - u.y() * v.x();
-}
-
-}  // namespace
-
 int closedSegmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet) {
   const ArcPosition position = arcPositionOf(map, p, leaflet);
   if (position.leaflet < 0) return -1;
@@ -200,8 +192,8 @@ int closedSegmentOf(const SegmentMap& map, const Eigen::Vector3d& p, int leaflet
     const Eigen::Vector2d& from = arc->ring_third[k];
     Eigen::Vector2d direction = arc->commissure_start + chord * ((k + 1) / 3.0) - from;
     if (direction.norm() < 1e-9) direction = Eigen::Vector2d(-chord.y(), chord.x());
-    const double start_side = cross2(direction, arc->commissure_start - from);
-    if (cross2(direction, q - from) * start_side > 0.0) break;
+    const double start_side = cross2d(direction, arc->commissure_start - from);
+    if (cross2d(direction, q - from) * start_side > 0.0) break;
     index = k + 1;
   }
   return position.leaflet * 3 + index;

@@ -96,17 +96,27 @@ struct ValveReach {
 
 namespace {
 
-// Errors (file, point_wheres[k]) for the points out of reach, the first few of them, and a
-// count of the others at (file, summary_where).
+// How point k is named in messages: where the file has it (Curve::point_wheres, e.g. "line 4"
+// of a .csv) or, without that, `list_where`[k].
+std::string pointWhere(const std::vector<std::string>& point_wheres, Eigen::Index k,
+                       const std::string& list_where) {
+  return static_cast<std::size_t>(k) < point_wheres.size()
+             ? point_wheres[static_cast<std::size_t>(k)]
+             : list_where + "[" + std::to_string(k) + "]";
+}
+
+// Errors (file, pointWhere(point_wheres, k, list_where)) for the points out of reach, the
+// first few of them, and a count of the others at (file, summary_where).
 bool checkEachPointNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
                              const std::string& file, const std::vector<std::string>& point_wheres,
-                             const std::string& summary_where, Diagnostics& diagnostics) {
+                             const std::string& list_where, const std::string& summary_where,
+                             Diagnostics& diagnostics) {
   if (mesh_V.rows() == 0) return true;
   const ValveReach valve(mesh_V);
   constexpr int kReported = 3;
   int far = 0;
   for (Eigen::Index k = 0; k < points.rows(); ++k) {
-    if (!valve.check(points.row(k), file, point_wheres[static_cast<std::size_t>(k)], diagnostics,
+    if (!valve.check(points.row(k), file, pointWhere(point_wheres, k, list_where), diagnostics,
                      far < kReported))
       ++far;
   }
@@ -122,15 +132,13 @@ bool checkEachPointNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixX
 bool checkPointsNearValve(const Eigen::MatrixXd& mesh_V, const Eigen::MatrixXd& points,
                           const std::string& file, const std::string& where,
                           Diagnostics& diagnostics) {
-  std::vector<std::string> point_wheres;
-  for (Eigen::Index k = 0; k < points.rows(); ++k)
-    point_wheres.push_back(where + "[" + std::to_string(k) + "]");
-  return checkEachPointNearValve(mesh_V, points, file, point_wheres, where, diagnostics);
+  return checkEachPointNearValve(mesh_V, points, file, {}, where, where, diagnostics);
 }
 
 bool checkCurveNearValve(const Eigen::MatrixXd& mesh_V, const Curve& curve, const std::string& file,
                          Diagnostics& diagnostics) {
-  return checkEachPointNearValve(mesh_V, curve.points, file, curve.point_wheres, "", diagnostics);
+  return checkEachPointNearValve(mesh_V, curve.points, file, curve.point_wheres, "points", "",
+                                 diagnostics);
 }
 
 namespace {
@@ -157,7 +165,7 @@ double perimeter(const Eigen::MatrixXd& P) {
 bool segmentsCross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c,
                    const Eigen::Vector2d& d) {
   auto side = [](const Eigen::Vector2d& p, const Eigen::Vector2d& q, const Eigen::Vector2d& r) {
-    const double cross = (q - p).x() * (r - p).y() - (q - p).y() * (r - p).x();
+    const double cross = cross2d(q - p, r - p);
     return (cross > 0.0) - (cross < 0.0);
   };
   return side(a, b, c) * side(a, b, d) < 0 && side(c, d, a) * side(c, d, b) < 0;
@@ -186,11 +194,7 @@ std::pair<Eigen::Index, Eigen::Index> firstCrossingSides(const Eigen::MatrixXd& 
 bool checkClosedAnnulus(const Eigen::MatrixXd& open_ring, const Eigen::MatrixXd& closed,
                         const std::string& file, Diagnostics& diagnostics,
                         const std::vector<std::string>& point_wheres) {
-  const auto where = [&](Eigen::Index k) {
-    return static_cast<std::size_t>(k) < point_wheres.size()
-               ? point_wheres[static_cast<std::size_t>(k)]
-               : "points[" + std::to_string(k) + "]";
-  };
+  const auto where = [&](Eigen::Index k) { return pointWhere(point_wheres, k, "points"); };
   if (open_ring.rows() < 3 || closed.rows() != open_ring.rows()) return true;  // checked elsewhere
   const double open_length = perimeter(open_ring), closed_length = perimeter(closed);
   // 0.5: the parametric valve's closed annulus drawn in to 0.35 of its size made the closure

@@ -170,7 +170,7 @@ ImportedCase importValveCase(const Eigen::MatrixXd& V, const Eigen::MatrixXi& F,
     }
   }
   const std::vector<int>& ring = loops[best_loop];
-  out.holes = std::max(0, static_cast<int>(loops.size()) - 2);
+  out.holes = holesBeyondRingAndFreeEdge(loops.size());
   const int n = static_cast<int>(ring.size());
   const int al = nearestInLoop(V, ring, landmarks.anterolateral, out.commissure_distance_mm[0]);
   const int pm = nearestInLoop(V, ring, landmarks.posteromedial, out.commissure_distance_mm[1]);

@@ -3,6 +3,7 @@
 // never on hash order or thread count.
 #pragma once
 
+#include <cstddef>
 #include <vector>
 
 #include <Eigen/Core>
@@ -43,6 +44,13 @@ Eigen::MatrixXi bendingQuads(const Eigen::MatrixXi& F);
 // inconsistently oriented faces too (walks the undirected boundary graph).
 //   F  #F by 3
 std::vector<std::vector<int>> boundaryLoops(const Eigen::MatrixXi& F);
+
+// Boundary loops of a valve surface beyond the two it is made of, the annulus ring and the
+// leaflets' free edge: holes or loose pieces (0 when there are two or fewer).
+//   loop_count  boundaryLoops(F).size()
+inline int holesBeyondRingAndFreeEdge(std::size_t loop_count) {
+  return loop_count > 2 ? static_cast<int>(loop_count) - 2 : 0;
+}
 
 // Neighbouring vertices of every vertex through an edge, each list sorted ascending.
 //   F             #F by 3

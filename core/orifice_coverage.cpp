@@ -11,9 +11,7 @@ namespace {
 using Vec2 = Eigen::Vector2d;
 
 // (b - a) x (q - a): > 0 when q lies left of the directed line a -> b.
-double cross(const Vec2& a, const Vec2& b, const Vec2& q) {
-  return (b - a).x() * (q - a).y() - (b - a).y() * (q - a).x();
-}
+double cross(const Vec2& a, const Vec2& b, const Vec2& q) { return cross2d(b - a, q - a); }
 
 // Squared distance from q to the segment a-b.
 double squaredDistanceToSegment(const Vec2& a, const Vec2& b, const Vec2& q) {

@@ -41,7 +41,7 @@ namespace {
 // loose pieces. import-mesh warned of them, validate and the others took such a case silently
 // (each hole's rim is simulated as a free edge, and the labels near it may be off).
 int meshHoles(const ValveMesh& mesh) {
-  return std::max(0, static_cast<int>(boundaryLoops(mesh.F).size()) - 2);
+  return holesBeyondRingAndFreeEdge(boundaryLoops(mesh.F).size());
 }
 
 }  // namespace
