@@ -395,7 +395,9 @@ void writeCordSet(const std::filesystem::path& path, const CordSet& set, const V
     if (mesh != nullptr) c["group"] = groupName(cord, mesh->leaflet, mesh->leaflet_names, set.tips);
     c["seed_rest_length_mm"] = cord.seed_rest_length;
     c["rest_length_mm"] = cord.rest_length;
-    c["scale"] = cord.scale();
+    // Only for readers (the rest length is the value): rounded to 12 decimals, so that a
+    // scale fitted to its bound reads 0.7, not the 0.6999999999999998 of rest / seed.
+    c["scale"] = std::round(cord.scale() * 1e12) / 1e12;
     c["compliance_mm_per_N"] = cord.compliance;
     c["provenance"] = toString(cord.provenance);
     c["locked"] = cord.locked;
