@@ -117,6 +117,52 @@ TEST(EditCordsCli, LockedCordsAreLeftAloneUntilUnlocked) {
   EXPECT_DOUBLE_EQ(c.cords[1].rest_length, 1.05 * a.cords[1].seed_rest_length);
 }
 
+// The summary counts locks as they changed, and an edit that changes no length says what it
+// did do: --all 1 makes every cord manual ("nothing changed" said it left the file as it was),
+// --lock edited without an edit locks nothing, --unlock all on an unlocked set unlocks none
+// (it said "32 unlocked").
+TEST(EditCordsCli, SaysWhatAnEditThatChangesNoLengthDid) {
+  TempDir dir;
+  auto r =
+      runChordfit("edit-cords " + quoted(kSmallCase) + " --all 1 --out " + quoted(dir / "a.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.err.find("warning: edit-cords: no rest length changed (scale 1); 32 cords now "
+                       "manual"),
+            std::string::npos)
+      << r.err;
+  EXPECT_EQ(readCords(dir / "a.json").cords[0].provenance, Provenance::kManual);
+
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --unlock all --lock edited --out " +
+                  quoted(dir / "b.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("32 cords, 0 edited, 0 locked, 0 unlocked, 0 locked in all"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.err.find("--lock edited: no cord was edited, so none was locked"), std::string::npos)
+      << r.err;
+
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cord 4=1.2 --lock 4,5 --out " +
+                  quoted(dir / "c.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  r = runChordfit("edit-cords " + quoted(kSmallCase) + " --cords " + quoted(dir / "c.json") +
+                  " --unlock all --lock 5 --out " + quoted(dir / "d.json"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("0 edited, 0 locked, 1 unlocked, 1 locked in all"), std::string::npos)
+      << r.out;
+}
+
+// A scaling refused for the rest length it gives prints no "cords scaled" line for an edit
+// that is not written.
+TEST(EditCordsCli, ARefusedScalingPrintsNoScaledLine) {
+  TempDir dir;
+  const auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.001 --out " +
+                             quoted(dir / "a.json"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("a cord set holds 1 to 1000 mm"), std::string::npos) << r.err;
+  EXPECT_EQ(r.out.find("scaled"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "a.json"));
+}
+
 // A segment or group typed in another case is the one it names ("p2" was "no cord in segment").
 TEST(EditCordsCli, ASegmentNameInAnotherCaseIsTheSegment) {
   TempDir dir;

@@ -517,6 +517,19 @@ TEST(SweepCordCommand, ASetWithoutAP2PrimaryAsksForTheCord) {
       << r.err;
 }
 
+// A set without cords has nothing to sweep; it was asked for a --cord it could not have.
+TEST(SweepCordCommand, ASetWithoutCordsIsRefusedAsSuch) {
+  TempDir dir;
+  const auto small = std::filesystem::path(CHORDFIT_CASES_DIR) / "small-normal";
+  auto cords = nlohmann::json::parse(testing::readText(small / "cords.json"));
+  cords["cords"] = nlohmann::json::array();
+  testing::writeText(dir / "none.json", cords.dump());
+  const auto r = runChordfit("sweep-cord " + quoted(small) + " --cords " +
+                             quoted(dir / "none.json") + " --out " + quoted(dir / "s"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("none.json has no cords: nothing to sweep"), std::string::npos) << r.err;
+}
+
 // A cord slack over the whole range moves nothing: "flat", not a signal/noise read as noisy.
 TEST(SweepCordCommand, CallsTheMapOfACordSlackThroughoutFlat) {
   TempDir dir;
@@ -532,6 +545,8 @@ TEST(SweepCordCommand, CallsTheMapOfACordSlackThroughoutFlat) {
   EXPECT_TRUE(summary["vertex_height"]["flat"].get<bool>());
   EXPECT_FALSE(summary["vertex_height"]["smooth"].get<bool>());
   EXPECT_NE(r.out.find("flat: it does not move over the range"), std::string::npos) << r.out;
+  // No noise either: the ratio is not a number to print (it printed "inf").
+  EXPECT_NE(r.out.find("signal/noise - (no noise) | flat"), std::string::npos) << r.out;
 }
 
 // --set changes the closures of the sweep (another CSV than the case's settings give) and is

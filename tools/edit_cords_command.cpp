@@ -32,7 +32,6 @@ namespace {
 constexpr double kMaxScale = 10.0;
 // The fit's default scale bounds (inverse/fit_parameters.h): an unlocked cord outside them
 // starts the fit clamped.
-// The fit's default scale bounds.
 const double kFitScaleLower = inverse::ParameterBounds{}.scale_lower;
 const double kFitScaleUpper = inverse::ParameterBounds{}.scale_upper;
 
@@ -169,6 +168,7 @@ struct EditRequests {
   std::vector<ScaleRequest> scalings;  // --all, --group, --segment, --cord: the order applied
   std::vector<TipMove> tip_moves;
   std::set<int> unlock;
+  bool lock_edited = false;  // --lock edited: the cords the scalings change
 };
 
 bool asksForNothing(const EditCordsOptions& options) {
@@ -313,6 +313,7 @@ bool parseLockLists(const EditCordsOptions& options, int count, std::set<int>& u
 bool parseRequests(const EditCordsOptions& options, const CordSet& set, const CordNames& names,
                    EditRequests& requests, std::string& problem) {
   const int count = static_cast<int>(set.cords.size());
+  requests.lock_edited = options.lock == "edited";
   return parseAllScale(options.all_scale, count, requests.scalings, problem) &&
          parseNamedScales("--group", options.group_scales, names.group, names.groups, "group",
                           requests.scalings, problem) &&
@@ -327,10 +328,11 @@ bool parseRequests(const EditCordsOptions& options, const CordSet& set, const Co
 struct ScalingOutcome {
   std::set<int> edited;
   int left_locked = 0;
+  std::string lines;  // one per scaling, printed once the scaled set is known to be valid
 };
 
-// Applies the scalings in the order given, so that the more specific one wins, and prints a
-// line for each. scaleCord leaves locked cords alone.
+// Applies the scalings in the order given, so that the more specific one wins, with a line
+// for each. scaleCord leaves locked cords alone.
 ScalingOutcome scaleCords(const std::vector<ScaleRequest>& scalings, CordSet& set) {
   ScalingOutcome outcome;
   for (const ScaleRequest& r : scalings) {
@@ -343,9 +345,12 @@ ScalingOutcome scaleCords(const std::vector<ScaleRequest>& scalings, CordSet& se
     }
     const int locked = static_cast<int>(r.cords.size()) - changed;
     outcome.left_locked += locked;
-    std::printf("  %-40s %3d %s scaled", r.what.c_str(), changed, nounFor(changed, "cord").c_str());
-    if (locked > 0) std::printf(", %d locked left alone", locked);
-    std::printf("\n");
+    char line[160];
+    std::snprintf(line, sizeof line, "  %-40s %3d %s scaled", r.what.c_str(), changed,
+                  nounFor(changed, "cord").c_str());
+    outcome.lines += line;
+    if (locked > 0) outcome.lines += ", " + std::to_string(locked) + " locked left alone";
+    outcome.lines += "\n";
   }
   return outcome;
 }
@@ -376,6 +381,7 @@ bool moveTips(const ValveMesh& mesh, const std::vector<TipMove>& moves, CordSet&
     set.tips[tip].position += offset;
     if (set.tips[tip].closed_position) *set.tips[tip].closed_position += offset;
   }
+  if (moves.empty()) return true;  // the set's tips were checked when it was read
   // A moved tip must stay within reach of the valve and below the annulus, as a case's tips
   // must (case_extent.h); otherwise every command reading the set would refuse it.
   Diagnostics far_tips;
@@ -467,13 +473,19 @@ void noteScalesOutsideFitBounds(const std::vector<int>& outside_bounds) {
 void reportEdits(const std::string& out_file, const CordSet& before, const CordSet& after,
                  const CordNames& names, const EditRequests& requests, const ScalingOutcome& scaled,
                  const std::set<int>& locked) {
-  const auto locked_in_all = std::count_if(after.cords.begin(), after.cords.end(),
-                                           [](const Cord& cord) { return cord.locked; });
-  std::printf(
-      "edit-cords: %s, %zu edited, %zu locked by --lock, %zu unlocked, %ld locked in "
-      "all -> %s\n",
-      counted(static_cast<int>(after.cords.size()), "cord").c_str(), scaled.edited.size(),
-      locked.size(), requests.unlock.size(), static_cast<long>(locked_in_all), out_file.c_str());
+  // Locks counted as they changed: --unlock all on a set with nothing locked unlocks none.
+  int newly_locked = 0, newly_unlocked = 0, locked_in_all = 0, made_manual = 0;
+  for (std::size_t i = 0; i < after.cords.size(); ++i) {
+    const Cord& a = before.cords[i];
+    const Cord& b = after.cords[i];
+    newly_locked += !a.locked && b.locked;
+    newly_unlocked += a.locked && !b.locked;
+    locked_in_all += b.locked;
+    made_manual += a.provenance != b.provenance;
+  }
+  std::printf("edit-cords: %s, %zu edited, %d locked, %d unlocked, %d locked in all -> %s\n",
+              counted(static_cast<int>(after.cords.size()), "cord").c_str(), scaled.edited.size(),
+              newly_locked, newly_unlocked, locked_in_all, out_file.c_str());
   printChangedCords(before, after, names);
   if (scaled.left_locked > 0) {
     std::printf(
@@ -481,11 +493,19 @@ void reportEdits(const std::string& out_file, const CordSet& before, const CordS
         "them)\n",
         counted(scaled.left_locked, "locked cord").c_str());
   }
-  if (!anyCordChanged(before, after) && !requests.scalings.empty() && requests.tip_moves.empty())
-    printWarning("edit-cords: nothing changed: %s\n",
-                 scaled.edited.empty()
-                     ? "every cord the scalings name is locked"
-                     : "the scalings leave every rest length as it was (scale 1)");
+  if (!anyCordChanged(before, after) && !requests.scalings.empty() && requests.tip_moves.empty()) {
+    if (scaled.edited.empty())
+      printWarning("edit-cords: nothing changed: every cord the scalings name is locked\n");
+    else if (made_manual == 0)
+      printWarning(
+          "edit-cords: nothing changed: the scalings leave every rest length as it was "
+          "(scale 1)\n");
+    else
+      printWarning("edit-cords: no rest length changed (scale 1); %s now manual\n",
+                   counted(made_manual, "cord").c_str());
+  }
+  if (locked.empty() && requests.lock_edited)
+    printWarning("edit-cords: --lock edited: no cord was edited, so none was locked\n");
   noteScalesOutsideFitBounds(unlockedOutsideFitBounds(after));
 }
 
@@ -517,6 +537,7 @@ int runEditCords(const EditCordsOptions& options) {
   const ScalingOutcome scaled = scaleCords(requests.scalings, set);
   if (const std::string problem = restLengthProblem(set, scaled.edited); !problem.empty())
     return usage(problem);
+  std::fputs(scaled.lines.c_str(), stdout);
   if (!moveTips(mesh, requests.tip_moves, set)) return kExitBadInput;
   const std::set<int> locked = lockCords(options.lock, scaled.edited, set);
 

@@ -210,9 +210,16 @@ std::optional<ScaleGrid> checkedScaleGrid(const SweepCordOptions& options) {
   return grid;
 }
 
-// The cord to sweep: `given` (--cord), or by default the P2 primary cord; -1 with the problem
-// printed when there is no such cord.
-int sweptCord(int given, const ValveCase& valve_case, const CordSet& cords) {
+// The cord to sweep: --cord, or by default the P2 primary cord; -1 with the problem
+// printed when there is no such cord (or no cord at all).
+int sweptCord(const SweepCordOptions& options, const ValveCase& valve_case, const CordSet& cords) {
+  if (cords.cords.empty()) {
+    std::cerr << "error: sweep-cord: "
+              << noCordsProblem(valve_case, options.case_dir, options.cords_file, "--cords")
+              << ": nothing to sweep\n";
+    return -1;
+  }
+  const int given = options.cord;
   const int cord = given >= 0 ? given : defaultP2PrimaryCord(valve_case, cords);
   if (given < 0 && cord < 0) {  // the default, not the user's --cord, found nothing
     std::cerr << "error: sweep-cord: the cord set has no P2 primary cord to sweep by default ("
@@ -444,10 +451,10 @@ void printVerdicts(const nlohmann::json& summary) {
   for (const char* key : {"mean_deviation", "vertex_height"}) {
     if (!summary.contains(key)) continue;
     const auto& n = summary[key];
-    // signal_to_noise is null in the JSON when the noise is 0 (an infinite ratio).
+    // With no noise the ratio is infinite (null once the JSON is written).
     char ratio[32] = "- (no noise)";
-    if (n["signal_to_noise"].is_number())
-      std::snprintf(ratio, sizeof ratio, "%.3g", n["signal_to_noise"].get<double>());
+    if (const double r = n["signal_to_noise"].get<double>(); std::isfinite(r))
+      std::snprintf(ratio, sizeof ratio, "%.3g", r);
     std::printf(
         "%-15s noise rms %.2e max %.2e mm | change over a 0.5%% step %.2e mm | "
         "signal/noise %s | %s\n",
@@ -466,7 +473,7 @@ int runSweepCord(const SweepCordOptions& options) {
   if (!loaded) return kExitBadInput;
   ValveCase& valve_case = loaded->valve_case;
   const CordSet& cords = loaded->cords;
-  const int cord = sweptCord(options.cord, valve_case, cords);
+  const int cord = sweptCord(options, valve_case, cords);
   if (cord < 0) return kExitBadInput;
   const auto settings =
       caseSettingsOrReport(valve_case, options.case_dir, SettingsUse::kClose, "sweep-cord",
