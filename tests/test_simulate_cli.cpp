@@ -214,7 +214,18 @@ TEST_F(SimulateCommand, RejectsAnOutputDirectoryInsideAFileBeforeSimulating) {
                              quoted(dir_ / "a-file" / "sim"));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("--out"), std::string::npos) << r.err;
-  EXPECT_NE(r.err.find("is not a directory"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("/a-file is not a directory"), std::string::npos) << r.err;
+}
+
+// --out naming a file: said once ("--out: X: X is not a directory" named it twice).
+TEST_F(SimulateCommand, RejectsAnOutputDirectoryThatIsAFileNamingItOnce) {
+  testing::writeText(dir_ / "a-file", "x");
+  const std::string out = (dir_ / "a-file").string();
+  const auto r =
+      runChordfit("simulate " + quoted(case_dir_) + " --quiet --out " + quoted(dir_ / "a-file"));
+  EXPECT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.err.find("--out: " + out + ": exists and is not a directory"), std::string::npos)
+      << r.err;
 }
 
 TEST_F(SimulateCommand, ADirectoryInTheWayOfAnOutputFileIsFoundBeforeSimulating) {

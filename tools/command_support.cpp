@@ -396,7 +396,9 @@ std::string danglingLinkProblem(const std::filesystem::path& path) {
 std::string outputPlaceProblem(const std::string& directory) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  fs::path existing = fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
+  const fs::path requested =
+      fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
+  fs::path existing = requested;
   while (!ec && !fs::exists(existing, ec) && existing.has_parent_path() &&
          existing != existing.parent_path()) {
     const std::string dangling = danglingLinkProblem(existing);
@@ -404,7 +406,9 @@ std::string outputPlaceProblem(const std::string& directory) {
     existing = existing.parent_path();
   }
   if (ec) return ec.message();
-  if (!fs::is_directory(existing, ec)) return existing.string() + " is not a directory";
+  if (!fs::is_directory(existing, ec))  // the message names --out itself already
+    return existing == requested ? "exists and is not a directory"
+                                 : existing.string() + " is not a directory";
   // Creating a file is the only reliable test: access(W_OK) says yes to root everywhere,
   // /proc and read-only mounts included. mkstemp picks a name no other file has.
   std::string probe = (existing / ".chordfit-probe-XXXXXX").string();
