@@ -249,6 +249,16 @@ class CordFit {
     return true;
   }
 
+  // A pre-fit stage's result (global_prefit.h, segment_prefit.h, tissue_prefit.h) becomes the
+  // optimiser's start, recorded as history entry `iteration` of `stage`.
+  template <typename StageResult>
+  void startFrom(const StageResult& result, const char* stage, int iteration) {
+    outcome_.forward_sims += result.forward_sims;
+    start_set_ = result.start;
+    start_evaluation_ = result.best;
+    record(stage, iteration, start_evaluation_, start_evaluation_.cost);
+  }
+
   void runGlobalPrefit() {
     PrefitOptions prefit = options_.prefit;
     prefit.threads = options_.finite_difference.threads;
@@ -259,15 +269,12 @@ class CordFit {
       prefit.kind_points = 0;
     const PrefitResult result = globalScalePrefit(valve_case_, start_set_, start_evaluation_,
                                                   options_.bounds, seed_residual_, prefit);
-    outcome_.forward_sims += result.forward_sims;
     outcome_.prefit_ran = true;
     outcome_.prefit_factor = result.factor;
     outcome_.prefit_primary_factor = result.primary_factor;
     outcome_.prefit_secondary_factor = result.secondary_factor;
     outcome_.prefit_kind_stage = result.kind_stage;
-    start_set_ = result.start;
-    start_evaluation_ = result.best;
-    record("prefit", 1, start_evaluation_, start_evaluation_.cost);
+    startFrom(result, "prefit", 1);
   }
 
   void runSegmentPrefit() {
@@ -276,13 +283,10 @@ class CordFit {
     segment.on_closure = stageHeartbeat(options_.on_stage, "segment pre-fit");
     const SegmentPrefitResult result = segmentScalePrefit(
         valve_case_, start_set_, start_evaluation_, options_.bounds, seed_residual_, segment);
-    outcome_.forward_sims += result.forward_sims;
     outcome_.segment_prefit_ran = true;
     outcome_.segment_prefit_changes = result.changed;
     segment_prefit_ids_ = result.changed_segments;
-    start_set_ = result.start;
-    start_evaluation_ = result.best;
-    record("segments", 2, start_evaluation_, start_evaluation_.cost);
+    startFrom(result, "segments", 2);
   }
 
   void runTissuePrefit() {
@@ -291,13 +295,10 @@ class CordFit {
     tissue.on_closure = stageHeartbeat(options_.on_stage, "tissue pre-fit");
     const TissuePrefitResult result = segmentTissuePrefit(
         valve_case_, start_set_, start_evaluation_, options_.bounds, seed_residual_, tissue);
-    outcome_.forward_sims += result.forward_sims;
     outcome_.tissue_prefit_ran = true;
     outcome_.tissue_prefit_changes = result.changed;
     outcome_.tissue = result.tissue;
-    start_set_ = result.start;
-    start_evaluation_ = result.best;
-    record("tissue", 3, start_evaluation_, start_evaluation_.cost);
+    startFrom(result, "tissue", 3);
   }
 
   // What an optimisation's result makes the outcome say.
