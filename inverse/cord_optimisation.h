@@ -1,6 +1,6 @@
-// One optimisation of a case's cords from a start (fit_cords.h runs one, and a second in the
-// tissue retry): the chosen optimiser on the chosen parameterisation, then the slack release
-// (slack_release.h). Internal to the fit; `chordfit fit` and the tests call fitCords.
+// One optimisation of a case's cords from a start (the fit, inverse/fit_cords.cpp, runs one,
+// and a second in the tissue retry): the chosen optimiser on the chosen parameterisation, then the
+// slack release (slack_release.h). Internal to the fit; `chordfit fit` and the tests call fitCords.
 #pragma once
 
 #include <memory>
@@ -24,6 +24,10 @@ struct FitOptions;
 // What one optimisation leaves. Heap-held and never moved: the parameterisation, residual and
 // objective refer to working_case and to each other.
 struct Optimisation {
+  Optimisation() = default;
+  Optimisation(const Optimisation&) = delete;  // a copy's members would refer to this one's
+  Optimisation& operator=(const Optimisation&) = delete;
+
   ValveCase working_case;  // the case, on the start's tissue
   std::unique_ptr<FitParameterization> parameters;
   std::unique_ptr<ForwardResidual> residual;

@@ -96,11 +96,11 @@ class CordFit {
   }
 
   // The optimiser from the pre-fits' start, then the slack release. False when it failed.
-  bool optimise() {
-    run_ = inverse::optimise(valve_case_, seed_, settings_, options_,
-                             {start_set_, start_evaluation_, outcome_.tissue, segment_prefit_ids_,
-                              outcome_.forward_sims},
-                             start_);
+  bool runOptimiser() {
+    run_ = optimise(valve_case_, seed_, settings_, options_,
+                    {start_set_, start_evaluation_, outcome_.tissue, segment_prefit_ids_,
+                     outcome_.forward_sims},
+                    start_);
     for (const IterationRecord& r : run_->history) outcome_.history.push_back(r);
     outcome_.forward_sims = run_->forward_sims;
     optimiser_unsettled_ = run_->residual->unsettledClosures();
@@ -205,6 +205,7 @@ class CordFit {
         residual.unsettledClosures() - unsettled_in_fit_ - outcome_.uncertainty.unsettled_sims;
   }
 
+  // What the stages run so far found (the whole fit once they all ran).
   FitOutcome& outcome() { return outcome_; }
 
  private:
@@ -259,6 +260,8 @@ class CordFit {
     record(stage, iteration, start_evaluation_, start_evaluation_.cost);
   }
 
+  // The global pre-fit (global_prefit.h): one factor on every free non-manual cord, then one
+  // per kind when the budget leaves room for it.
   void runGlobalPrefit() {
     PrefitOptions prefit = options_.prefit;
     prefit.threads = options_.finite_difference.threads;
@@ -277,6 +280,7 @@ class CordFit {
     startFrom(result, "prefit", 1);
   }
 
+  // The segment pre-fit (segment_prefit.h): a factor per Carpentier segment.
   void runSegmentPrefit() {
     SegmentPrefitOptions segment = options_.segment_prefit;
     segment.threads = options_.finite_difference.threads;
@@ -289,6 +293,7 @@ class CordFit {
     startFrom(result, "segments", 2);
   }
 
+  // The tissue pre-fit (tissue_prefit.h, --tissue-prefit): softer tissue per segment.
   void runTissuePrefit() {
     TissuePrefitOptions tissue = options_.tissue_prefit;
     tissue.threads = options_.finite_difference.threads;
@@ -362,10 +367,10 @@ class CordFit {
         retry_options.on_iteration = [on_iteration = options_.on_iteration, relabel](
                                          const IterationRecord& r) { on_iteration(relabel(r)); };
       std::unique_ptr<Optimisation> second =
-          inverse::optimise(valve_case_, seed_, settings_, retry_options,
-                            {softened.start, softened.best, softened.tissue, segment_prefit_ids_,
-                             outcome_.forward_sims},
-                            start_);
+          optimise(valve_case_, seed_, settings_, retry_options,
+                   {softened.start, softened.best, softened.tissue, segment_prefit_ids_,
+                    outcome_.forward_sims},
+                   start_);
       for (const IterationRecord& r : second->history) outcome_.history.push_back(relabel(r));
       outcome_.forward_sims = second->forward_sims;
       optimiser_unsettled_ += second->residual->unsettledClosures();
@@ -449,7 +454,7 @@ FitOutcome fitCords(const ValveCase& valve_case, const CordSet& seed,
     return outcome;
   }
   CordFit fit(valve_case, seed, settings, options, start);
-  if (!fit.closeSeed() || !fit.runPrefits() || !fit.optimise()) return std::move(fit.outcome());
+  if (!fit.closeSeed() || !fit.runPrefits() || !fit.runOptimiser()) return std::move(fit.outcome());
   fit.retryOnSofterTissue();
   fit.adoptFittedCords();
   if (options.uncertainty) fit.estimateUncertainty();

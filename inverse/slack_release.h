@@ -1,4 +1,4 @@
-// Slack-cord release: the last step of a per-cord fit (fit_cords.h).
+// Slack-cord release: the last step of a per-cord optimisation (cord_optimisation.h).
 //
 // Why: a cord slack in the fitted closure (its span short of its rest length by more than
 // kSlackMarginMm) pulls on nothing there, so every length from its span up closes the valve
@@ -16,7 +16,7 @@
 // primaries, taut and never rescaled, set it at 1.05 where the truth's other primaries sit at
 // ~0.8): the valve's own taut cords are the data's estimate of where cords of the kind sit,
 // an empirical prior. A raised
-// cord is longer than before, so it stays slack in the fitted closed state; fitCords keeps the
+// cord is longer than before, so it stays slack in the fitted closed state; optimise() keeps the
 // release only when a full closure with it fits the tracings as well (data cost within
 // SlackReleaseOptions::cost_tolerance), since on the way from the open state a cord may pull
 // before it goes slack. Manual and locked cords are never touched.

@@ -151,8 +151,8 @@ TEST(EditCordsCli, SaysWhatAnEditThatChangesNoLengthDid) {
       << r.out;
 }
 
-// A scaling refused for the rest length it gives prints no "cords scaled" line for an edit
-// that is not written.
+// A scaling refused for the rest length it gives, or a refused tip move, prints no "cords
+// scaled" line for an edit that is not written.
 TEST(EditCordsCli, ARefusedScalingPrintsNoScaledLine) {
   TempDir dir;
   const auto r = runChordfit("edit-cords " + quoted(kSmallCase) + " --all 0.001 --out " +
@@ -160,6 +160,15 @@ TEST(EditCordsCli, ARefusedScalingPrintsNoScaledLine) {
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_NE(r.err.find("a cord set holds 1 to 1000 mm"), std::string::npos) << r.err;
   EXPECT_EQ(r.out.find("scaled"), std::string::npos) << r.out;
+  EXPECT_FALSE(fs::exists(dir / "a.json"));
+
+  // Nor for one whose tip move is refused.
+  const auto moved = runChordfit("edit-cords " + quoted(kSmallCase) +
+                                 " --cord 3=0.9 --move-tip anterolateral=0,0,1000 --out " +
+                                 quoted(dir / "a.json"));
+  EXPECT_EQ(moved.exit_code, 2) << moved.err;
+  EXPECT_NE(moved.err.find("--move-tip"), std::string::npos) << moved.err;
+  EXPECT_EQ(moved.out.find("scaled"), std::string::npos) << moved.out;
   EXPECT_FALSE(fs::exists(dir / "a.json"));
 }
 

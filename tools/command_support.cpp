@@ -396,8 +396,8 @@ std::string danglingLinkProblem(const std::filesystem::path& path) {
 std::string outputPlaceProblem(const std::string& directory) {
   namespace fs = std::filesystem;
   std::error_code ec;
-  const fs::path requested =
-      fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
+  fs::path requested = fs::absolute(directory.empty() ? fs::path(".") : fs::path(directory), ec);
+  if (!requested.has_filename()) requested = requested.parent_path();  // "out/" is "out"
   fs::path existing = requested;
   while (!ec && !fs::exists(existing, ec) && existing.has_parent_path() &&
          existing != existing.parent_path()) {

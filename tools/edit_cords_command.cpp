@@ -328,7 +328,7 @@ bool parseRequests(const EditCordsOptions& options, const CordSet& set, const Co
 struct ScalingOutcome {
   std::set<int> edited;
   int left_locked = 0;
-  std::string lines;  // one per scaling, printed once the scaled set is known to be valid
+  std::string lines;  // one per scaling, printed once every edit is known to be valid
 };
 
 // Applies the scalings in the order given, so that the more specific one wins, with a line
@@ -345,10 +345,11 @@ ScalingOutcome scaleCords(const std::vector<ScaleRequest>& scalings, CordSet& se
     }
     const int locked = static_cast<int>(r.cords.size()) - changed;
     outcome.left_locked += locked;
-    char line[160];
-    std::snprintf(line, sizeof line, "  %-40s %3d %s scaled", r.what.c_str(), changed,
-                  nounFor(changed, "cord").c_str());
-    outcome.lines += line;
+    char count[64];
+    std::snprintf(count, sizeof count, " %3d %s scaled", changed, nounFor(changed, "cord").c_str());
+    // The request as typed, padded to 40 columns and never cut (a long --cord list).
+    outcome.lines +=
+        "  " + r.what + std::string(r.what.size() < 40 ? 40 - r.what.size() : 0, ' ') + count;
     if (locked > 0) outcome.lines += ", " + std::to_string(locked) + " locked left alone";
     outcome.lines += "\n";
   }
@@ -374,8 +375,8 @@ std::string restLengthProblem(const CordSet& set, const std::set<int>& edited) {
   return "";
 }
 
-// Moves each tip, its open and (when present) closed position, and prints where it went.
-// False, with the problems printed, when a tip of the set is out of place afterwards.
+// Moves each tip, its open and (when present) closed position. False, with the problems
+// printed, when a tip of the set is out of place afterwards.
 bool moveTips(const ValveMesh& mesh, const std::vector<TipMove>& moves, CordSet& set) {
   for (const auto& [tip, offset] : moves) {
     set.tips[tip].position += offset;
@@ -389,12 +390,17 @@ bool moveTips(const ValveMesh& mesh, const std::vector<TipMove>& moves, CordSet&
     far_tips.print(std::cerr);
     return false;
   }
-  for (const auto& [tip, offset] : moves) {
-    std::printf("  --move-tip %-29s moved by (%.2f, %.2f, %.2f) mm to (%.2f, %.2f, %.2f)\n",
-                set.tips[tip].name.c_str(), offset.x(), offset.y(), offset.z(),
-                set.tips[tip].position.x(), set.tips[tip].position.y(), set.tips[tip].position.z());
-  }
   return true;
+}
+
+// A line per moved tip: by how much and where it went.
+void printTipMoves(const std::vector<TipMove>& moves, const CordSet& set) {
+  for (const auto& [tip, offset] : moves) {
+    const Eigen::Vector3d& at = set.tips[tip].position;
+    std::printf("  --move-tip %-29s moved by (%.2f, %.2f, %.2f) mm to (%.2f, %.2f, %.2f)\n",
+                set.tips[tip].name.c_str(), offset.x(), offset.y(), offset.z(), at.x(), at.y(),
+                at.z());
+  }
 }
 
 // Locks the cords of --lock `list` (checked by parseLockLists), its "edited" being the cords
@@ -537,8 +543,10 @@ int runEditCords(const EditCordsOptions& options) {
   const ScalingOutcome scaled = scaleCords(requests.scalings, set);
   if (const std::string problem = restLengthProblem(set, scaled.edited); !problem.empty())
     return usage(problem);
-  std::fputs(scaled.lines.c_str(), stdout);
   if (!moveTips(mesh, requests.tip_moves, set)) return kExitBadInput;
+  // Printed once every change is known to be valid: a refused edit prints only its error.
+  std::fputs(scaled.lines.c_str(), stdout);
+  printTipMoves(requests.tip_moves, set);
   const std::set<int> locked = lockCords(options.lock, scaled.edited, set);
 
   writeCordSet(options.out_file, set, &mesh);

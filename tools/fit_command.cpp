@@ -10,11 +10,7 @@
 #include <string>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
-#include "core/case_extent.h"
 #include "core/counted.h"
-#include "core/simulator.h"
 #include "inverse/fit_cords.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
@@ -113,7 +109,8 @@ void reportProgressOnStdout(const FitCommandOptions& o, const FitInputs& inputs,
   options.on_iteration = printIterationLine;
 }
 
-// Stage 5's failure: reports why the fit did not run to its end and returns the exit code.
+// Stage 5, inverse::fitCords, failed: reports why the fit did not run to its end and returns the
+// exit code.
 int reportFitFailure(const FitCommandOptions& o, const inverse::FitOutcome& fit) {
   std::cerr << "error: " << o.case_dir << ": " << fit.error << "\n";
   return fit.error_is_input ? kExitBadInput : kExitSimulationFailed;
@@ -214,6 +211,9 @@ void printFitSummary(const FitCommandOptions& o, const ValveCase& valve_case,
 }  // namespace
 
 // The fit as a sequence of stages, each of which reports its own failure.
+// The stages, numbered as their functions' comments number them: 1-2 options and inputs
+// (fit_inputs.h), 3-4 the fit's options and progress lines, 5 the fit, 6 the files
+// (fit_outputs.h), 7 the summary.
 int runFit(const FitCommandOptions& o) {
   const auto mode = checkOptionValues(o);
   if (!mode) return kExitBadInput;

@@ -10,8 +10,6 @@
 #include <utility>
 #include <vector>
 
-#include <nlohmann/json.hpp>
-
 #include "core/case_extent.h"
 #include "core/case_io.h"
 #include "core/cordset_io.h"
@@ -19,7 +17,6 @@
 #include "inverse/fit_cords.h"
 #include "tools/command_support.h"
 #include "tools/commands.h"
-#include "tools/fit_report.h"
 
 namespace chordfit::cli {
 
@@ -148,8 +145,7 @@ void noteWideScaleStep(const FitCommandOptions& o) {
 
 }  // namespace
 
-// Stage 1. The parameter mode of the fit when every option value that needs no input file is
-// acceptable; otherwise nullopt, after reporting the first refused value in the order below.
+// Stage 1 (fit_inputs.h); the checks in the order they are reported.
 std::optional<inverse::ParameterMode> checkOptionValues(const FitCommandOptions& o) {
   if (!outputIsNotTheCase(o)) return std::nullopt;
   const auto mode = parameterModeOrReport(o.params);
@@ -298,8 +294,7 @@ bool groupBoundsKeepCordsInRange(const FitCommandOptions& o, const ValveCase& va
 
 }  // namespace
 
-// Stage 2. The case, the seed and the closure settings when they load and suit the options
-// (`mode` from checkOptionValues); otherwise nullopt, after reporting the first problem.
+// Stage 2 (fit_inputs.h).
 std::optional<FitInputs> loadFitInputs(const FitCommandOptions& o, inverse::ParameterMode mode) {
   auto valve_case = caseWithTracingsOrReport(o.case_dir);
   if (!valve_case || !tipBoxWithinReach(o, mode, *valve_case)) return std::nullopt;

@@ -10,7 +10,6 @@
 
 #include "core/atomic_file.h"
 #include "core/case_io.h"
-#include "core/case_extent.h"
 #include "core/cordset_io.h"
 #include "core/metrics.h"
 #include "core/section_figure.h"
@@ -183,9 +182,7 @@ void writeFitFigures(const std::filesystem::path& out, const FitCommandOptions& 
 
 }  // namespace
 
-// Stage 6. Writes every output file into a staging directory and publishes them into --out
-// together (staged_output.h). On failure (reported) the exit code is set and --out is left
-// as it was; exceptions (a failed write) propagate, as from every command, to main.
+// Stage 6 (fit_outputs.h).
 WrittenFit writeFitOutputs(const FitCommandOptions& o, const ValveCase& valve_case,
                            const inverse::FitOutcome& fit) {
   WrittenFit written;

@@ -227,10 +227,8 @@ int sweptCord(const SweepCordOptions& options, const ValveCase& valve_case, cons
     return -1;
   }
   if (cord >= static_cast<int>(cords.cords.size())) {
-    const std::string valid =
-        cords.cords.empty() ? "" : ": 0.." + std::to_string(cords.cords.size() - 1);
     std::cerr << "error: sweep-cord: --cord: no such cord " << cord << " (the set has "
-              << counted(cords.cords.size(), "cord") << valid << ")\n";
+              << counted(cords.cords.size(), "cord") << ": 0.." << cords.cords.size() - 1 << ")\n";
     return -1;
   }
   return cord;
