@@ -52,7 +52,7 @@ run_fit() {
   echo "      case: $case_dir (synthetic; its truth in truth/ is not read by the fit)"
   echo "      scale bounds: $bounds; outputs: $out"
   # At most 1000 forward runs with warm-started finite differences; Ceres stops on its own
-  # tolerance after ~280 (about 4 s on 2 idle cores, docs/fitting.md "Measured results").
+  # tolerance after ~280 (4-7 s on 2 idle cores by machine, docs/fitting.md "Measured results").
   # fit takes at most 64 threads.
   "$exe" fit "$case_dir" --params scales --optimizer ceres --threads "$((jobs < 64 ? jobs : 64))" --fd-warm \
     --max-sims "${CHORDFIT_MAX_SIMS:-1000}" --scale-bounds "$bounds" --out "$out"
