@@ -177,6 +177,28 @@ TEST(Cli, RefusesAnOutputPathTooLongForWhatIsWrittenUnderItBeforeTheWork) {
 }
 
 // `chordfit --bogus` said only "A subcommand is required".
+// A missing cord or tissue file is named with the command and option that gave it: the bare
+// "error: nope.json: file not found" did not say which of two JSON files was meant.
+TEST(Cli, NamesTheOptionOfAMissingCordOrTissueFile) {
+  TempDir dir;
+  const std::string missing = quoted(dir / "nope.json");
+  const std::string case_dir = quoted(smallCase());
+  const std::string out = " --out " + quoted(dir / "out");
+  const std::string named = ": " + (dir / "nope.json").string() + ": file not found";
+  expectRefused("simulate " + case_dir + " --cords " + missing + out,
+                "error: simulate: --cords" + named);
+  expectRefused("simulate " + case_dir + " --tissue " + missing + out,
+                "error: simulate: --tissue" + named);
+  expectRefused("sweep-cord " + case_dir + " --cords " + missing + out,
+                "error: sweep-cord: --cords" + named);
+  expectRefused("fit " + case_dir + " --seed-cords " + missing + out,
+                "error: fit: --seed-cords" + named);
+  expectRefused("edit-cords " + case_dir + " --cords " + missing + " --all 1.1 --out " +
+                    quoted(dir / "e.json"),
+                "error: edit-cords: --cords" + named);
+  EXPECT_FALSE(fs::exists(dir / "out"));
+}
+
 TEST(Cli, NamesAnUnknownOptionBeforeTheCommand) {
   expectRefused("--bogus", "error: unknown option --bogus");
   expectRefused("--verison", "--verison: did you mean \"--version\"?");

@@ -124,11 +124,20 @@ std::string tissueBesideCordsNote(const char* command, const std::string& cords_
          option + " to use it)\n";
 }
 
-std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file) {
+bool optionFileFoundOrReport(const std::string& given_as, const std::string& file) {
+  std::error_code error;
+  if (std::filesystem::exists(file, error) || error) return true;
+  std::cerr << "error: " << given_as << ": " << file << ": file not found\n";
+  return false;
+}
+
+std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file,
+                                    const std::string& given_as) {
   if (cords_file.empty()) {
     if (valve_case.cords) return valve_case.cords;
     return heuristicCordSet(valve_case);
   }
+  if (!given_as.empty() && !optionFileFoundOrReport(given_as, cords_file)) return std::nullopt;
   Diagnostics diagnostics;
   CordSet set;
   if (!readCordSet(cords_file, cords_file, set, diagnostics) ||
@@ -154,13 +163,15 @@ std::optional<CaseWithCords> loadCaseWithCords(const char* command, const std::s
   auto valve_case = loadCaseOrReport(case_dir);
   if (!valve_case) return std::nullopt;
   if (!tissue_file.empty()) {
+    if (!optionFileFoundOrReport(std::string(command) + ": --tissue", tissue_file))
+      return std::nullopt;
     Diagnostics diagnostics;
     if (!loadTissueFile(tissue_file, tissue_file, *valve_case, diagnostics)) {
       reportProblems(diagnostics);
       return std::nullopt;
     }
   }
-  auto cords = resolveCords(*valve_case, cords_file);
+  auto cords = resolveCords(*valve_case, cords_file, std::string(command) + ": --cords");
   if (!cords) return std::nullopt;
   if (tissue_file.empty())
     printLinesToStderr(tissueBesideCordsNote(command, cords_file, "--tissue FILE"));

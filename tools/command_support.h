@@ -23,8 +23,14 @@ int reportProblems(const Diagnostics& diagnostics);
 
 // The cord set a command works with: `cords_file` when given (checked against the case
 // mesh), else the case's own cords, else the paper's heuristic. Prints problems and returns
-// nullopt on bad input.
-std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file);
+// nullopt on bad input. `given_as` ("simulate: --cords"), when given, names a missing file's
+// option: a command may read two files of the same kind of name (cords.json, tissue.json).
+std::optional<CordSet> resolveCords(const ValveCase& valve_case, const std::string& cords_file,
+                                    const std::string& given_as = "");
+
+// False, with "error: GIVEN_AS: FILE: file not found" printed, when `file` does not exist;
+// true otherwise (any other problem is its reader's to report).
+bool optionFileFoundOrReport(const std::string& given_as, const std::string& file);
 
 // Why resolveCords' set cannot be worked on when it has no cords, naming where it came from:
 // "E.json has no cords", "CASE: the case's cord set has no cords (give OPTION)" or "CASE: the

@@ -524,7 +524,7 @@ int runEditCords(const EditCordsOptions& options) {
   }
   const auto valve_case = loadCaseOrReport(options.case_dir);
   if (!valve_case) return kExitBadInput;
-  const auto before = resolveCords(*valve_case, options.cords_file);
+  const auto before = resolveCords(*valve_case, options.cords_file, "edit-cords: --cords");
   if (!before) return kExitBadInput;
   if (before->cords.empty())
     return usage(noCordsProblem(*valve_case, options.case_dir, options.cords_file, "--cords") +

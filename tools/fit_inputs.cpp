@@ -208,7 +208,7 @@ bool tipBoxWithinReach(const FitCommandOptions& o, inverse::ParameterMode mode,
 // otherwise nullopt, reported.
 std::optional<CordSet> seedWithCordsOrReport(const FitCommandOptions& o,
                                              const ValveCase& valve_case) {
-  auto seed = resolveCords(valve_case, o.seed_cords_file);
+  auto seed = resolveCords(valve_case, o.seed_cords_file, "fit: --seed-cords");
   if (!seed) return std::nullopt;
   if (seed->cords.empty()) {
     std::cerr << "error: fit: "
