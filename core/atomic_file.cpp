@@ -43,7 +43,7 @@ namespace fs = std::filesystem;
 // The temporary file of `path` written by process `pid`: hidden, and named so that no file a
 // user keeps beside it is taken for one (a backup "cords.json.tmp.20261129" was, and removed).
 std::string temporaryPrefix(const fs::path& path) {
-  return "." + path.filename().string() + ".chordfit-tmp.";
+  return "." + path.filename().string() + kTemporaryInfix;
 }
 
 // The pid in a temporary file's name beside `path` (temporaryPrefix), or -1 for any other.

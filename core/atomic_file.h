@@ -15,6 +15,9 @@ namespace chordfit {
 // bytes and the link stays. Throws std::runtime_error naming the path on failure.
 void writeFileAtomically(const std::filesystem::path& path, const std::string& bytes);
 
+// What a temporary file's name adds to its target's: "." before it, this and the pid after.
+inline constexpr char kTemporaryInfix[] = ".chordfit-tmp.";
+
 // Whether `entry`, a temporary file or directory named with the pid of the process writing
 // it, was left by a process that has ended: its lock is free (a live writer holds a flock on
 // it, which another container on this host sees too, where its pid means nothing), no process

@@ -20,6 +20,10 @@ namespace chordfit {
 
 namespace {
 
+// A C0 control character or DEL: what a name shown on one line of a summary or table must not
+// hold (leaflet names, the case's name).
+bool isControlByte(char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; }
+
 namespace fs = std::filesystem;
 using nlohmann::json;
 
@@ -443,8 +447,7 @@ bool readVersion(const json& document, JsonFields& fields) {
 // case's name. An '=' is fine: edit-cords splits NAME=S at the last '=', before a number.
 std::string leafletNameProblem(const std::string& name) {
   for (const char ch : name) {
-    const auto byte = static_cast<unsigned char>(ch);
-    if (byte < 0x20 || byte == 0x7f)
+    if (isControlByte(ch))
       return "contains a control character (" + shownText(std::string(1, ch)) +
              "): give a name of printable characters";
     if (ch == '/')
@@ -603,8 +606,7 @@ bool readOptionalParts(const json& document, const fs::path& dir, JsonFields& fi
 }  // namespace
 
 std::string caseNameProblem(const std::string& name) {
-  const auto control = [](char ch) { return static_cast<unsigned char>(ch) < 0x20 || ch == 0x7f; };
-  if (std::any_of(name.begin(), name.end(), control))
+  if (std::any_of(name.begin(), name.end(), isControlByte))
     return "contains a control character (a newline, tab or NUL): give a name of printable "
            "characters";
   if (name.find_first_not_of(' ') == std::string::npos) return "is blank: give the case a name";

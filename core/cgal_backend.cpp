@@ -56,10 +56,9 @@ using Polygon = std::vector<std::size_t>;
 // ---------------------------------------------------------------------------------------
 // Small text helpers shared by the pre-checks.
 
-// A word from the file as it may appear in a message (a corrupt file can hold any bytes).
-std::string printable(const std::string& word) { return shownText(word); }
-
-std::string quotedWord(const std::string& word) { return "'" + printable(word) + "'"; }
+// A word from the file as it may appear in a message (a corrupt file can hold any bytes;
+// shownText escapes them).
+std::string quotedWord(const std::string& word) { return "'" + shownText(word) + "'"; }
 
 bool parseCount(const std::string& text, unsigned long long& value) {
   if (text.empty() || !std::isdigit(static_cast<unsigned char>(text[0]))) return false;
@@ -248,7 +247,7 @@ std::uint64_t readBinaryListLength(const char* data, const std::string& type, bo
 }
 
 std::string plyItemWhere(const PlyElement& e, unsigned long long item) {
-  return "element " + printable(e.name) + " " + std::to_string(item) + ": ";
+  return "element " + shownText(e.name) + " " + std::to_string(item) + ": ";
 }
 
 // Walks the declared elements; `pos` ends where the last one does.
@@ -318,7 +317,7 @@ std::string declaredElements(const PlyHeader& header) {
   std::string text;
   for (std::size_t k = 0; k < header.elements.size(); ++k) {
     const PlyElement& e = header.elements[k];
-    std::string name = printable(e.name);
+    std::string name = shownText(e.name);
     if (e.count != 1) name = name == "vertex" ? "vertices" : name.back() == 's' ? name : name + "s";
     if (k > 0) text += k + 1 == header.elements.size() ? " and " : ", ";
     text += std::to_string(e.count) + " " + name;

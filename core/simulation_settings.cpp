@@ -105,11 +105,10 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
   // at or near it would meet that criterion with the valve still moving at the clamp
   // (max_step_mm 5e-5 reported a closure "converged" after 159 steps, 39 % of the orifice
   // open; tolerance_mm 0.3 against the automatic 0.25 mm clamp, right after the ramp). 10x
-  // keeps a settled valve apart from a clamped one. The automatic clamp is the simulator's
-  // (simulator.cpp): 0.25 x the contact thickness.
+  // keeps a settled valve apart from a clamped one.
   constexpr double kMinStepToTolerance = 10.0;
   const bool automatic_clamp = !(s.max_step_mm > 0.0);
-  const double clamp = automatic_clamp ? 0.25 * contactThicknessMm(s) : s.max_step_mm;
+  const double clamp = velocityClampMm(s);
   if (std::isfinite(clamp) && clamp > 0.0 && std::isfinite(s.tolerance_mm) &&
       s.tolerance_mm > 0.0 && clamp < kMinStepToTolerance * s.tolerance_mm) {
     char what[300];
@@ -133,6 +132,10 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& s) {
 double contactThicknessMm(const SimulationSettings& settings) {
   return settings.contact_thickness_mm > 0.0 ? settings.contact_thickness_mm
                                              : settings.material.thickness_mm;
+}
+
+double velocityClampMm(const SimulationSettings& settings) {
+  return settings.max_step_mm > 0.0 ? settings.max_step_mm : 0.25 * contactThicknessMm(settings);
 }
 
 SimulationSettings settingsFromJson(const std::string& json, Diagnostics& diagnostics,

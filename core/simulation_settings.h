@@ -187,6 +187,10 @@ std::vector<SettingsProblem> settingsProblems(const SimulationSettings& settings
 // contact_thickness_mm, or the material thickness when that is <= 0.
 double contactThicknessMm(const SimulationSettings& settings);
 
+// The largest step a vertex may take before the constraints (the velocity clamp): max_step_mm,
+// or 0.25 x the contact thickness when that is 0 (automatic).
+double velocityClampMm(const SimulationSettings& settings);
+
 // Why a cold closure at time step dt_ms cannot settle because max_steps ends before the
 // pressure ramp does ("" when it can), worded as a problem of max_steps.
 std::string rampBeyondStepCap(const SimulationSettings& settings, double dt_ms);

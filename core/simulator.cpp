@@ -678,7 +678,7 @@ SimulationResult simulate(const SimulationModel& model, const SimulationSettings
     }
   }
   const double thickness = contactThicknessMm(settings);
-  const double max_step = settings.max_step_mm > 0.0 ? settings.max_step_mm : 0.25 * thickness;
+  const double max_step = velocityClampMm(settings);
   const double sign = settings.phase == ClosurePhase::kClose ? 1.0 : -1.0;
   const double pressure = sign * mmHgToMpa(settings.pressure_mmhg);
   const Vec3 flow = sign * settings.flow_speed_mm_per_ms * model.flow_direction.normalized();

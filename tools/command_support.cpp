@@ -452,7 +452,7 @@ bool reportEmptyOutput(const char* command, const std::string& out) {
 // of PATH_MAX's 4,096 bytes (leaving the directories it had made), or with a file name of
 // 250 bytes that its temporary took past NAME_MAX's 255. Lengths are bytes; pids up to 10
 // digits.
-constexpr std::size_t kTemporaryNameExtra = sizeof("..chordfit-tmp.") - 1 + 10;
+constexpr std::size_t kTemporaryNameExtra = 1 + (sizeof(kTemporaryInfix) - 1) + 10;
 constexpr std::size_t kStagingExtra = sizeof("/.staging-") - 1 + 10;
 
 // `longer`: what the command writes that is longer than the path given.
